@@ -1,0 +1,259 @@
+//! Shannon entropy and its relatives (Part II §2, §7; Rényi and Tsallis).
+
+use crate::math::{ln, xlnx};
+use crate::matrix::{MatrixRef, for_column_blocks};
+use crate::scan::{check_normalized, entropy_nats, mass, mass_xlnx, non_empty};
+use crate::sum::{Neumaier, sum_map};
+use crate::{Base, Error, Real};
+
+/// Shannon entropy `H(p) = −Σ p_i log p_i` of a distribution (Part II eq. (2)).
+///
+/// ```text
+/// H(p) = − Σ_i p_i log p_i ,   0 · log 0 = 0
+/// ```
+/// One pass: validation, the sum and `Σ p ln p` are fused. The result is
+/// the entropy of `p / Σp`, so the residual normalisation error allowed by
+/// [`Real::MASS_TOLERANCE`] does not leak into it.
+///
+/// # Errors
+/// [`Error::Empty`], [`Error::NonFinite`], [`Error::Negative`],
+/// [`Error::ZeroMass`], [`Error::NotNormalized`].
+///
+/// # Examples
+/// ```
+/// use itgfx_core::{entropy, Base};
+/// let h = entropy(&[0.5f64, 0.25, 0.25], Base::Bits).unwrap();
+/// assert!((h - 1.5).abs() < 1e-15);
+/// ```
+pub fn entropy<T: Real>(p: &[T], base: Base) -> Result<T, Error> {
+    non_empty(p.len())?;
+    let m = mass_xlnx(p)?;
+    check_normalized::<T>(m.sum)?;
+    Ok(T::from_f64(entropy_nats(m) * base.per_nat()))
+}
+
+/// Entropy of non-negative weights (counts, areas, luminances) after
+/// normalising them by their sum: `H(w / Σw) = log S − (Σ w log w)/S`.
+///
+/// # Errors
+/// As [`entropy`] but never [`Error::NotNormalized`].
+pub fn entropy_of_weights<T: Real>(w: &[T], base: Base) -> Result<T, Error> {
+    non_empty(w.len())?;
+    let m = mass_xlnx(w)?;
+    if m.sum == 0.0 {
+        return Err(Error::ZeroMass);
+    }
+    Ok(T::from_f64(entropy_nats(m) * base.per_nat()))
+}
+
+/// Binary entropy `H(p, 1−p)` (Part II eq. (4)).
+///
+/// # Errors
+/// [`Error::NonFinite`] or [`Error::InvalidParameter`] if `p ∉ [0, 1]`.
+pub fn binary_entropy<T: Real>(p: T, base: Base) -> Result<T, Error> {
+    let p = p.to_f64();
+    if !p.is_finite() {
+        return Err(Error::NonFinite { index: 0 });
+    }
+    if !(0.0..=1.0).contains(&p) {
+        return Err(Error::InvalidParameter { name: "p", value: p });
+    }
+    Ok(T::from_f64(binary_entropy_nats(p) * base.per_nat()))
+}
+
+#[inline]
+pub(crate) fn binary_entropy_nats(p: f64) -> f64 {
+    -(xlnx(p) + xlnx(1.0 - p))
+}
+
+/// Joint entropy `H(X,Y) = −Σ p_ij log p_ij` of a joint distribution given
+/// as a row-major `rows × cols` matrix (Part II eq. (3)).
+///
+/// # Errors
+/// [`Error::Empty`], [`Error::LengthMismatch`], then as [`entropy`].
+pub fn joint_entropy<T: Real>(joint: &[T], rows: usize, cols: usize, base: Base) -> Result<T, Error> {
+    MatrixRef::new(joint, rows, cols)?;
+    entropy(joint, base)
+}
+
+/// Entropies of a joint distribution `p(x, y)` (rows are `x`, columns `y`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointEntropies {
+    /// `H(X)` from the row marginal.
+    pub h_x: f64,
+    /// `H(Y)` from the column marginal.
+    pub h_y: f64,
+    /// `H(X,Y)` (Part II eq. (3)).
+    pub h_xy: f64,
+    /// `H(X|Y) = H(X,Y) − H(Y)` (Part II eq. (5) and property 2).
+    pub h_x_given_y: f64,
+    /// `H(Y|X) = H(X,Y) − H(X)`.
+    pub h_y_given_x: f64,
+    /// `I(X;Y) = H(X) + H(Y) − H(X,Y)` (Part II eq. (7), property 3).
+    pub mutual_information: f64,
+}
+
+/// Every entropy of a joint distribution, in `base`, allocation-free.
+///
+/// Three compensated passes over the matrix: entries, row sums and column
+/// sums (in blocks of 256 columns on the stack). Differences that are
+/// non-negative in exact arithmetic are clamped at 0 against rounding.
+///
+/// # Errors
+/// [`Error::Empty`], [`Error::LengthMismatch`], then as [`entropy`].
+pub fn joint_entropies<T: Real>(joint: &[T], rows: usize, cols: usize, base: Base) -> Result<JointEntropies, Error> {
+    let m = MatrixRef::new(joint, rows, cols)?;
+    let all = mass_xlnx(joint)?;
+    check_normalized::<T>(all.sum)?;
+    let s = all.sum;
+    let h_xy = entropy_nats(all);
+    // Row marginal, normalised by the total mass.
+    let mut hx = Neumaier::new();
+    for i in 0..rows {
+        hx.add(xlnx(sum_map(m.row(i), |x| x) / s));
+    }
+    let mut hy = Neumaier::new();
+    for_column_blocks::<T, f64>(&m, None, |_, col| {
+        for &q in col {
+            hy.add(xlnx(q / s));
+        }
+    });
+    let (h_x, h_y) = (-hx.value(), -hy.value());
+    let k = base.per_nat();
+    let clamp = |v: f64| if v < 0.0 { 0.0 } else { v };
+    Ok(JointEntropies {
+        h_x: h_x * k,
+        h_y: h_y * k,
+        h_xy: h_xy * k,
+        h_x_given_y: clamp(h_xy - h_y) * k,
+        h_y_given_x: clamp(h_xy - h_x) * k,
+        mutual_information: clamp(h_x + h_y - h_xy) * k,
+    })
+}
+
+/// Mutual information `I(X;Y)` of a joint distribution (Part II eq. (7)).
+///
+/// # Errors
+/// As [`joint_entropies`].
+pub fn mutual_information<T: Real>(joint: &[T], rows: usize, cols: usize, base: Base) -> Result<T, Error> {
+    joint_entropies(joint, rows, cols, base).map(|j| T::from_f64(j.mutual_information))
+}
+
+/// Conditional entropy `H(X|Y)` of a joint distribution, rows `x` and
+/// columns `y` (Part II eq. (5)).
+///
+/// # Errors
+/// As [`joint_entropies`].
+pub fn conditional_entropy<T: Real>(joint: &[T], rows: usize, cols: usize, base: Base) -> Result<T, Error> {
+    joint_entropies(joint, rows, cols, base).map(|j| T::from_f64(j.h_x_given_y))
+}
+
+/// Rényi entropy of order `alpha`: `H_α(p) = log(Σ p_i^α) / (1 − α)`.
+///
+/// `alpha = 1` is Shannon's entropy (the limit), `alpha = 0` the log of the
+/// support size (Hartley), `alpha = +∞` the min-entropy `−log max p`.
+/// `H_α` is non-increasing in `α`.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] for `alpha` NaN or negative, then as [`entropy`].
+pub fn renyi_entropy<T: Real>(p: &[T], alpha: f64, base: Base) -> Result<T, Error> {
+    if alpha.is_nan() || alpha < 0.0 {
+        return Err(Error::InvalidParameter { name: "alpha", value: alpha });
+    }
+    non_empty(p.len())?;
+    let s = mass(p)?;
+    check_normalized::<T>(s)?;
+    if alpha == 1.0 {
+        return entropy(p, base);
+    }
+    let nats = if alpha == f64::INFINITY {
+        let max = p.iter().map(|x| x.to_f64()).fold(0.0, f64::max);
+        -ln(max / s)
+    } else if alpha == 0.0 {
+        let support = p.iter().filter(|x| x.to_f64() > 0.0).count();
+        ln(support as f64)
+    } else {
+        let sa = sum_map(p, |x| if x > 0.0 { libm::pow(x / s, alpha) } else { 0.0 });
+        ln(sa) / (1.0 - alpha)
+    };
+    Ok(T::from_f64(if nats < 0.0 { 0.0 } else { nats * base.per_nat() }))
+}
+
+/// Tsallis entropy of index `q`: `S_q(p) = (1 − Σ p_i^q) / (q − 1)`.
+///
+/// Not logarithmic, so it takes no base; `q = 1` is Shannon's entropy in nats.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] for `q` NaN, infinite or negative, then as [`entropy`].
+pub fn tsallis_entropy<T: Real>(p: &[T], q: f64) -> Result<T, Error> {
+    if !q.is_finite() || q < 0.0 {
+        return Err(Error::InvalidParameter { name: "q", value: q });
+    }
+    non_empty(p.len())?;
+    let s = mass(p)?;
+    check_normalized::<T>(s)?;
+    if q == 1.0 {
+        return entropy(p, Base::Nats);
+    }
+    let sq = sum_map(p, |x| if x > 0.0 { libm::pow(x / s, q) } else { 0.0 });
+    Ok(T::from_f64((1.0 - sq) / (q - 1.0)))
+}
+
+/// Estimate of the continuous (differential) entropy `H^c(X)` from a
+/// histogram with bins of width `delta`, by Part II eq. (32):
+/// `H^c ≈ H(X^Δ) + log Δ`.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] if `delta` is not positive and finite, then as [`entropy`].
+pub fn differential_entropy_from_bins<T: Real>(p: &[T], delta: f64, base: Base) -> Result<T, Error> {
+    if !(delta > 0.0 && delta.is_finite()) {
+        return Err(Error::InvalidParameter { name: "delta", value: delta });
+    }
+    let h = entropy(p, Base::Nats)?.to_f64();
+    Ok(T::from_f64((h + ln(delta)) * base.per_nat()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bad_input_table() {
+        let nan = f64::NAN;
+        let cases: &[(&[f64], Error)] = &[
+            (&[], Error::Empty),
+            (&[0.5, nan, 0.5], Error::NonFinite { index: 1 }),
+            (&[0.5, f64::INFINITY], Error::NonFinite { index: 1 }),
+            (&[1.5, -0.5], Error::Negative { index: 1 }),
+            (&[0.0, 0.0], Error::ZeroMass),
+            (&[0.5, 0.6], Error::NotNormalized { sum: 1.1 }),
+        ];
+        for (p, e) in cases {
+            let got = entropy(p, Base::Bits).unwrap_err();
+            match (got, e) {
+                (Error::NotNormalized { sum: a }, Error::NotNormalized { sum: b }) => assert!((a - b).abs() < 1e-12),
+                _ => assert_eq!(got, *e, "{p:?}"),
+            }
+        }
+        // -0.0 is a zero, not a negative.
+        assert_eq!(entropy(&[-0.0, 1.0], Base::Bits).unwrap(), 0.0);
+    }
+
+    #[test]
+    fn bad_element_found_in_a_late_block() {
+        let mut p = [1.0f64 / 1000.0; 1000];
+        p[777] = f64::NAN;
+        assert_eq!(entropy(&p, Base::Bits), Err(Error::NonFinite { index: 777 }));
+    }
+
+    #[test]
+    fn renyi_limits() {
+        let p = [0.5f64, 0.25, 0.125, 0.125];
+        let h1 = entropy(&p, Base::Bits).unwrap();
+        let near = renyi_entropy(&p, 1.0 + 1e-7, Base::Bits).unwrap();
+        assert!((near - h1).abs() < 1e-6);
+        assert!((renyi_entropy(&p, 0.0, Base::Bits).unwrap() - 2.0).abs() < 1e-15);
+        assert!((renyi_entropy(&p, f64::INFINITY, Base::Bits).unwrap() - 1.0).abs() < 1e-15);
+        assert!((tsallis_entropy(&p, 2.0).unwrap() - (1.0 - (0.25 + 0.0625 + 2.0 * 0.015625))).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,60 @@
+//! The grouping property of entropy (Part II Fig. 1; Part IV eq. (24)).
+
+use crate::math::{ln, xlnx};
+use crate::scan::{check_normalized, mass, same_len};
+use crate::sum::Neumaier;
+use crate::{Base, Error, Real};
+
+/// The two parts of the recursive decomposition `H(X) = H_in + H_out`
+/// (Part IV eq. (24)) for a partition of the outcomes into groups.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Grouping {
+    /// `H_in = Σ_j q_j H(Y_j)`: information still hidden inside the groups.
+    pub h_in: f64,
+    /// `H_out = −Σ_j q_j log q_j`: information acquired by knowing the group.
+    pub h_out: f64,
+}
+
+impl Grouping {
+    /// `H_in + H_out`, which equals `H(X)`.
+    #[must_use]
+    pub fn total(&self) -> f64 {
+        self.h_in + self.h_out
+    }
+}
+
+/// Decomposes `H(p)` over the partition `labels` (outcome `k` is in group
+/// `labels[k] < groups`); `scratch` holds the `groups` group masses `q_j`.
+///
+/// `H_in` is computed term by term as `−Σ_k p_k log(p_k / q_{label(k)})`,
+/// not as a difference, so the identity `H = H_in + H_out` is a real check.
+///
+/// # Errors
+/// As [`crate::Pmf::new`]; [`Error::LengthMismatch`] for `labels` or
+/// `scratch`; [`Error::LabelOutOfRange`].
+pub fn grouping<T: Real>(p: &[T], labels: &[usize], groups: usize, scratch: &mut [f64], base: Base) -> Result<Grouping, Error> {
+    same_len(p.len(), labels.len())?;
+    same_len(groups, scratch.len())?;
+    let s = mass(p)?;
+    check_normalized::<T>(s)?;
+    scratch.iter_mut().for_each(|q| *q = 0.0);
+    for (index, (&label, x)) in labels.iter().zip(p).enumerate() {
+        if label >= groups {
+            return Err(Error::LabelOutOfRange { index, label, groups });
+        }
+        scratch[label] += x.to_f64() / s;
+    }
+    let mut out = Neumaier::new();
+    for &q in scratch.iter() {
+        out.add(-xlnx(q));
+    }
+    let mut inner = Neumaier::new();
+    for (&label, x) in labels.iter().zip(p) {
+        let x = x.to_f64() / s;
+        if x > 0.0 {
+            inner.add(-x * (ln(x) - ln(scratch[label])));
+        }
+    }
+    let k = base.per_nat();
+    Ok(Grouping { h_in: inner.value() * k, h_out: out.value() * k })
+}

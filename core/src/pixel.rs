@@ -1,0 +1,380 @@
+//! Pixel quality and contrast for adaptive ray tracing (Part IV §2–§6,
+//! Part III-IV §5): colour and geometry entropies, qualities and contrasts,
+//! the classic measures they are compared with, the entropy-tree importance,
+//! f-divergence criteria, and the RMSE/PSNR used to score images.
+//!
+//! A "sample set" is the values of one colour channel (or the geometry
+//! factors) of the `N ≥ 2` rays through one pixel or sub-pixel region.
+
+use crate::entropy::binary_entropy_nats;
+use crate::math::ln;
+use crate::oracle::{DivergenceKernel, divergence_from_uniform};
+use crate::scan::{entropy_nats, mass, mass_xlnx, same_len};
+use crate::sum::Neumaier;
+use crate::{Base, Error, Real};
+
+/// Perceptual sRGB channel weights `w^R, w^G, w^B` (Part IV §3.1, §6.3).
+pub const SRGB_LUMINANCE_WEIGHTS: [f64; 3] = [0.2126, 0.7152, 0.0722];
+/// Mitchell's per-channel contrast thresholds, used as weights (Part IV eq. (2)).
+pub const MITCHELL_WEIGHTS: [f64; 3] = [0.4, 0.3, 0.6];
+
+fn at_least_two(n: usize) -> Result<(), Error> {
+    if n == 0 {
+        return Err(Error::Empty);
+    }
+    if n < 2 {
+        return Err(Error::LengthMismatch { expected: 2, found: n });
+    }
+    Ok(())
+}
+
+/// Pixel channel (or geometry) entropy `H(p)` with `p_i = c(s_i) / Σ c(s_j)`
+/// (Part IV Defs. 2 and 6, eqs. (8), (14)).
+///
+/// A sample set that is all zero (a black pixel, or no geometry) is
+/// perfectly homogeneous: it gets the maximum, `log N`.
+///
+/// # Errors
+/// [`Error::Empty`], [`Error::LengthMismatch`] for a single sample,
+/// [`Error::NonFinite`], [`Error::Negative`].
+pub fn pixel_entropy<T: Real>(samples: &[T], base: Base) -> Result<f64, Error> {
+    at_least_two(samples.len())?;
+    let m = mass_xlnx(samples)?;
+    let nats = if m.sum == 0.0 { ln(samples.len() as f64) } else { entropy_nats(m) };
+    Ok(nats * base.per_nat())
+}
+
+/// Pixel quality `Q = H(p) / log N` in `[0, 1]` (Part IV Defs. 3 and 7,
+/// eqs. (10), (15)); independent of the log base.
+///
+/// # Errors
+/// As [`pixel_entropy`].
+pub fn pixel_quality<T: Real>(samples: &[T]) -> Result<f64, Error> {
+    let h = pixel_entropy(samples, Base::Nats)?;
+    Ok((h / ln(samples.len() as f64)).clamp(0.0, 1.0))
+}
+
+/// Pixel contrast `C = 1 − Q` (Part IV Defs. 8 and 12, eqs. (16), (20)).
+///
+/// # Errors
+/// As [`pixel_entropy`].
+pub fn pixel_contrast<T: Real>(samples: &[T]) -> Result<f64, Error> {
+    pixel_quality(samples).map(|q| 1.0 - q)
+}
+
+/// `(p_min, p_max)` of the normalised samples; `None` if all are zero.
+fn extremes<T: Real>(samples: &[T]) -> Result<Option<(f64, f64)>, Error> {
+    at_least_two(samples.len())?;
+    let s = mass(samples)?;
+    if s == 0.0 {
+        return Ok(None);
+    }
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+    for x in samples {
+        let x = x.to_f64();
+        lo = lo.min(x);
+        hi = hi.max(x);
+    }
+    Ok(Some((lo / s, hi / s)))
+}
+
+/// Binary contrast `C_b = 1 − H_b(p_min/(p_min+p_max))`, with `H_b` in bits
+/// (Part IV Defs. 9 and 13, eqs. (17), (21)); in `[0, 1]`, 0 for an all-zero set.
+///
+/// # Errors
+/// As [`pixel_entropy`].
+pub fn binary_contrast<T: Real>(samples: &[T]) -> Result<f64, Error> {
+    Ok(match extremes(samples)? {
+        None => 0.0,
+        Some((lo, hi)) => 1.0 - binary_entropy_nats(lo / (lo + hi)) * Base::Bits.per_nat(),
+    })
+}
+
+/// Logarithmic-difference contrast `log(p_max / p_min)` (Part IV Def. 14,
+/// eq. (22)); `+∞` when some sample is zero and another is not, 0 for an
+/// all-zero set.
+///
+/// # Errors
+/// As [`pixel_entropy`].
+pub fn log_difference_contrast<T: Real>(samples: &[T], base: Base) -> Result<f64, Error> {
+    Ok(match extremes(samples)? {
+        None => 0.0,
+        Some((lo, _)) if lo == 0.0 => f64::INFINITY,
+        Some((lo, hi)) => (ln(hi) - ln(lo)) * base.per_nat(),
+    })
+}
+
+/// Geometry factor of a sample `g(s) = cos θ / r²` (Part IV eq. (12)), from
+/// the cosine between the surface normal and the reversed ray and the ray
+/// length; back-facing hits (`cos θ < 0`) count as `|cos θ|`.
+#[must_use]
+pub fn geometry_factor(cos_theta: f64, distance: f64) -> f64 {
+    cos_theta.abs() / (distance * distance)
+}
+
+/// Weighted mean of per-channel values `Σ w^c v^c / Σ w^c`: the pixel colour
+/// quality of Part IV Def. 4 (eq. (11)) when `values` are channel qualities.
+///
+/// # Errors
+/// [`Error::LengthMismatch`], [`Error::NonFinite`], [`Error::Negative`],
+/// [`Error::ZeroMass`] for all-zero weights.
+pub fn weighted_channel_mean(values: &[f64], weights: &[f64]) -> Result<f64, Error> {
+    same_len(values.len(), weights.len())?;
+    let sw = mass(weights)?;
+    if sw == 0.0 {
+        return Err(Error::ZeroMass);
+    }
+    let mut acc = Neumaier::new();
+    for (v, w) in values.iter().zip(weights) {
+        if !v.is_finite() {
+            return Err(Error::NonFinite { index: 0 });
+        }
+        acc.add(v * w);
+    }
+    Ok(acc.value() / sw)
+}
+
+/// Pixel colour contrast of a colour system (Part IV Defs. 10–11, eqs. (18),
+/// (19)): channel contrasts weighted by `w^c c̄`, where `c̄` is the channel's
+/// mean sample value. Pass entropy contrasts for `C^c`, binary contrasts for
+/// `C_b^c`. 0 when every `w^c c̄` is 0 (a black pixel).
+///
+/// # Errors
+/// [`Error::LengthMismatch`], [`Error::NonFinite`], [`Error::Negative`].
+pub fn colour_contrast(channel_contrasts: &[f64], weights: &[f64], channel_means: &[f64]) -> Result<f64, Error> {
+    same_len(channel_contrasts.len(), weights.len())?;
+    same_len(channel_contrasts.len(), channel_means.len())?;
+    mass(weights)?;
+    mass(channel_means)?;
+    let mut num = Neumaier::new();
+    let mut den = Neumaier::new();
+    for ((c, w), m) in channel_contrasts.iter().zip(weights).zip(channel_means) {
+        if !c.is_finite() {
+            return Err(Error::NonFinite { index: 0 });
+        }
+        num.add(w * m * c);
+        den.add(w * m);
+    }
+    let d = den.value();
+    Ok(if d > 0.0 { num.value() / d } else { 0.0 })
+}
+
+/// Colour–geometry contrast `δ C^c + (1 − δ) C^g` (Part IV Def. 15, eq. (23);
+/// eq. (28) in the refinement tree).
+///
+/// # Errors
+/// [`Error::InvalidParameter`] for `delta ∉ [0, 1]`.
+pub fn mixed_contrast(delta: f64, colour: f64, geometry: f64) -> Result<f64, Error> {
+    if !(0.0..=1.0).contains(&delta) {
+        return Err(Error::InvalidParameter { name: "delta", value: delta });
+    }
+    Ok(delta * colour + (1.0 - delta) * geometry)
+}
+
+/// Mitchell's classic contrast `(I_max − I_min)/(I_max + I_min)` of one
+/// channel (Part IV eq. (1)); 0 for an all-zero set.
+///
+/// # Errors
+/// As [`pixel_entropy`].
+pub fn classic_contrast<T: Real>(samples: &[T]) -> Result<f64, Error> {
+    Ok(match extremes(samples)? {
+        None => 0.0,
+        Some((lo, hi)) => (hi - lo) / (hi + lo),
+    })
+}
+
+fn mean<T: Real>(samples: &[T]) -> Result<f64, Error> {
+    Ok(mass(samples)? / samples.len() as f64)
+}
+
+/// Simmons' priority value `p_c = Σ_c k_c C_c c̄` over the R, G, B sample
+/// sets with `k = (0.4, 0.3, 0.6)` (Part IV eq. (2)).
+///
+/// # Errors
+/// As [`pixel_entropy`] for each channel; [`Error::LengthMismatch`] if the
+/// channels differ in length.
+pub fn priority_colour<T: Real>(r: &[T], g: &[T], b: &[T]) -> Result<f64, Error> {
+    same_len(r.len(), g.len())?;
+    same_len(r.len(), b.len())?;
+    let mut acc = 0.0;
+    for (k, c) in MITCHELL_WEIGHTS.iter().zip([r, g, b]) {
+        acc += k * classic_contrast(c)? * mean(c)?;
+    }
+    Ok(acc)
+}
+
+/// Depth difference `p_d = 1 − d_min/d_max` (Part IV eq. (3)); 0 if all depths are 0.
+///
+/// # Errors
+/// As [`pixel_entropy`].
+pub fn depth_difference<T: Real>(depths: &[T]) -> Result<f64, Error> {
+    Ok(match extremes(depths)? {
+        None => 0.0,
+        Some((lo, hi)) => 1.0 - lo / hi,
+    })
+}
+
+/// Priority value `p_v = δ p_c + (1 − δ) p_d` (Part IV eq. (4); `δ = 0.9` there).
+///
+/// # Errors
+/// [`Error::InvalidParameter`] for `delta ∉ [0, 1]`.
+pub fn priority_value(delta: f64, p_c: f64, p_d: f64) -> Result<f64, Error> {
+    mixed_contrast(delta, p_c, p_d)
+}
+
+/// Outcome of the confidence test (Part IV eq. (5)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConfidenceTest {
+    /// The sample mean `L̂`.
+    pub mean: f64,
+    /// Half-width `t_{1−α/2, N−1} · s / √N` of the `1 − α` interval.
+    pub half_width: f64,
+    /// `true` when the half-width is within the tolerance: stop sampling.
+    pub satisfied: bool,
+}
+
+/// Confidence test of variance-based adaptive sampling (Part IV eq. (5)):
+/// is the true value within `tolerance` of the mean with probability `1 − α`?
+/// Uses Student's t quantile with `N − 1` degrees of freedom (the samples
+/// per pixel are few: 8 in Part IV §6.4).
+///
+/// # Errors
+/// As [`pixel_entropy`] for the samples (negative values are allowed here:
+/// only finiteness is required), [`Error::InvalidParameter`] for `alpha ∉ (0, 1)`
+/// or a negative `tolerance`.
+pub fn confidence_test(samples: &[f64], alpha: f64, tolerance: f64) -> Result<ConfidenceTest, Error> {
+    at_least_two(samples.len())?;
+    if !(alpha > 0.0 && alpha < 1.0) {
+        return Err(Error::InvalidParameter { name: "alpha", value: alpha });
+    }
+    if !(tolerance >= 0.0 && tolerance.is_finite()) {
+        return Err(Error::InvalidParameter { name: "tolerance", value: tolerance });
+    }
+    let mut s = Neumaier::new();
+    for (index, &x) in samples.iter().enumerate() {
+        if !x.is_finite() {
+            return Err(Error::NonFinite { index });
+        }
+        s.add(x);
+    }
+    let n = samples.len() as f64;
+    let m = s.value() / n;
+    let mut ss = Neumaier::new();
+    for &x in samples {
+        ss.add((x - m) * (x - m));
+    }
+    let sd = libm::sqrt(ss.value() / (n - 1.0));
+    let t = crate::quantile::student_t_quantile(1.0 - alpha / 2.0, samples.len() - 1);
+    let half_width = t * sd / libm::sqrt(n);
+    Ok(ConfidenceTest { mean: m, half_width, satisfied: half_width <= tolerance })
+}
+
+/// Importance of an `n`-node of the refinement tree, `q_n ≈ c̄_n / N_r^{n−1}`
+/// (Part IV Proposition 1, eq. (26)); `level = n ≥ 1`.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] for `level = 0`, `regions < 2`, or a negative mean.
+pub fn node_importance(mean_colour: f64, regions: u32, level: u32) -> Result<f64, Error> {
+    if level == 0 {
+        return Err(Error::InvalidParameter { name: "level", value: 0.0 });
+    }
+    if regions < 2 {
+        return Err(Error::InvalidParameter { name: "regions", value: f64::from(regions) });
+    }
+    if !(mean_colour >= 0.0 && mean_colour.is_finite()) {
+        return Err(Error::InvalidParameter { name: "mean_colour", value: mean_colour });
+    }
+    Ok(mean_colour / libm::pow(f64::from(regions), f64::from(level - 1)))
+}
+
+/// Colour contrast of an `n`-node, `C_n = Σ_c w^c C_n^c q_n^c` (Part IV eq. (27)).
+///
+/// # Errors
+/// [`Error::LengthMismatch`], [`Error::NonFinite`].
+pub fn tree_colour_contrast(channel_contrasts: &[f64], weights: &[f64], importances: &[f64]) -> Result<f64, Error> {
+    same_len(channel_contrasts.len(), weights.len())?;
+    same_len(channel_contrasts.len(), importances.len())?;
+    let mut acc = Neumaier::new();
+    for (index, ((c, w), q)) in channel_contrasts.iter().zip(weights).zip(importances).enumerate() {
+        let v = c * w * q;
+        if !v.is_finite() {
+            return Err(Error::NonFinite { index });
+        }
+        acc.add(v);
+    }
+    Ok(acc.value())
+}
+
+/// The f-divergence refinement criterion for ray tracing,
+/// `(1/N) L̄ D(p, u)` with `p_i = L_i / Σ L_j` and `u` uniform
+/// (Part III-IV eqs. (14)–(16)); with `square_root`, `(1/N) L̄ D^½(p, u)`
+/// (Def. 4). Refine while the value is not below `ε`.
+/// `kernel` must not be [`DivergenceKernel::Variance`].
+///
+/// # Errors
+/// As [`pixel_entropy`]; [`Error::InvalidParameter`] for the variance kernel.
+pub fn divergence_criterion(kernel: DivergenceKernel, luminances: &[f64], square_root: bool) -> Result<f64, Error> {
+    if kernel == DivergenceKernel::Variance {
+        return Err(Error::InvalidParameter { name: "kernel", value: 3.0 });
+    }
+    at_least_two(luminances.len())?;
+    let s = mass(luminances)?;
+    let n = luminances.len() as f64;
+    let d = divergence_from_uniform(kernel, luminances, s).unwrap_or(0.0);
+    let d = if square_root { libm::sqrt(d) } else { d };
+    Ok(s / n / n * d)
+}
+
+/// Luminance `Y` of a linear sRGB colour (Part III-IV §5.1).
+#[must_use]
+pub fn luminance(rgb: [f64; 3]) -> f64 {
+    SRGB_LUMINANCE_WEIGHTS[0] * rgb[0] + SRGB_LUMINANCE_WEIGHTS[1] * rgb[1] + SRGB_LUMINANCE_WEIGHTS[2] * rgb[2]
+}
+
+/// Image error of Part IV §6.4 Table 2 / Part III-IV Table 3.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImageError {
+    /// Root of the channel-weighted mean square error.
+    pub rmse: f64,
+    /// `10 log10(I_max² / MSE)` dB; `+∞` for identical images.
+    pub psnr: f64,
+}
+
+/// RMSE and PSNR between two interleaved images with `channels` channels,
+/// the per-channel MSEs combined with `weights` (equal weights give the
+/// `_a` columns of the tables, the sRGB weights the `_p` columns), and the
+/// peak value `peak` (255 for 8-bit images).
+///
+/// # Errors
+/// [`Error::LengthMismatch`] (lengths, or not a multiple of `channels`,
+/// or `weights.len() != channels`), [`Error::NonFinite`],
+/// [`Error::InvalidParameter`] for `peak`, [`Error::ZeroMass`] for all-zero weights.
+pub fn image_error(a: &[f64], b: &[f64], channels: usize, weights: &[f64], peak: f64) -> Result<ImageError, Error> {
+    same_len(a.len(), b.len())?;
+    if channels == 0 || a.len() % channels != 0 {
+        return Err(Error::LengthMismatch { expected: channels.max(1), found: a.len() });
+    }
+    same_len(channels, weights.len())?;
+    if !(peak > 0.0 && peak.is_finite()) {
+        return Err(Error::InvalidParameter { name: "peak", value: peak });
+    }
+    let sw = mass(weights)?;
+    if sw == 0.0 {
+        return Err(Error::ZeroMass);
+    }
+    let mut mse = 0.0;
+    for (c, w) in weights.iter().enumerate() {
+        let mut acc = Neumaier::new();
+        for (index, (x, y)) in a.iter().zip(b).enumerate().skip(c).step_by(channels) {
+            let d = x - y;
+            if !d.is_finite() {
+                return Err(Error::NonFinite { index });
+            }
+            acc.add(d * d);
+        }
+        mse += w * acc.value() / (a.len() / channels) as f64;
+    }
+    let mse = mse / sw;
+    let psnr = if mse > 0.0 { 10.0 * libm::log10(peak * peak / mse) } else { f64::INFINITY };
+    Ok(ImageError { rmse: libm::sqrt(mse), psnr })
+}

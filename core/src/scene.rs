@@ -1,0 +1,394 @@
+//! The scene visibility channel (Part III §2–§8): positional entropy `H_P`,
+//! scene entropy `H_S`, joint entropy `H_J`, mutual information `I_S`, their
+//! normalisations, the mutual information matrix, the continuous mutual
+//! information `I_S^c` and the discretisation error `δ_ij`.
+//!
+//! Inputs are patch areas (any positive unit; only `a_i = A_i / A_T` is
+//! used) and either a dense form-factor matrix or sparse line counts.
+
+use crate::math::{ln, xlnx};
+use crate::matrix::MatrixRef;
+use crate::scan::{mass, mass_xlnx, entropy_nats, same_len, non_empty};
+use crate::sum::Neumaier;
+use crate::{Base, Error, Real};
+
+/// Scene visibility measures, all in one unit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneMeasures {
+    /// Number of patches `n_p`.
+    pub patches: usize,
+    /// Patches no line reached (their `H_i` is unknown and counted as 0).
+    pub unsampled_patches: usize,
+    /// `H_P = −Σ a_i log a_i` (Part III eq. (43)).
+    pub positional_entropy: f64,
+    /// `H_S = Σ a_i H_i = −Σ a_i Σ F_ij log F_ij` (Part III eqs. (39)–(41)).
+    pub scene_entropy: f64,
+    /// `H_J = H_P + H_S` (Part III eq. (44) and §2.3).
+    pub joint_entropy: f64,
+    /// `I_S = H_P − H_S` (Part III eq. (45)).
+    pub mutual_information: f64,
+    /// `H_S / H_P` (Part III eq. (50)); 0 when `H_P = 0`.
+    pub normalized_entropy: f64,
+    /// `I_S / H_P` (Part III eq. (51)); 0 when `H_P = 0`.
+    pub normalized_mutual_information: f64,
+    /// `H_S / H_J` (Part III §3.2.3).
+    pub entropy_over_joint: f64,
+    /// `I_S / H_J` (Part III §3.2.3).
+    pub mutual_information_over_joint: f64,
+}
+
+impl SceneMeasures {
+    fn from_nats(patches: usize, unsampled: usize, hp: f64, hs: f64, base: Base) -> Self {
+        let k = base.per_nat();
+        let hj = hp + hs;
+        let is = hp - hs;
+        let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { 0.0 };
+        Self {
+            patches,
+            unsampled_patches: unsampled,
+            positional_entropy: hp * k,
+            scene_entropy: hs * k,
+            joint_entropy: hj * k,
+            mutual_information: is * k,
+            normalized_entropy: ratio(hs, hp),
+            normalized_mutual_information: ratio(is, hp),
+            entropy_over_joint: ratio(hs, hj),
+            mutual_information_over_joint: ratio(is, hj),
+        }
+    }
+}
+
+fn relative_area_entropy<T: Real>(areas: &[T]) -> Result<(f64, f64), Error> {
+    non_empty(areas.len())?;
+    let m = mass_xlnx(areas)?;
+    if m.sum == 0.0 {
+        return Err(Error::ZeroMass);
+    }
+    Ok((m.sum, entropy_nats(m)))
+}
+
+/// Scene measures from patch areas and a dense `n × n` form-factor matrix
+/// (rows must sum to 1: a closed scene, Part III eq. (9)).
+///
+/// # Errors
+/// Area errors as [`crate::entropy_of_weights`]; matrix errors as
+/// [`MatrixRef::check_stochastic`].
+///
+/// # Examples
+/// ```
+/// use itgfx_core::{scene_measures, Base};
+/// // Regular tetrahedron seen from inside: each face sees the other three equally.
+/// let t = 1.0 / 3.0;
+/// let f = [0.0, t, t, t, t, 0.0, t, t, t, t, 0.0, t, t, t, t, 0.0];
+/// let m = scene_measures(&[1.0f64; 4], &f, Base::Bits).unwrap();
+/// assert!((m.mutual_information - (4.0f64 / 3.0).log2()).abs() < 1e-12);
+/// ```
+pub fn scene_measures<T: Real>(areas: &[T], form_factors: &[T], base: Base) -> Result<SceneMeasures, Error> {
+    let n = areas.len();
+    let (total, hp) = relative_area_entropy(areas)?;
+    let f = MatrixRef::new(form_factors, n, n)?;
+    f.check_stochastic()?;
+    let mut hs = Neumaier::new();
+    for (i, a) in areas.iter().enumerate() {
+        let a = a.to_f64() / total;
+        if a > 0.0 {
+            hs.add(a * entropy_nats(mass_xlnx(f.row(i))?));
+        }
+    }
+    Ok(SceneMeasures::from_nats(n, 0, hp, hs.value(), base))
+}
+
+/// Number of lines (or line segments) that joined patch `from` to patch `to`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[repr(C)]
+pub struct PairCount {
+    /// Source patch `i`.
+    pub from: u32,
+    /// Destination patch `j`.
+    pub to: u32,
+    /// `N_ij`.
+    pub count: u64,
+}
+
+/// Scene measures from sparse line counts, with `F_ij = N_ij / N_i` and
+/// `N_i = Σ_j N_ij` (Part III eqs. (30)–(31)).
+///
+/// `pairs` may list a pair several times (shards are simply concatenated);
+/// `row_totals` is caller scratch of `n` values and receives `N_i`.
+/// Relative areas come from the exact `areas`, as in Part III's tables.
+/// The one-pass form used is
+/// `H_S = Σ_i a_i ln N_i − Σ_(i,j) (a_i/N_i) N_ij ln N_ij` when each pair
+/// appears once; repeated pairs are first summed, which needs `pairs`
+/// sorted by `(from, to)`: unsorted input with repeats is refused.
+///
+/// # Errors
+/// Area errors as [`crate::entropy_of_weights`]; [`Error::LengthMismatch`]
+/// for `row_totals`; [`Error::LabelOutOfRange`] for a patch index `≥ n`;
+/// [`Error::InvalidParameter`] (`name = "pairs"`) for unsorted pairs.
+pub fn scene_measures_from_counts<T: Real>(
+    areas: &[T],
+    pairs: &[PairCount],
+    row_totals: &mut [u64],
+    base: Base,
+) -> Result<SceneMeasures, Error> {
+    let n = areas.len();
+    let (total, hp) = relative_area_entropy(areas)?;
+    same_len(n, row_totals.len())?;
+    row_totals.iter_mut().for_each(|t| *t = 0);
+    let mut prev: Option<(u32, u32)> = None;
+    for (index, p) in pairs.iter().enumerate() {
+        for idx in [p.from, p.to] {
+            if idx as usize >= n {
+                return Err(Error::LabelOutOfRange { index, label: idx as usize, groups: n });
+            }
+        }
+        if let Some(pr) = prev {
+            if (p.from, p.to) < pr {
+                return Err(Error::InvalidParameter { name: "pairs", value: index as f64 });
+            }
+        }
+        prev = Some((p.from, p.to));
+        row_totals[p.from as usize] += p.count;
+    }
+    let mut hs = Neumaier::new();
+    let mut unsampled = 0;
+    for (a, &t) in areas.iter().zip(row_totals.iter()) {
+        let a = a.to_f64() / total;
+        if t == 0 {
+            unsampled += usize::from(a > 0.0);
+        } else if a > 0.0 {
+            hs.add(a * ln(t as f64));
+        }
+    }
+    // Sum runs of equal pairs, then subtract (a_i/N_i) N_ij ln N_ij.
+    let mut k = 0;
+    while k < pairs.len() {
+        let (i, j) = (pairs[k].from, pairs[k].to);
+        let mut c = 0u64;
+        while k < pairs.len() && pairs[k].from == i && pairs[k].to == j {
+            c += pairs[k].count;
+            k += 1;
+        }
+        let a = areas[i as usize].to_f64() / total;
+        if c > 0 && a > 0.0 {
+            hs.add(-a / row_totals[i as usize] as f64 * xlnx(c as f64));
+        }
+    }
+    let hs = hs.value().max(0.0);
+    Ok(SceneMeasures::from_nats(n, unsampled, hp, hs, base))
+}
+
+/// The mutual information matrix `I_ij = a_i F_ij log(F_ij / a_j)`
+/// (Part III eq. (64)) into `out` (row-major `n × n`), and the per-patch
+/// information transfer `I_i = Σ_j I_ij` (eq. (65)) into `per_patch`.
+/// `Σ_i I_i` is `I_S` by eq. (63)/(66) when `F` is reciprocal.
+///
+/// # Errors
+/// As [`scene_measures`], and [`Error::LengthMismatch`] for the outputs.
+pub fn mutual_information_matrix_into<T: Real>(
+    areas: &[T],
+    form_factors: &[T],
+    base: Base,
+    out: &mut [T],
+    per_patch: &mut [T],
+) -> Result<(), Error> {
+    let n = areas.len();
+    let (total, _) = relative_area_entropy(areas)?;
+    let f = MatrixRef::new(form_factors, n, n)?;
+    f.check_stochastic()?;
+    same_len(n * n, out.len())?;
+    same_len(n, per_patch.len())?;
+    let k = base.per_nat();
+    for i in 0..n {
+        let ai = areas[i].to_f64() / total;
+        let mut row = Neumaier::new();
+        for j in 0..n {
+            let fij = f.row(i)[j].to_f64();
+            let aj = areas[j].to_f64() / total;
+            let v = if fij > 0.0 && ai > 0.0 { ai * fij * (ln(fij) - ln(aj)) } else { 0.0 };
+            out[i * n + j] = T::from_f64(v * k);
+            row.add(v);
+        }
+        per_patch[i] = T::from_f64(row.value() * k);
+    }
+    Ok(())
+}
+
+/// Point-to-point form factor `F(x, y) = cos θ_x cos θ_y / (π r²)` for
+/// mutually visible points (Part III eq. (7)).
+#[must_use]
+#[inline]
+pub fn point_form_factor(cos_x: f64, cos_y: f64, r2: f64) -> f64 {
+    cos_x * cos_y / (core::f64::consts::PI * r2)
+}
+
+/// Running Monte Carlo estimate of the continuous scene mutual information
+/// `I_S^c ≈ (1/N) Σ_k log(A_T F(x_k, y_k))` (Part III eq. (59)), mergeable
+/// across shards, with the sample variance for a standard error.
+///
+/// For global lines a sample is one segment (a pair of consecutive
+/// intersections facing each other); for local lines, one line (§6.1).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ContinuousMutualInformation {
+    total_area: f64,
+    samples: u64,
+    sum: Neumaier,
+    sum_sq: Neumaier,
+}
+
+impl ContinuousMutualInformation {
+    /// An empty estimate for a scene of total area `A_T`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] unless `total_area` is positive and finite.
+    pub fn new(total_area: f64) -> Result<Self, Error> {
+        if !(total_area > 0.0 && total_area.is_finite()) {
+            return Err(Error::InvalidParameter { name: "total_area", value: total_area });
+        }
+        Ok(Self { total_area, ..Self::default() })
+    }
+
+    /// Adds one sample given its point-to-point form factor `F(x, y) > 0`.
+    /// Non-positive or non-finite values are ignored and return `false`.
+    #[inline]
+    pub fn add_form_factor(&mut self, f: f64) -> bool {
+        if !(f > 0.0 && f.is_finite()) {
+            return false;
+        }
+        let l = ln(self.total_area * f);
+        self.samples += 1;
+        self.sum.add(l);
+        self.sum_sq.add(l * l);
+        true
+    }
+
+    /// Adds one sample from its geometry (cosines at both ends, squared length).
+    #[inline]
+    pub fn add_segment(&mut self, cos_x: f64, cos_y: f64, r2: f64) -> bool {
+        self.add_form_factor(point_form_factor(cos_x, cos_y, r2))
+    }
+
+    /// Merges another shard's estimate (same scene).
+    pub fn merge(&mut self, other: &Self) {
+        self.samples += other.samples;
+        self.sum.merge(&other.sum);
+        self.sum_sq.merge(&other.sum_sq);
+    }
+
+    /// Number of samples.
+    #[must_use]
+    pub fn samples(&self) -> u64 {
+        self.samples
+    }
+
+    /// `I_S^c` in `base`; `None` before the first sample.
+    #[must_use]
+    pub fn estimate(&self, base: Base) -> Option<f64> {
+        (self.samples > 0).then(|| self.sum.value() / self.samples as f64 * base.per_nat())
+    }
+
+    /// Standard error of the estimate (sample standard deviation over `√N`),
+    /// treating samples as independent; `None` below two samples.
+    #[must_use]
+    pub fn standard_error(&self, base: Base) -> Option<f64> {
+        if self.samples < 2 {
+            return None;
+        }
+        let n = self.samples as f64;
+        let mean = self.sum.value() / n;
+        let var = ((self.sum_sq.value() - n * mean * mean) / (n - 1.0)).max(0.0);
+        Some(libm::sqrt(var / n) * base.per_nat())
+    }
+}
+
+/// `I_S^c` from a slice of point-to-point form factors (Part III eq. (59)).
+///
+/// # Errors
+/// [`Error::Empty`], [`Error::InvalidParameter`] for `total_area`,
+/// [`Error::NonFinite`], [`Error::Negative`], and [`Error::ZeroMass`] if
+/// no sample is positive.
+pub fn continuous_mutual_information<T: Real>(total_area: f64, point_form_factors: &[T], base: Base) -> Result<T, Error> {
+    non_empty(point_form_factors.len())?;
+    mass(point_form_factors)?;
+    let mut acc = ContinuousMutualInformation::new(total_area)?;
+    for f in point_form_factors {
+        acc.add_form_factor(f.to_f64());
+    }
+    acc.estimate(base).map(T::from_f64).ok_or(Error::ZeroMass)
+}
+
+fn check_areas(area_i: f64, area_j: f64, total: f64) -> Result<(), Error> {
+    for (name, v) in [("area_i", area_i), ("area_j", area_j), ("total_area", total)] {
+        if !(v > 0.0 && v.is_finite()) {
+            return Err(Error::InvalidParameter { name, value: v });
+        }
+    }
+    Ok(())
+}
+
+/// Visibility discretisation error between two patches from `N_ij`
+/// patch-to-patch random lines, i.e. uniform area sampling (Part III eq. (73)):
+///
+/// ```text
+/// δ_ij = (A_i A_j / A_T) ( mean_k F_k log F_k − mean_k F_k · log mean_k F_k )  ≥ 0
+/// ```
+/// `point_form_factors` are `F(x_k, y_k)`, zero for occluded pairs. The
+/// bracket is the log-sum gap (Part II eq. (18)) and is never negative.
+///
+/// # Errors
+/// [`Error::Empty`], [`Error::InvalidParameter`] for an area,
+/// [`Error::NonFinite`], [`Error::Negative`].
+pub fn discretisation_error_area_sampling<T: Real>(
+    area_i: f64,
+    area_j: f64,
+    total_area: f64,
+    point_form_factors: &[T],
+    base: Base,
+) -> Result<f64, Error> {
+    check_areas(area_i, area_j, total_area)?;
+    non_empty(point_form_factors.len())?;
+    let m = mass_xlnx(point_form_factors)?;
+    let n = point_form_factors.len() as f64;
+    let mean = m.sum / n;
+    let gap = m.xlnx / n - xlnx(mean);
+    let gap = if gap < 0.0 { 0.0 } else { gap };
+    Ok(area_i * area_j / total_area * gap * base.per_nat())
+}
+
+/// Visibility discretisation error between two patches from the `N_ij`
+/// local lines or global-line segments joining them (Part III eq. (75)):
+///
+/// ```text
+/// δ_ij = (A_i F_ij / A_T) ( (1/N_ij) Σ_k log F(x_k, y_k) − log(F_ij / A_j) )
+/// ```
+/// Non-negative in expectation (Jensen), but a Monte Carlo estimate can dip
+/// below 0 at low counts; it is returned as computed.
+///
+/// # Errors
+/// As [`discretisation_error_area_sampling`], plus [`Error::InvalidParameter`]
+/// for `f_ij ∉ (0, 1]` and [`Error::ZeroMass`] if a sample is zero.
+pub fn discretisation_error_lines<T: Real>(
+    area_i: f64,
+    area_j: f64,
+    total_area: f64,
+    f_ij: f64,
+    point_form_factors: &[T],
+    base: Base,
+) -> Result<f64, Error> {
+    check_areas(area_i, area_j, total_area)?;
+    if !(f_ij > 0.0 && f_ij <= 1.0) {
+        return Err(Error::InvalidParameter { name: "f_ij", value: f_ij });
+    }
+    non_empty(point_form_factors.len())?;
+    mass(point_form_factors)?;
+    let mut s = Neumaier::new();
+    for f in point_form_factors {
+        let f = f.to_f64();
+        if f <= 0.0 {
+            return Err(Error::ZeroMass);
+        }
+        s.add(ln(f));
+    }
+    let mean_ln = s.value() / point_form_factors.len() as f64;
+    Ok(area_i * f_ij / total_area * (mean_ln - ln(f_ij / area_j)) * base.per_nat())
+}

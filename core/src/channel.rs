@@ -126,7 +126,11 @@ impl<'a, T: Real> Channel<'a, T> {
             for (dj, &py) in col.iter().enumerate() {
                 let j = c0 + dj;
                 for (i, px) in self.input.iter().enumerate() {
-                    let v = if py > 0.0 { px.to_f64() * self.matrix.row(i)[j].to_f64() / py } else { px.to_f64() };
+                    let v = if py > 0.0 {
+                        px.to_f64() * self.matrix.row(i)[j].to_f64() / py
+                    } else {
+                        px.to_f64()
+                    };
                     out[j * r + i] = T::from_f64(v);
                 }
             }
@@ -141,24 +145,19 @@ impl<'a, T: Real> Channel<'a, T> {
             Ok(m) => entropy_nats(m),
             Err(_) => f64::NAN, // validated in `new`
         };
-        let mut hyx = Neumaier::new();
-        for (i, px) in self.input.iter().enumerate() {
-            let px = px.to_f64();
-            if px > 0.0 {
-                if let Ok(m) = mass_xlnx(self.matrix.row(i)) {
-                    hyx.add(px * entropy_nats(m));
-                }
-            }
-        }
-        let h_y_given_x = hyx.value();
-        let (mi, h_y) = mixture_divergence_and_entropy(self.input, &self.matrix);
+        let (mi, h_y, h_y_given_x) = mixture_divergence_and_entropy(self.input, &self.matrix);
+        let h_y_given_x = h_y_given_x.max(0.0);
         let k = base.per_nat();
         let h_x_given_y = h_x - mi;
         ChannelMeasures {
             h_x: h_x * k,
             h_y: h_y * k,
             h_y_given_x: h_y_given_x * k,
-            h_x_given_y: if h_x_given_y < 0.0 { 0.0 } else { h_x_given_y * k },
+            h_x_given_y: if h_x_given_y < 0.0 {
+                0.0
+            } else {
+                h_x_given_y * k
+            },
             h_xy: (h_x + h_y_given_x) * k,
             mutual_information: mi * k,
         }
@@ -172,7 +171,12 @@ impl<'a, T: Real> Channel<'a, T> {
     ///
     /// # Errors
     /// [`Error::LengthMismatch`] for wrong buffer lengths.
-    pub fn specific_information_into(&self, output: &[T], base: Base, out: &mut [T]) -> Result<(), Error> {
+    pub fn specific_information_into(
+        &self,
+        output: &[T],
+        base: Base,
+        out: &mut [T],
+    ) -> Result<(), Error> {
         same_len(self.outputs(), output.len())?;
         same_len(self.inputs(), out.len())?;
         let k = base.per_nat();
@@ -181,7 +185,11 @@ impl<'a, T: Real> Channel<'a, T> {
             for (x, y) in self.matrix.row(i).iter().zip(output) {
                 let (x, y) = (x.to_f64(), y.to_f64());
                 if x > 0.0 {
-                    acc.add(if y > 0.0 { x * (ln(x) - ln(y)) } else { f64::INFINITY });
+                    acc.add(if y > 0.0 {
+                        x * (ln(x) - ln(y))
+                    } else {
+                        f64::INFINITY
+                    });
                 }
             }
             let v = acc.value();
@@ -198,7 +206,12 @@ impl<'a, T: Real> Channel<'a, T> {
     ///
     /// # Errors
     /// [`Error::LengthMismatch`] for wrong buffer lengths.
-    pub fn output_specific_information_into(&self, reversed: &[T], base: Base, out: &mut [T]) -> Result<(), Error> {
+    pub fn output_specific_information_into(
+        &self,
+        reversed: &[T],
+        base: Base,
+        out: &mut [T],
+    ) -> Result<(), Error> {
         let (r, c) = (self.inputs(), self.outputs());
         same_len(r * c, reversed.len())?;
         same_len(c, out.len())?;
@@ -208,7 +221,11 @@ impl<'a, T: Real> Channel<'a, T> {
             for (x, px) in reversed[j * r..(j + 1) * r].iter().zip(self.input) {
                 let (x, px) = (x.to_f64(), px.to_f64());
                 if x > 0.0 {
-                    acc.add(if px > 0.0 { x * (ln(x) - ln(px)) } else { f64::INFINITY });
+                    acc.add(if px > 0.0 {
+                        x * (ln(x) - ln(px))
+                    } else {
+                        f64::INFINITY
+                    });
                 }
             }
             let v = acc.value();
@@ -268,12 +285,22 @@ pub fn cascade_into<T: Real>(
 /// # Errors
 /// As [`MatrixRef::new`], element errors with row-major indices, and
 /// [`Error::LengthMismatch`] if `out.len() != rows`.
-pub fn row_entropies_into<T: Real>(matrix: &[T], rows: usize, cols: usize, base: Base, out: &mut [T]) -> Result<(), Error> {
+pub fn row_entropies_into<T: Real>(
+    matrix: &[T],
+    rows: usize,
+    cols: usize,
+    base: Base,
+    out: &mut [T],
+) -> Result<(), Error> {
     let m = MatrixRef::new(matrix, rows, cols)?;
     same_len(rows, out.len())?;
     for (i, o) in out.iter_mut().enumerate() {
         let s = mass_xlnx(m.row(i)).map_err(|e| crate::matrix::offset(e, i * cols))?;
-        *o = T::from_f64(if s.sum > 0.0 { entropy_nats(s) * base.per_nat() } else { 0.0 });
+        *o = T::from_f64(if s.sum > 0.0 {
+            entropy_nats(s) * base.per_nat()
+        } else {
+            0.0
+        });
     }
     Ok(())
 }

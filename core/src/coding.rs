@@ -6,7 +6,9 @@ use crate::{Error, Real};
 /// Expected length `ℓ̄ = Σ p_i ℓ_i` (bits per symbol) of a binary Huffman
 /// code for `p`, allocation-free with a caller's `scratch` of `p.len()` values.
 ///
-/// Satisfies `H(p) ≤ ℓ̄ < H(p) + 1` (Part II eq. (24)). The expected length
+/// Satisfies `H(p) ≤ ℓ̄ < H(p) + 1` (Part II eq. (24)). Symbols of zero
+/// probability are left out of the tree (they add nothing to `ℓ̄`), and a
+/// distribution with one possible symbol needs 0 bits. The expected length
 /// equals the sum of the weights of the internal nodes of the Huffman tree;
 /// the two-queue construction keeps its internal-node queue in the slots of
 /// leaves already consumed, so `scratch` needs only one value per symbol.
@@ -27,13 +29,21 @@ pub fn huffman_expected_length<T: Real>(p: &[T], scratch: &mut [f64]) -> Result<
     check_normalized::<T>(s)?;
     let n = p.len();
     if scratch.len() < n {
-        return Err(Error::LengthMismatch { expected: n, found: scratch.len() });
+        return Err(Error::LengthMismatch {
+            expected: n,
+            found: scratch.len(),
+        });
     }
-    let w = &mut scratch[..n];
-    for (o, x) in w.iter_mut().zip(p) {
-        *o = x.to_f64() / s;
+    // Zero-probability symbols cost nothing and must not deepen the tree.
+    let mut k = 0;
+    for x in p {
+        let x = x.to_f64();
+        if x > 0.0 {
+            scratch[k] = x / s;
+            k += 1;
+        }
     }
-    Ok(huffman_in_place(w))
+    Ok(huffman_in_place(&mut scratch[..k]))
 }
 
 /// Sum of internal node weights of the Huffman tree of `w` (destroys `w`).
@@ -87,9 +97,16 @@ pub fn huffman_block_length<T: Real>(p: &[T], k: u32) -> Result<f64, Error> {
     let n = p.len();
     let size = (n as u64).checked_pow(k).filter(|&m| k > 0 && m <= 1 << 22);
     let Some(size) = size else {
-        return Err(Error::InvalidParameter { name: "k", value: f64::from(k) });
+        return Err(Error::InvalidParameter {
+            name: "k",
+            value: f64::from(k),
+        });
     };
-    let base: Vec<f64> = p.iter().map(|x| x.to_f64() / s).collect();
+    let base: Vec<f64> = p
+        .iter()
+        .map(|x| x.to_f64() / s)
+        .filter(|&x| x > 0.0)
+        .collect();
     let mut blocks = Vec::with_capacity(size as usize);
     blocks.push(1.0f64);
     for _ in 0..k {

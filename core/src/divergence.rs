@@ -52,7 +52,11 @@ pub trait FGenerator {
 #[inline]
 pub fn f_term<G: FGenerator + ?Sized>(g: &G, p: f64, q: f64) -> f64 {
     if q > 0.0 {
-        if p > 0.0 { q * g.f(p / q) } else { q * g.f_at_zero() }
+        if p > 0.0 {
+            q * g.f(p / q)
+        } else {
+            q * g.f_at_zero()
+        }
     } else if p > 0.0 {
         p * g.slope_at_infinity()
     } else {
@@ -205,13 +209,22 @@ pub fn arithmetic_geometric<T: Real>(p: &[T], q: &[T], base: Base) -> Result<T, 
 /// [`Error::InvalidParameter`] for `alpha` not positive and finite, then as [`kl_divergence`].
 pub fn l_alpha<T: Real>(p: &[T], q: &[T], alpha: f64) -> Result<T, Error> {
     if !(alpha > 0.0 && alpha.is_finite()) {
-        return Err(Error::InvalidParameter { name: "alpha", value: alpha });
+        return Err(Error::InvalidParameter {
+            name: "alpha",
+            value: alpha,
+        });
     }
     let (p, q) = validate_pair(p, q)?;
     let mut acc = Neumaier::new();
     for (x, y) in p.iter().zip(q) {
         let d = (x.to_f64() - y.to_f64()).abs();
-        acc.add(if alpha == 1.0 { d } else if alpha == 2.0 { d * d } else { libm::pow(d, alpha) });
+        acc.add(if alpha == 1.0 {
+            d
+        } else if alpha == 2.0 {
+            d * d
+        } else {
+            libm::pow(d, alpha)
+        });
     }
     Ok(T::from_f64(acc.value()))
 }
@@ -277,7 +290,12 @@ pub fn divergences<T: Real>(p: &[T], q: &[T], base: Base) -> Result<Divergences,
 /// [`Error::LengthMismatch`] if `dists.len() != N · M` for `N = weights.len()`;
 /// the weights and each row must be distributions (as [`kl_divergence`], with
 /// [`Error::RowNotNormalized`] for rows).
-pub fn jensen_shannon<T: Real>(weights: &[T], dists: &[T], m: usize, base: Base) -> Result<T, Error> {
+pub fn jensen_shannon<T: Real>(
+    weights: &[T],
+    dists: &[T],
+    m: usize,
+    base: Base,
+) -> Result<T, Error> {
     let n = weights.len();
     if n == 0 || m == 0 {
         return Err(Error::Empty);
@@ -285,7 +303,9 @@ pub fn jensen_shannon<T: Real>(weights: &[T], dists: &[T], m: usize, base: Base)
     let mat = MatrixRef::new(dists, n, m)?;
     check_normalized::<T>(mass(weights)?)?;
     mat.check_stochastic()?;
-    Ok(T::from_f64(mixture_divergence(weights, &mat) * base.per_nat()))
+    Ok(T::from_f64(
+        mixture_divergence(weights, &mat) * base.per_nat(),
+    ))
 }
 
 /// `Σ_i w_i D_KL(M_i ‖ Σ_k w_k M_k)` in nats over validated inputs; the
@@ -294,10 +314,16 @@ pub(crate) fn mixture_divergence<T: Real, W: Real>(w: &[W], m: &MatrixRef<'_, T>
     mixture_divergence_and_entropy(w, m).0
 }
 
-/// As [`mixture_divergence`], also returning `H(Σ w_i M_i)` in nats.
-pub(crate) fn mixture_divergence_and_entropy<T: Real, W: Real>(w: &[W], m: &MatrixRef<'_, T>) -> (f64, f64) {
+/// As [`mixture_divergence`], also returning `H(Σ w_i M_i)` and
+/// `Σ_i w_i H(M_i)` in nats: one logarithm per matrix element serves both
+/// the divergence and the row entropies.
+pub(crate) fn mixture_divergence_and_entropy<T: Real, W: Real>(
+    w: &[W],
+    m: &MatrixRef<'_, T>,
+) -> (f64, f64, f64) {
     let mut d = Neumaier::new();
     let mut h = Neumaier::new();
+    let mut rows = Neumaier::new();
     let mut lnm = [0.0f64; crate::matrix::COL_BLOCK];
     for_column_blocks(m, Some(w), |c0, mix| {
         for (l, &x) in lnm.iter_mut().zip(mix) {
@@ -311,17 +337,30 @@ pub(crate) fn mixture_divergence_and_entropy<T: Real, W: Real>(w: &[W], m: &Matr
                 continue;
             }
             let row = &m.row(i)[c0..c0 + width];
-            let mut acc = [0.0f64; 2];
-            for (j, x) in row.iter().enumerate() {
-                let x = x.to_f64();
-                // x > 0 implies mix_j ≥ w_i x > 0 here.
-                acc[j & 1] += if x > 0.0 { x * (ln(x) - lnm[j]) } else { 0.0 };
+            // xl = Σ x ln x, xm = Σ x ln mix; x > 0 implies mix_j ≥ w_i x > 0.
+            let mut xl = [0.0f64; 8];
+            let mut xm = [0.0f64; 8];
+            let mut lanes = row.chunks_exact(8).zip(lnm[..width].chunks_exact(8));
+            for (xs, ls) in &mut lanes {
+                for l in 0..8 {
+                    let x = xs[l].to_f64();
+                    xl[l] += xlnx(x);
+                    xm[l] += x * ls[l];
+                }
             }
-            d.add(wi * (acc[0] + acc[1]));
+            let done = width - width % 8;
+            for (x, l) in row[done..].iter().zip(&lnm[done..width]) {
+                let x = x.to_f64();
+                xl[0] += xlnx(x);
+                xm[0] += x * l;
+            }
+            let (xl, xm): (f64, f64) = (xl.iter().sum(), xm.iter().sum());
+            d.add(wi * (xl - xm));
+            rows.add(-wi * xl);
         }
     });
     let v = d.value();
-    (if v < 0.0 { 0.0 } else { v }, h.value())
+    (if v < 0.0 { 0.0 } else { v }, h.value(), rows.value())
 }
 
 /// A convex function with its derivative, generating Bregman and Burbea–Rao
@@ -342,7 +381,11 @@ impl ConvexFunction for ULogU {
         xlnx(u)
     }
     fn df(&self, u: f64) -> f64 {
-        if u > 0.0 { ln(u) + 1.0 } else { f64::NEG_INFINITY }
+        if u > 0.0 {
+            ln(u) + 1.0
+        } else {
+            f64::NEG_INFINITY
+        }
     }
 }
 
@@ -379,7 +422,11 @@ pub fn bregman<T: Real, F: ConvexFunction + ?Sized>(p: &[T], q: &[T], f: &F) -> 
 ///
 /// # Errors
 /// As [`kl_divergence`].
-pub fn burbea_rao<T: Real, F: ConvexFunction + ?Sized>(p: &[T], q: &[T], f: &F) -> Result<T, Error> {
+pub fn burbea_rao<T: Real, F: ConvexFunction + ?Sized>(
+    p: &[T],
+    q: &[T],
+    f: &F,
+) -> Result<T, Error> {
     let (p, q) = validate_pair(p, q)?;
     let mut acc = Neumaier::new();
     for (x, y) in p.iter().zip(q) {

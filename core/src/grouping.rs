@@ -32,7 +32,13 @@ impl Grouping {
 /// # Errors
 /// As [`crate::Pmf::new`]; [`Error::LengthMismatch`] for `labels` or
 /// `scratch`; [`Error::LabelOutOfRange`].
-pub fn grouping<T: Real>(p: &[T], labels: &[usize], groups: usize, scratch: &mut [f64], base: Base) -> Result<Grouping, Error> {
+pub fn grouping<T: Real>(
+    p: &[T],
+    labels: &[usize],
+    groups: usize,
+    scratch: &mut [f64],
+    base: Base,
+) -> Result<Grouping, Error> {
     same_len(p.len(), labels.len())?;
     same_len(groups, scratch.len())?;
     let s = mass(p)?;
@@ -40,7 +46,11 @@ pub fn grouping<T: Real>(p: &[T], labels: &[usize], groups: usize, scratch: &mut
     scratch.iter_mut().for_each(|q| *q = 0.0);
     for (index, (&label, x)) in labels.iter().zip(p).enumerate() {
         if label >= groups {
-            return Err(Error::LabelOutOfRange { index, label, groups });
+            return Err(Error::LabelOutOfRange {
+                index,
+                label,
+                groups,
+            });
         }
         scratch[label] += x.to_f64() / s;
     }
@@ -56,5 +66,8 @@ pub fn grouping<T: Real>(p: &[T], labels: &[usize], groups: usize, scratch: &mut
         }
     }
     let k = base.per_nat();
-    Ok(Grouping { h_in: inner.value() * k, h_out: out.value() * k })
+    Ok(Grouping {
+        h_in: inner.value() * k,
+        h_out: out.value() * k,
+    })
 }

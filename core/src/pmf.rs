@@ -1,6 +1,6 @@
 //! Validated, borrowed probability distributions.
 
-use crate::scan::{check_normalized, mass, mass_xlnx, entropy_nats};
+use crate::scan::{check_normalized, entropy_nats, mass, mass_xlnx};
 use crate::{Base, Error, Real};
 
 /// A borrowed probability mass function: finite, non-negative, summing to 1

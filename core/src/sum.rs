@@ -25,13 +25,21 @@ impl Neumaier {
     /// An empty sum.
     #[must_use]
     pub const fn new() -> Self {
-        Self { sum: 0.0, compensation: 0.0 }
+        Self {
+            sum: 0.0,
+            compensation: 0.0,
+        }
     }
 
     /// Adds one term.
     #[inline]
     pub fn add(&mut self, x: f64) {
         let t = self.sum + x;
+        if !t.is_finite() {
+            // Infinite terms (KL's +∞) are values: carry them, never ∞ − ∞.
+            self.sum = t;
+            return;
+        }
         if self.sum.abs() >= x.abs() {
             self.compensation += (self.sum - t) + x;
         } else {
@@ -51,6 +59,9 @@ impl Neumaier {
     #[must_use]
     #[inline]
     pub fn value(&self) -> f64 {
+        if !self.sum.is_finite() {
+            return self.sum;
+        }
         self.sum + self.compensation
     }
 }

@@ -1,0 +1,44 @@
+use itgfx_core::{
+    Base, entropy, entropy_rate, excess_entropy_from_blocks, markov_excess_entropy,
+    stationary_distribution_into,
+};
+use proptest::prelude::*;
+
+use crate::strategies::*;
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// For a reversible chain built from a symmetric joint: the stationary
+    /// distribution is the marginal (wP = w), h = H(X_2|X_1) ≤ H(w), and the
+    /// block entropies H_n = H(w) + (n−1)h give back h and E = H(w) − h
+    /// (Part II eqs. (13)-(14)).
+    #[test]
+    fn reversible_chain((w, p) in reciprocal_scene(10)) {
+        let n = w.len();
+        let mut out = vec![0.0; n];
+        let mut scratch = vec![0.0; n];
+        stationary_distribution_into(&p, n, 1e-13, 1_000_000, &mut out, &mut scratch).unwrap();
+        for (a, b) in out.iter().zip(&w) {
+            prop_assert!((a - b).abs() < 1e-9);
+        }
+        let h = entropy_rate(&p, &w, Base::Bits).unwrap();
+        let hw = entropy(&w, Base::Bits).unwrap();
+        prop_assert!(h <= hw + TOL && h >= 0.0);
+        let e = markov_excess_entropy(&p, &w, Base::Bits).unwrap();
+        prop_assert!(close(e, hw - h, TOL));
+        let blocks: Vec<f64> = (1..=6).map(|k| hw + (k as f64 - 1.0) * h).collect();
+        let (hn, en) = excess_entropy_from_blocks(&blocks).unwrap();
+        prop_assert!(close(hn, h, 1e-9) && close(en, e, 1e-9));
+    }
+}
+
+/// An i.i.d. chain (every row equal to w) has h = H(w) and E = 0.
+#[test]
+fn iid_chain_equality() {
+    let w = [0.5, 0.3, 0.2];
+    let p: Vec<f64> = w.iter().cycle().take(9).copied().collect();
+    let h = entropy_rate(&p, &w, Base::Bits).unwrap();
+    assert!((h - entropy(&w, Base::Bits).unwrap()).abs() < 1e-14);
+    assert!(markov_excess_entropy(&p, &w, Base::Bits).unwrap().abs() < 1e-14);
+}

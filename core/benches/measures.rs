@@ -42,11 +42,7 @@ fn main() {
     let sizes: Vec<usize> = std::env::var("ITGFX_BENCH_SIZES")
         .unwrap_or_else(|_| "1e6,1e7,1e8".into())
         .split(',')
-        .map(|s| {
-            s.trim()
-                .parse::<f64>()
-                .expect("ITGFX_BENCH_SIZES: numbers like 1e6") as usize
-        })
+        .map(|s| s.trim().parse::<f64>().expect("ITGFX_BENCH_SIZES: numbers like 1e6") as usize)
         .collect();
     for &n in &sizes {
         let reps = if n >= 100_000_000 { 3 } else { 7 };
@@ -75,12 +71,7 @@ fn main() {
             r.iter_mut().for_each(|x| *x /= s);
         }
         let input = normalized(xorshift(4, rows));
-        let t = best(reps, || {
-            Channel::new(&input, &m, cols)
-                .unwrap()
-                .measures(Base::Bits)
-                .mutual_information
-        });
+        let t = best(reps, || Channel::new(&input, &m, cols).unwrap().measures(Base::Bits).mutual_information);
         report("channel_mi", t);
     }
 }

@@ -48,10 +48,7 @@ impl Bottleneck {
     /// [`Error::InvalidParameter`] for `k` out of range.
     pub fn assignment(&self, k: usize) -> Result<Vec<usize>, Error> {
         if k == 0 || k > self.rows {
-            return Err(Error::InvalidParameter {
-                name: "k",
-                value: k as f64,
-            });
+            return Err(Error::InvalidParameter { name: "k", value: k as f64 });
         }
         let mut parent: Vec<usize> = (0..self.rows).collect();
         for m in &self.merges[..self.rows - k] {
@@ -87,9 +84,8 @@ fn merge_loss(pa: f64, ca: &[f64], pb: f64, cb: &[f64]) -> f64 {
     let mut acc = 0.0;
     for (&x, &y) in ca.iter().zip(cb) {
         let m = (pa * x + pb * y) / s;
-        acc += pa * xlnx(x) + pb * xlnx(y)
-            - s * xlnx(m)
-            - (pa * x + pb * y - s * m) * if m > 0.0 { ln(m) } else { 0.0 };
+        acc +=
+            pa * xlnx(x) + pb * xlnx(y) - s * xlnx(m) - (pa * x + pb * y - s * m) * if m > 0.0 { ln(m) } else { 0.0 };
     }
     acc.max(0.0)
 }
@@ -109,21 +105,14 @@ pub fn agglomerative_bottleneck<T: Real>(
     let s = mass(joint)?;
     check_normalized::<T>(s)?;
     let k = base.per_nat();
-    let mut weight: Vec<f64> = (0..rows)
-        .map(|i| m.row(i).iter().map(|x| x.to_f64()).sum::<f64>() / s)
-        .collect();
+    let mut weight: Vec<f64> = (0..rows).map(|i| m.row(i).iter().map(|x| x.to_f64()).sum::<f64>() / s).collect();
     let mut cond: Vec<Vec<f64>> = (0..rows)
         .map(|i| {
             let w = weight[i] * s;
-            m.row(i)
-                .iter()
-                .map(|x| if w > 0.0 { x.to_f64() / w } else { 0.0 })
-                .collect()
+            m.row(i).iter().map(|x| if w > 0.0 { x.to_f64() / w } else { 0.0 }).collect()
         })
         .collect();
-    let py: Vec<f64> = (0..cols)
-        .map(|j| (0..rows).map(|i| weight[i] * cond[i][j]).sum())
-        .collect();
+    let py: Vec<f64> = (0..cols).map(|j| (0..rows).map(|i| weight[i] * cond[i][j]).sum()).collect();
     let info = |weight: &[f64], cond: &[Vec<f64>], alive: &[bool]| -> f64 {
         let mut acc = 0.0;
         for i in 0..rows {
@@ -158,11 +147,8 @@ pub fn agglomerative_bottleneck<T: Real>(
         let (loss, a, b) = best;
         let s = weight[a] + weight[b];
         if s > 0.0 {
-            let merged: Vec<f64> = cond[a]
-                .iter()
-                .zip(&cond[b])
-                .map(|(x, y)| (weight[a] * x + weight[b] * y) / s)
-                .collect();
+            let merged: Vec<f64> =
+                cond[a].iter().zip(&cond[b]).map(|(x, y)| (weight[a] * x + weight[b] * y) / s).collect();
             cond[a] = merged;
         }
         weight[a] = s;
@@ -175,9 +161,5 @@ pub fn agglomerative_bottleneck<T: Real>(
             clusters: rows - step,
         });
     }
-    Ok(Bottleneck {
-        initial_information: initial * k,
-        merges,
-        rows,
-    })
+    Ok(Bottleneck { initial_information: initial * k, merges, rows })
 }

@@ -126,11 +126,7 @@ impl<'a, T: Real> Channel<'a, T> {
             for (dj, &py) in col.iter().enumerate() {
                 let j = c0 + dj;
                 for (i, px) in self.input.iter().enumerate() {
-                    let v = if py > 0.0 {
-                        px.to_f64() * self.matrix.row(i)[j].to_f64() / py
-                    } else {
-                        px.to_f64()
-                    };
+                    let v = if py > 0.0 { px.to_f64() * self.matrix.row(i)[j].to_f64() / py } else { px.to_f64() };
                     out[j * r + i] = T::from_f64(v);
                 }
             }
@@ -153,11 +149,7 @@ impl<'a, T: Real> Channel<'a, T> {
             h_x: h_x * k,
             h_y: h_y * k,
             h_y_given_x: h_y_given_x * k,
-            h_x_given_y: if h_x_given_y < 0.0 {
-                0.0
-            } else {
-                h_x_given_y * k
-            },
+            h_x_given_y: if h_x_given_y < 0.0 { 0.0 } else { h_x_given_y * k },
             h_xy: (h_x + h_y_given_x) * k,
             mutual_information: mi * k,
         }
@@ -171,12 +163,7 @@ impl<'a, T: Real> Channel<'a, T> {
     ///
     /// # Errors
     /// [`Error::LengthMismatch`] for wrong buffer lengths.
-    pub fn specific_information_into(
-        &self,
-        output: &[T],
-        base: Base,
-        out: &mut [T],
-    ) -> Result<(), Error> {
+    pub fn specific_information_into(&self, output: &[T], base: Base, out: &mut [T]) -> Result<(), Error> {
         same_len(self.outputs(), output.len())?;
         same_len(self.inputs(), out.len())?;
         let k = base.per_nat();
@@ -185,11 +172,7 @@ impl<'a, T: Real> Channel<'a, T> {
             for (x, y) in self.matrix.row(i).iter().zip(output) {
                 let (x, y) = (x.to_f64(), y.to_f64());
                 if x > 0.0 {
-                    acc.add(if y > 0.0 {
-                        x * (ln(x) - ln(y))
-                    } else {
-                        f64::INFINITY
-                    });
+                    acc.add(if y > 0.0 { x * (ln(x) - ln(y)) } else { f64::INFINITY });
                 }
             }
             let v = acc.value();
@@ -206,12 +189,7 @@ impl<'a, T: Real> Channel<'a, T> {
     ///
     /// # Errors
     /// [`Error::LengthMismatch`] for wrong buffer lengths.
-    pub fn output_specific_information_into(
-        &self,
-        reversed: &[T],
-        base: Base,
-        out: &mut [T],
-    ) -> Result<(), Error> {
+    pub fn output_specific_information_into(&self, reversed: &[T], base: Base, out: &mut [T]) -> Result<(), Error> {
         let (r, c) = (self.inputs(), self.outputs());
         same_len(r * c, reversed.len())?;
         same_len(c, out.len())?;
@@ -221,11 +199,7 @@ impl<'a, T: Real> Channel<'a, T> {
             for (x, px) in reversed[j * r..(j + 1) * r].iter().zip(self.input) {
                 let (x, px) = (x.to_f64(), px.to_f64());
                 if x > 0.0 {
-                    acc.add(if px > 0.0 {
-                        x * (ln(x) - ln(px))
-                    } else {
-                        f64::INFINITY
-                    });
+                    acc.add(if px > 0.0 { x * (ln(x) - ln(px)) } else { f64::INFINITY });
                 }
             }
             let v = acc.value();
@@ -296,11 +270,7 @@ pub fn row_entropies_into<T: Real>(
     same_len(rows, out.len())?;
     for (i, o) in out.iter_mut().enumerate() {
         let s = mass_xlnx(m.row(i)).map_err(|e| crate::matrix::offset(e, i * cols))?;
-        *o = T::from_f64(if s.sum > 0.0 {
-            entropy_nats(s) * base.per_nat()
-        } else {
-            0.0
-        });
+        *o = T::from_f64(if s.sum > 0.0 { entropy_nats(s) * base.per_nat() } else { 0.0 });
     }
     Ok(())
 }

@@ -29,10 +29,7 @@ pub fn huffman_expected_length<T: Real>(p: &[T], scratch: &mut [f64]) -> Result<
     check_normalized::<T>(s)?;
     let n = p.len();
     if scratch.len() < n {
-        return Err(Error::LengthMismatch {
-            expected: n,
-            found: scratch.len(),
-        });
+        return Err(Error::LengthMismatch { expected: n, found: scratch.len() });
     }
     // Zero-probability symbols cost nothing and must not deepen the tree.
     let mut k = 0;
@@ -97,16 +94,9 @@ pub fn huffman_block_length<T: Real>(p: &[T], k: u32) -> Result<f64, Error> {
     let n = p.len();
     let size = (n as u64).checked_pow(k).filter(|&m| k > 0 && m <= 1 << 22);
     let Some(size) = size else {
-        return Err(Error::InvalidParameter {
-            name: "k",
-            value: f64::from(k),
-        });
+        return Err(Error::InvalidParameter { name: "k", value: f64::from(k) });
     };
-    let base: Vec<f64> = p
-        .iter()
-        .map(|x| x.to_f64() / s)
-        .filter(|&x| x > 0.0)
-        .collect();
+    let base: Vec<f64> = p.iter().map(|x| x.to_f64() / s).filter(|&x| x > 0.0).collect();
     let mut blocks = Vec::with_capacity(size as usize);
     blocks.push(1.0f64);
     for _ in 0..k {

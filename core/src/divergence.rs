@@ -52,11 +52,7 @@ pub trait FGenerator {
 #[inline]
 pub fn f_term<G: FGenerator + ?Sized>(g: &G, p: f64, q: f64) -> f64 {
     if q > 0.0 {
-        if p > 0.0 {
-            q * g.f(p / q)
-        } else {
-            q * g.f_at_zero()
-        }
+        if p > 0.0 { q * g.f(p / q) } else { q * g.f_at_zero() }
     } else if p > 0.0 {
         p * g.slope_at_infinity()
     } else {
@@ -209,10 +205,7 @@ pub fn arithmetic_geometric<T: Real>(p: &[T], q: &[T], base: Base) -> Result<T, 
 /// [`Error::InvalidParameter`] for `alpha` not positive and finite, then as [`kl_divergence`].
 pub fn l_alpha<T: Real>(p: &[T], q: &[T], alpha: f64) -> Result<T, Error> {
     if !(alpha > 0.0 && alpha.is_finite()) {
-        return Err(Error::InvalidParameter {
-            name: "alpha",
-            value: alpha,
-        });
+        return Err(Error::InvalidParameter { name: "alpha", value: alpha });
     }
     let (p, q) = validate_pair(p, q)?;
     let mut acc = Neumaier::new();
@@ -290,12 +283,7 @@ pub fn divergences<T: Real>(p: &[T], q: &[T], base: Base) -> Result<Divergences,
 /// [`Error::LengthMismatch`] if `dists.len() != N · M` for `N = weights.len()`;
 /// the weights and each row must be distributions (as [`kl_divergence`], with
 /// [`Error::RowNotNormalized`] for rows).
-pub fn jensen_shannon<T: Real>(
-    weights: &[T],
-    dists: &[T],
-    m: usize,
-    base: Base,
-) -> Result<T, Error> {
+pub fn jensen_shannon<T: Real>(weights: &[T], dists: &[T], m: usize, base: Base) -> Result<T, Error> {
     let n = weights.len();
     if n == 0 || m == 0 {
         return Err(Error::Empty);
@@ -303,9 +291,7 @@ pub fn jensen_shannon<T: Real>(
     let mat = MatrixRef::new(dists, n, m)?;
     check_normalized::<T>(mass(weights)?)?;
     mat.check_stochastic()?;
-    Ok(T::from_f64(
-        mixture_divergence(weights, &mat) * base.per_nat(),
-    ))
+    Ok(T::from_f64(mixture_divergence(weights, &mat) * base.per_nat()))
 }
 
 /// `Σ_i w_i D_KL(M_i ‖ Σ_k w_k M_k)` in nats over validated inputs; the
@@ -317,10 +303,7 @@ pub(crate) fn mixture_divergence<T: Real, W: Real>(w: &[W], m: &MatrixRef<'_, T>
 /// As [`mixture_divergence`], also returning `H(Σ w_i M_i)` and
 /// `Σ_i w_i H(M_i)` in nats: one logarithm per matrix element serves both
 /// the divergence and the row entropies.
-pub(crate) fn mixture_divergence_and_entropy<T: Real, W: Real>(
-    w: &[W],
-    m: &MatrixRef<'_, T>,
-) -> (f64, f64, f64) {
+pub(crate) fn mixture_divergence_and_entropy<T: Real, W: Real>(w: &[W], m: &MatrixRef<'_, T>) -> (f64, f64, f64) {
     let mut d = Neumaier::new();
     let mut h = Neumaier::new();
     let mut rows = Neumaier::new();
@@ -381,11 +364,7 @@ impl ConvexFunction for ULogU {
         xlnx(u)
     }
     fn df(&self, u: f64) -> f64 {
-        if u > 0.0 {
-            ln(u) + 1.0
-        } else {
-            f64::NEG_INFINITY
-        }
+        if u > 0.0 { ln(u) + 1.0 } else { f64::NEG_INFINITY }
     }
 }
 
@@ -422,11 +401,7 @@ pub fn bregman<T: Real, F: ConvexFunction + ?Sized>(p: &[T], q: &[T], f: &F) -> 
 ///
 /// # Errors
 /// As [`kl_divergence`].
-pub fn burbea_rao<T: Real, F: ConvexFunction + ?Sized>(
-    p: &[T],
-    q: &[T],
-    f: &F,
-) -> Result<T, Error> {
+pub fn burbea_rao<T: Real, F: ConvexFunction + ?Sized>(p: &[T], q: &[T], f: &F) -> Result<T, Error> {
     let (p, q) = validate_pair(p, q)?;
     let mut acc = Neumaier::new();
     for (x, y) in p.iter().zip(q) {

@@ -56,10 +56,7 @@ pub fn binary_entropy<T: Real>(p: T, base: Base) -> Result<T, Error> {
         return Err(Error::NonFinite { index: 0 });
     }
     if !(0.0..=1.0).contains(&p) {
-        return Err(Error::InvalidParameter {
-            name: "p",
-            value: p,
-        });
+        return Err(Error::InvalidParameter { name: "p", value: p });
     }
     Ok(T::from_f64(binary_entropy_nats(p) * base.per_nat()))
 }
@@ -74,12 +71,7 @@ pub(crate) fn binary_entropy_nats(p: f64) -> f64 {
 ///
 /// # Errors
 /// [`Error::Empty`], [`Error::LengthMismatch`], then as [`entropy`].
-pub fn joint_entropy<T: Real>(
-    joint: &[T],
-    rows: usize,
-    cols: usize,
-    base: Base,
-) -> Result<T, Error> {
+pub fn joint_entropy<T: Real>(joint: &[T], rows: usize, cols: usize, base: Base) -> Result<T, Error> {
     MatrixRef::new(joint, rows, cols)?;
     entropy(joint, base)
 }
@@ -109,12 +101,7 @@ pub struct JointEntropies {
 ///
 /// # Errors
 /// [`Error::Empty`], [`Error::LengthMismatch`], then as [`entropy`].
-pub fn joint_entropies<T: Real>(
-    joint: &[T],
-    rows: usize,
-    cols: usize,
-    base: Base,
-) -> Result<JointEntropies, Error> {
+pub fn joint_entropies<T: Real>(joint: &[T], rows: usize, cols: usize, base: Base) -> Result<JointEntropies, Error> {
     let m = MatrixRef::new(joint, rows, cols)?;
     let all = mass_xlnx(joint)?;
     check_normalized::<T>(all.sum)?;
@@ -148,12 +135,7 @@ pub fn joint_entropies<T: Real>(
 ///
 /// # Errors
 /// As [`joint_entropies`].
-pub fn mutual_information<T: Real>(
-    joint: &[T],
-    rows: usize,
-    cols: usize,
-    base: Base,
-) -> Result<T, Error> {
+pub fn mutual_information<T: Real>(joint: &[T], rows: usize, cols: usize, base: Base) -> Result<T, Error> {
     joint_entropies(joint, rows, cols, base).map(|j| T::from_f64(j.mutual_information))
 }
 
@@ -162,12 +144,7 @@ pub fn mutual_information<T: Real>(
 ///
 /// # Errors
 /// As [`joint_entropies`].
-pub fn conditional_entropy<T: Real>(
-    joint: &[T],
-    rows: usize,
-    cols: usize,
-    base: Base,
-) -> Result<T, Error> {
+pub fn conditional_entropy<T: Real>(joint: &[T], rows: usize, cols: usize, base: Base) -> Result<T, Error> {
     joint_entropies(joint, rows, cols, base).map(|j| T::from_f64(j.h_x_given_y))
 }
 
@@ -181,10 +158,7 @@ pub fn conditional_entropy<T: Real>(
 /// [`Error::InvalidParameter`] for `alpha` NaN or negative, then as [`entropy`].
 pub fn renyi_entropy<T: Real>(p: &[T], alpha: f64, base: Base) -> Result<T, Error> {
     if alpha.is_nan() || alpha < 0.0 {
-        return Err(Error::InvalidParameter {
-            name: "alpha",
-            value: alpha,
-        });
+        return Err(Error::InvalidParameter { name: "alpha", value: alpha });
     }
     non_empty(p.len())?;
     let s = mass(p)?;
@@ -199,20 +173,10 @@ pub fn renyi_entropy<T: Real>(p: &[T], alpha: f64, base: Base) -> Result<T, Erro
         let support = p.iter().filter(|x| x.to_f64() > 0.0).count();
         ln(support as f64)
     } else {
-        let sa = sum_map(p, |x| {
-            if x > 0.0 {
-                libm::pow(x / s, alpha)
-            } else {
-                0.0
-            }
-        });
+        let sa = sum_map(p, |x| if x > 0.0 { libm::pow(x / s, alpha) } else { 0.0 });
         ln(sa) / (1.0 - alpha)
     };
-    Ok(T::from_f64(if nats < 0.0 {
-        0.0
-    } else {
-        nats * base.per_nat()
-    }))
+    Ok(T::from_f64(if nats < 0.0 { 0.0 } else { nats * base.per_nat() }))
 }
 
 /// Tsallis entropy of index `q`: `S_q(p) = (1 − Σ p_i^q) / (q − 1)`.
@@ -223,10 +187,7 @@ pub fn renyi_entropy<T: Real>(p: &[T], alpha: f64, base: Base) -> Result<T, Erro
 /// [`Error::InvalidParameter`] for `q` NaN, infinite or negative, then as [`entropy`].
 pub fn tsallis_entropy<T: Real>(p: &[T], q: f64) -> Result<T, Error> {
     if !q.is_finite() || q < 0.0 {
-        return Err(Error::InvalidParameter {
-            name: "q",
-            value: q,
-        });
+        return Err(Error::InvalidParameter { name: "q", value: q });
     }
     non_empty(p.len())?;
     let s = mass(p)?;
@@ -244,16 +205,9 @@ pub fn tsallis_entropy<T: Real>(p: &[T], q: f64) -> Result<T, Error> {
 ///
 /// # Errors
 /// [`Error::InvalidParameter`] if `delta` is not positive and finite, then as [`entropy`].
-pub fn differential_entropy_from_bins<T: Real>(
-    p: &[T],
-    delta: f64,
-    base: Base,
-) -> Result<T, Error> {
+pub fn differential_entropy_from_bins<T: Real>(p: &[T], delta: f64, base: Base) -> Result<T, Error> {
     if !(delta > 0.0 && delta.is_finite()) {
-        return Err(Error::InvalidParameter {
-            name: "delta",
-            value: delta,
-        });
+        return Err(Error::InvalidParameter { name: "delta", value: delta });
     }
     let h = entropy(p, Base::Nats)?.to_f64();
     Ok(T::from_f64((h + ln(delta)) * base.per_nat()))
@@ -291,10 +245,7 @@ mod tests {
     fn bad_element_found_in_a_late_block() {
         let mut p = [1.0f64 / 1000.0; 1000];
         p[777] = f64::NAN;
-        assert_eq!(
-            entropy(&p, Base::Bits),
-            Err(Error::NonFinite { index: 777 })
-        );
+        assert_eq!(entropy(&p, Base::Bits), Err(Error::NonFinite { index: 777 }));
     }
 
     #[test]
@@ -305,9 +256,6 @@ mod tests {
         assert!((near - h1).abs() < 1e-6);
         assert!((renyi_entropy(&p, 0.0, Base::Bits).unwrap() - 2.0).abs() < 1e-15);
         assert!((renyi_entropy(&p, f64::INFINITY, Base::Bits).unwrap() - 1.0).abs() < 1e-15);
-        assert!(
-            (tsallis_entropy(&p, 2.0).unwrap() - (1.0 - (0.25 + 0.0625 + 2.0 * 0.015625))).abs()
-                < 1e-15
-        );
+        assert!((tsallis_entropy(&p, 2.0).unwrap() - (1.0 - (0.25 + 0.0625 + 2.0 * 0.015625))).abs() < 1e-15);
     }
 }

@@ -73,38 +73,22 @@ impl fmt::Display for Error {
         match *self {
             Error::Empty => write!(f, "input is empty"),
             Error::LengthMismatch { expected, found } => {
-                write!(
-                    f,
-                    "length mismatch: expected {expected} values, found {found}"
-                )
+                write!(f, "length mismatch: expected {expected} values, found {found}")
             }
             Error::NonFinite { index } => write!(f, "value at index {index} is not finite"),
             Error::Negative { index } => write!(f, "value at index {index} is negative"),
             Error::ZeroMass => write!(f, "all values are zero"),
             Error::NotNormalized { sum } => {
-                write!(
-                    f,
-                    "probabilities sum to {sum}, not 1 (use weights/--normalize for unnormalised data)"
-                )
+                write!(f, "probabilities sum to {sum}, not 1 (use weights/--normalize for unnormalised data)")
             }
             Error::RowNotNormalized { row, sum } => {
-                write!(
-                    f,
-                    "row {row} of the conditional matrix sums to {sum}, not 1"
-                )
+                write!(f, "row {row} of the conditional matrix sums to {sum}, not 1")
             }
             Error::InvalidParameter { name, value } => {
                 write!(f, "parameter {name} = {value} is outside its domain")
             }
-            Error::LabelOutOfRange {
-                index,
-                label,
-                groups,
-            } => {
-                write!(
-                    f,
-                    "label {label} at index {index} is not below the number of groups {groups}"
-                )
+            Error::LabelOutOfRange { index, label, groups } => {
+                write!(f, "label {label} at index {index} is not below the number of groups {groups}")
             }
             Error::NotConverged { iterations } => {
                 write!(f, "did not converge in {iterations} iterations")

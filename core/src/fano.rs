@@ -17,16 +17,10 @@ use crate::{Base, Error};
 /// [`Error::InvalidParameter`] for `pe ∉ [0, 1]` or `n < 1`.
 pub fn fano_bound(pe: f64, n: usize, base: Base) -> Result<f64, Error> {
     if !(0.0..=1.0).contains(&pe) {
-        return Err(Error::InvalidParameter {
-            name: "pe",
-            value: pe,
-        });
+        return Err(Error::InvalidParameter { name: "pe", value: pe });
     }
     if n == 0 {
-        return Err(Error::InvalidParameter {
-            name: "n",
-            value: 0.0,
-        });
+        return Err(Error::InvalidParameter { name: "n", value: 0.0 });
     }
     let tail = if n > 1 { pe * ln((n - 1) as f64) } else { 0.0 };
     Ok((binary_entropy_nats(pe) + tail) * base.per_nat())
@@ -42,16 +36,10 @@ pub fn fano_bound(pe: f64, n: usize, base: Base) -> Result<f64, Error> {
 /// [`Error::InvalidParameter`] for a negative or non-finite `h_cond`, or `n < 1`.
 pub fn fano_minimum_error(h_cond: f64, n: usize, base: Base) -> Result<f64, Error> {
     if !(h_cond >= 0.0 && h_cond.is_finite()) {
-        return Err(Error::InvalidParameter {
-            name: "h_cond",
-            value: h_cond,
-        });
+        return Err(Error::InvalidParameter { name: "h_cond", value: h_cond });
     }
     if n == 0 {
-        return Err(Error::InvalidParameter {
-            name: "n",
-            value: 0.0,
-        });
+        return Err(Error::InvalidParameter { name: "n", value: 0.0 });
     }
     let (mut lo, mut hi) = (0.0f64, (n - 1) as f64 / n as f64);
     if fano_bound(hi, n, base)? < h_cond {
@@ -78,16 +66,10 @@ pub fn fano_minimum_error(h_cond: f64, n: usize, base: Base) -> Result<f64, Erro
 /// [`Error::InvalidParameter`] for `n < 2` or a non-finite `h_cond_bits`.
 pub fn fano_weak_bound(h_cond_bits: f64, n: usize) -> Result<f64, Error> {
     if n < 2 {
-        return Err(Error::InvalidParameter {
-            name: "n",
-            value: n as f64,
-        });
+        return Err(Error::InvalidParameter { name: "n", value: n as f64 });
     }
     if !h_cond_bits.is_finite() {
-        return Err(Error::InvalidParameter {
-            name: "h_cond",
-            value: h_cond_bits,
-        });
+        return Err(Error::InvalidParameter { name: "h_cond", value: h_cond_bits });
     }
     Ok((h_cond_bits - 1.0) / (ln(n as f64) * Base::Bits.per_nat()))
 }

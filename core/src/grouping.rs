@@ -46,11 +46,7 @@ pub fn grouping<T: Real>(
     scratch.iter_mut().for_each(|q| *q = 0.0);
     for (index, (&label, x)) in labels.iter().zip(p).enumerate() {
         if label >= groups {
-            return Err(Error::LabelOutOfRange {
-                index,
-                label,
-                groups,
-            });
+            return Err(Error::LabelOutOfRange { index, label, groups });
         }
         scratch[label] += x.to_f64() / s;
     }
@@ -66,8 +62,5 @@ pub fn grouping<T: Real>(
         }
     }
     let k = base.per_nat();
-    Ok(Grouping {
-        h_in: inner.value() * k,
-        h_out: out.value() * k,
-    })
+    Ok(Grouping { h_in: inner.value() * k, h_out: out.value() * k })
 }

@@ -71,27 +71,23 @@ pub use channel::{Channel, ChannelMeasures, cascade_into, row_entropies_into};
 pub use coding::huffman_block_length;
 pub use coding::huffman_expected_length;
 pub use divergence::{
-    ArithmeticGeometric, ChiSquare, ConvexFunction, Divergences, FGenerator, Hellinger,
-    KullbackLeibler, Square, TotalVariation, ULogU, arithmetic_geometric, bregman, burbea_rao,
-    chi_square, divergences, f_divergence, f_term, hellinger, jensen_shannon, kl_divergence,
-    l_alpha, log_sum_terms, vasershtein_ornstein,
+    ArithmeticGeometric, ChiSquare, ConvexFunction, Divergences, FGenerator, Hellinger, KullbackLeibler, Square,
+    TotalVariation, ULogU, arithmetic_geometric, bregman, burbea_rao, chi_square, divergences, f_divergence, f_term,
+    hellinger, jensen_shannon, kl_divergence, l_alpha, log_sum_terms, vasershtein_ornstein,
 };
 pub use entropy::{
-    JointEntropies, binary_entropy, conditional_entropy, differential_entropy_from_bins, entropy,
-    entropy_of_weights, joint_entropies, joint_entropy, mutual_information, renyi_entropy,
-    tsallis_entropy,
+    JointEntropies, binary_entropy, conditional_entropy, differential_entropy_from_bins, entropy, entropy_of_weights,
+    joint_entropies, joint_entropy, mutual_information, renyi_entropy, tsallis_entropy,
 };
 pub use error::Error;
 pub use fano::{fano_bound, fano_minimum_error, fano_weak_bound};
 pub use grouping::{Grouping, grouping};
-pub use markov::{
-    entropy_rate, excess_entropy_from_blocks, markov_excess_entropy, stationary_distribution_into,
-};
+pub use markov::{entropy_rate, excess_entropy_from_blocks, markov_excess_entropy, stationary_distribution_into};
 pub use matrix::MatrixRef;
 pub use pmf::Pmf;
 pub use real::Real;
 pub use scene::{
     ContinuousMutualInformation, PairCount, SceneMeasures, continuous_mutual_information,
-    discretisation_error_area_sampling, discretisation_error_lines, mutual_information_matrix_into,
-    point_form_factor, scene_measures, scene_measures_from_counts,
+    discretisation_error_area_sampling, discretisation_error_lines, mutual_information_matrix_into, point_form_factor,
+    scene_measures, scene_measures_from_counts,
 };

@@ -30,10 +30,7 @@ pub fn stationary_distribution_into<T: Real>(
     same_len(n, out.len())?;
     same_len(n, scratch.len())?;
     if !(tol > 0.0 && tol.is_finite()) {
-        return Err(Error::InvalidParameter {
-            name: "tol",
-            value: tol,
-        });
+        return Err(Error::InvalidParameter { name: "tol", value: tol });
     }
     let uniform = 1.0 / n as f64;
     out.iter_mut().for_each(|w| *w = uniform);
@@ -60,9 +57,7 @@ pub fn stationary_distribution_into<T: Real>(
             return Ok(it);
         }
     }
-    Err(Error::NotConverged {
-        iterations: max_iter,
-    })
+    Err(Error::NotConverged { iterations: max_iter })
 }
 
 /// Entropy rate of a stationary Markov chain (Part II eq. (13)):
@@ -104,11 +99,7 @@ fn rate_nats<T: Real>(p: &MatrixRef<'_, T>, w: &[T]) -> f64 {
 ///
 /// # Errors
 /// As [`entropy_rate`].
-pub fn markov_excess_entropy<T: Real>(
-    transition: &[T],
-    stationary: &[T],
-    base: Base,
-) -> Result<T, Error> {
+pub fn markov_excess_entropy<T: Real>(transition: &[T], stationary: &[T], base: Base) -> Result<T, Error> {
     let h = entropy_rate(transition, stationary, Base::Nats)?.to_f64();
     let hw = entropy_nats(mass_xlnx(stationary)?);
     let e = hw - h;

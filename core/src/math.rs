@@ -107,10 +107,7 @@ mod tests {
             1.0 - f64::EPSILON / 2.0,
         ] {
             let (a, b) = (ln(x), libm::log(x));
-            assert!(
-                (a - b).abs() <= 2.0 * f64::EPSILON * b.abs().max(1e-300),
-                "{x:e}: {a} vs {b}"
-            );
+            assert!((a - b).abs() <= 2.0 * f64::EPSILON * b.abs().max(1e-300), "{x:e}: {a} vs {b}");
         }
         assert_eq!(ln(1.0), 0.0);
         assert_eq!(xlnx(0.0), 0.0);

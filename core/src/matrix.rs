@@ -24,15 +24,10 @@ impl<'a, T: Real> MatrixRef<'a, T> {
         if rows == 0 || cols == 0 {
             return Err(Error::Empty);
         }
-        let expected = rows.checked_mul(cols).ok_or(Error::LengthMismatch {
-            expected: usize::MAX,
-            found: data.len(),
-        })?;
+        let expected =
+            rows.checked_mul(cols).ok_or(Error::LengthMismatch { expected: usize::MAX, found: data.len() })?;
         if data.len() != expected {
-            return Err(Error::LengthMismatch {
-                expected,
-                found: data.len(),
-            });
+            return Err(Error::LengthMismatch { expected, found: data.len() });
         }
         Ok(Self { data, rows, cols })
     }

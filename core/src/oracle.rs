@@ -14,11 +14,7 @@ use crate::sum::Neumaier;
 use crate::{Base, Error};
 
 fn finite_non_negative(name: &'static str, v: f64) -> Result<f64, Error> {
-    if v >= 0.0 && v.is_finite() {
-        Ok(v)
-    } else {
-        Err(Error::InvalidParameter { name, value: v })
-    }
+    if v >= 0.0 && v.is_finite() { Ok(v) } else { Err(Error::InvalidParameter { name, value: v }) }
 }
 
 /// Power-based oracle `ρ_i A_i F_ij B_j` (Part III eq. (36)).
@@ -50,12 +46,7 @@ fn kernel_stats(samples: &[f64]) -> Result<(f64, f64, f64), Error> {
 /// # Errors
 /// [`Error::Empty`], sample errors ([`Error::NonFinite`], [`Error::Negative`]),
 /// [`Error::InvalidParameter`] for the scalars.
-pub fn kernel_smoothness_oracle(
-    rho_i: f64,
-    samples: &[f64],
-    area_j: f64,
-    b_j: f64,
-) -> Result<f64, Error> {
+pub fn kernel_smoothness_oracle(rho_i: f64, samples: &[f64], area_j: f64, b_j: f64) -> Result<f64, Error> {
     let (lo, _, hi) = kernel_stats(samples)?;
     Ok(finite_non_negative("rho_i", rho_i)?
         * (hi - lo)
@@ -70,12 +61,7 @@ pub fn kernel_smoothness_oracle(
 ///
 /// # Errors
 /// As [`kernel_smoothness_oracle`].
-pub fn kernel_smoothness_average_oracle(
-    rho_i: f64,
-    samples: &[f64],
-    area_j: f64,
-    b_j: f64,
-) -> Result<f64, Error> {
+pub fn kernel_smoothness_average_oracle(rho_i: f64, samples: &[f64], area_j: f64, b_j: f64) -> Result<f64, Error> {
     let (lo, av, hi) = kernel_stats(samples)?;
     Ok(finite_non_negative("rho_i", rho_i)?
         * (hi - av).max(av - lo)
@@ -118,11 +104,7 @@ pub enum DivergenceKernel {
 /// `D(p ‖ u)` between the normalised samples `p_k = x_k / Σx` and the
 /// uniform distribution `u_k = 1/N`, by one of the kernels; `None` when all
 /// samples are zero. Shared by the radiosity and ray-tracing criteria.
-pub(crate) fn divergence_from_uniform(
-    kernel: DivergenceKernel,
-    samples: &[f64],
-    sum: f64,
-) -> Option<f64> {
+pub(crate) fn divergence_from_uniform(kernel: DivergenceKernel, samples: &[f64], sum: f64) -> Option<f64> {
     if sum <= 0.0 {
         return None;
     }
@@ -173,10 +155,6 @@ pub fn divergence_oracle(
         * finite_non_negative("area_i", area_i)?
         * finite_non_negative("area_j", area_j)?
         * finite_non_negative("b_j", b_j)?;
-    let f_hat = if kernel == DivergenceKernel::Variance {
-        sum * sum
-    } else {
-        sum
-    };
+    let f_hat = if kernel == DivergenceKernel::Variance { sum * sum } else { sum };
     Ok(divergence_from_uniform(kernel, samples, sum).map_or(0.0, |d| scale * f_hat * d))
 }

@@ -23,10 +23,7 @@ fn at_least_two(n: usize) -> Result<(), Error> {
         return Err(Error::Empty);
     }
     if n < 2 {
-        return Err(Error::LengthMismatch {
-            expected: 2,
-            found: n,
-        });
+        return Err(Error::LengthMismatch { expected: 2, found: n });
     }
     Ok(())
 }
@@ -43,11 +40,7 @@ fn at_least_two(n: usize) -> Result<(), Error> {
 pub fn pixel_entropy<T: Real>(samples: &[T], base: Base) -> Result<f64, Error> {
     at_least_two(samples.len())?;
     let m = mass_xlnx(samples)?;
-    let nats = if m.sum == 0.0 {
-        ln(samples.len() as f64)
-    } else {
-        entropy_nats(m)
-    };
+    let nats = if m.sum == 0.0 { ln(samples.len() as f64) } else { entropy_nats(m) };
     Ok(nats * base.per_nat())
 }
 
@@ -148,11 +141,7 @@ pub fn weighted_channel_mean(values: &[f64], weights: &[f64]) -> Result<f64, Err
 ///
 /// # Errors
 /// [`Error::LengthMismatch`], [`Error::NonFinite`], [`Error::Negative`].
-pub fn colour_contrast(
-    channel_contrasts: &[f64],
-    weights: &[f64],
-    channel_means: &[f64],
-) -> Result<f64, Error> {
+pub fn colour_contrast(channel_contrasts: &[f64], weights: &[f64], channel_means: &[f64]) -> Result<f64, Error> {
     same_len(channel_contrasts.len(), weights.len())?;
     same_len(channel_contrasts.len(), channel_means.len())?;
     mass(weights)?;
@@ -177,10 +166,7 @@ pub fn colour_contrast(
 /// [`Error::InvalidParameter`] for `delta ∉ [0, 1]`.
 pub fn mixed_contrast(delta: f64, colour: f64, geometry: f64) -> Result<f64, Error> {
     if !(0.0..=1.0).contains(&delta) {
-        return Err(Error::InvalidParameter {
-            name: "delta",
-            value: delta,
-        });
+        return Err(Error::InvalidParameter { name: "delta", value: delta });
     }
     Ok(delta * colour + (1.0 - delta) * geometry)
 }
@@ -256,23 +242,13 @@ pub struct ConfidenceTest {
 /// As [`pixel_entropy`] for the samples (negative values are allowed here:
 /// only finiteness is required), [`Error::InvalidParameter`] for `alpha ∉ (0, 1)`
 /// or a negative `tolerance`.
-pub fn confidence_test(
-    samples: &[f64],
-    alpha: f64,
-    tolerance: f64,
-) -> Result<ConfidenceTest, Error> {
+pub fn confidence_test(samples: &[f64], alpha: f64, tolerance: f64) -> Result<ConfidenceTest, Error> {
     at_least_two(samples.len())?;
     if !(alpha > 0.0 && alpha < 1.0) {
-        return Err(Error::InvalidParameter {
-            name: "alpha",
-            value: alpha,
-        });
+        return Err(Error::InvalidParameter { name: "alpha", value: alpha });
     }
     if !(tolerance >= 0.0 && tolerance.is_finite()) {
-        return Err(Error::InvalidParameter {
-            name: "tolerance",
-            value: tolerance,
-        });
+        return Err(Error::InvalidParameter { name: "tolerance", value: tolerance });
     }
     let mut s = Neumaier::new();
     for (index, &x) in samples.iter().enumerate() {
@@ -290,11 +266,7 @@ pub fn confidence_test(
     let sd = libm::sqrt(ss.value() / (n - 1.0));
     let t = crate::quantile::student_t_quantile(1.0 - alpha / 2.0, samples.len() - 1);
     let half_width = t * sd / libm::sqrt(n);
-    Ok(ConfidenceTest {
-        mean: m,
-        half_width,
-        satisfied: half_width <= tolerance,
-    })
+    Ok(ConfidenceTest { mean: m, half_width, satisfied: half_width <= tolerance })
 }
 
 /// Importance of an `n`-node of the refinement tree, `q_n ≈ c̄_n / N_r^{n−1}`
@@ -304,22 +276,13 @@ pub fn confidence_test(
 /// [`Error::InvalidParameter`] for `level = 0`, `regions < 2`, or a negative mean.
 pub fn node_importance(mean_colour: f64, regions: u32, level: u32) -> Result<f64, Error> {
     if level == 0 {
-        return Err(Error::InvalidParameter {
-            name: "level",
-            value: 0.0,
-        });
+        return Err(Error::InvalidParameter { name: "level", value: 0.0 });
     }
     if regions < 2 {
-        return Err(Error::InvalidParameter {
-            name: "regions",
-            value: f64::from(regions),
-        });
+        return Err(Error::InvalidParameter { name: "regions", value: f64::from(regions) });
     }
     if !(mean_colour >= 0.0 && mean_colour.is_finite()) {
-        return Err(Error::InvalidParameter {
-            name: "mean_colour",
-            value: mean_colour,
-        });
+        return Err(Error::InvalidParameter { name: "mean_colour", value: mean_colour });
     }
     Ok(mean_colour / libm::pow(f64::from(regions), f64::from(level - 1)))
 }
@@ -328,20 +291,11 @@ pub fn node_importance(mean_colour: f64, regions: u32, level: u32) -> Result<f64
 ///
 /// # Errors
 /// [`Error::LengthMismatch`], [`Error::NonFinite`].
-pub fn tree_colour_contrast(
-    channel_contrasts: &[f64],
-    weights: &[f64],
-    importances: &[f64],
-) -> Result<f64, Error> {
+pub fn tree_colour_contrast(channel_contrasts: &[f64], weights: &[f64], importances: &[f64]) -> Result<f64, Error> {
     same_len(channel_contrasts.len(), weights.len())?;
     same_len(channel_contrasts.len(), importances.len())?;
     let mut acc = Neumaier::new();
-    for (index, ((c, w), q)) in channel_contrasts
-        .iter()
-        .zip(weights)
-        .zip(importances)
-        .enumerate()
-    {
+    for (index, ((c, w), q)) in channel_contrasts.iter().zip(weights).zip(importances).enumerate() {
         let v = c * w * q;
         if !v.is_finite() {
             return Err(Error::NonFinite { index });
@@ -359,16 +313,9 @@ pub fn tree_colour_contrast(
 ///
 /// # Errors
 /// As [`pixel_entropy`]; [`Error::InvalidParameter`] for the variance kernel.
-pub fn divergence_criterion(
-    kernel: DivergenceKernel,
-    luminances: &[f64],
-    square_root: bool,
-) -> Result<f64, Error> {
+pub fn divergence_criterion(kernel: DivergenceKernel, luminances: &[f64], square_root: bool) -> Result<f64, Error> {
     if kernel == DivergenceKernel::Variance {
-        return Err(Error::InvalidParameter {
-            name: "kernel",
-            value: 3.0,
-        });
+        return Err(Error::InvalidParameter { name: "kernel", value: 3.0 });
     }
     at_least_two(luminances.len())?;
     let s = mass(luminances)?;
@@ -381,9 +328,7 @@ pub fn divergence_criterion(
 /// Luminance `Y` of a linear sRGB colour (Part III-IV §5.1).
 #[must_use]
 pub fn luminance(rgb: [f64; 3]) -> f64 {
-    SRGB_LUMINANCE_WEIGHTS[0] * rgb[0]
-        + SRGB_LUMINANCE_WEIGHTS[1] * rgb[1]
-        + SRGB_LUMINANCE_WEIGHTS[2] * rgb[2]
+    SRGB_LUMINANCE_WEIGHTS[0] * rgb[0] + SRGB_LUMINANCE_WEIGHTS[1] * rgb[1] + SRGB_LUMINANCE_WEIGHTS[2] * rgb[2]
 }
 
 /// Image error of Part IV §6.4 Table 2 / Part III-IV Table 3.
@@ -404,26 +349,14 @@ pub struct ImageError {
 /// [`Error::LengthMismatch`] (lengths, or not a multiple of `channels`,
 /// or `weights.len() != channels`), [`Error::NonFinite`],
 /// [`Error::InvalidParameter`] for `peak`, [`Error::ZeroMass`] for all-zero weights.
-pub fn image_error(
-    a: &[f64],
-    b: &[f64],
-    channels: usize,
-    weights: &[f64],
-    peak: f64,
-) -> Result<ImageError, Error> {
+pub fn image_error(a: &[f64], b: &[f64], channels: usize, weights: &[f64], peak: f64) -> Result<ImageError, Error> {
     same_len(a.len(), b.len())?;
     if channels == 0 || a.len() % channels != 0 {
-        return Err(Error::LengthMismatch {
-            expected: channels.max(1),
-            found: a.len(),
-        });
+        return Err(Error::LengthMismatch { expected: channels.max(1), found: a.len() });
     }
     same_len(channels, weights.len())?;
     if !(peak > 0.0 && peak.is_finite()) {
-        return Err(Error::InvalidParameter {
-            name: "peak",
-            value: peak,
-        });
+        return Err(Error::InvalidParameter { name: "peak", value: peak });
     }
     let sw = mass(weights)?;
     if sw == 0.0 {
@@ -442,13 +375,6 @@ pub fn image_error(
         mse += w * acc.value() / (a.len() / channels) as f64;
     }
     let mse = mse / sw;
-    let psnr = if mse > 0.0 {
-        10.0 * libm::log10(peak * peak / mse)
-    } else {
-        f64::INFINITY
-    };
-    Ok(ImageError {
-        rmse: libm::sqrt(mse),
-        psnr,
-    })
+    let psnr = if mse > 0.0 { 10.0 * libm::log10(peak * peak / mse) } else { f64::INFINITY };
+    Ok(ImageError { rmse: libm::sqrt(mse), psnr })
 }

@@ -16,9 +16,7 @@ mod sealed {
 /// A floating-point element type accepted by the core: `f32` or `f64`.
 ///
 /// The trait is sealed so that methods can be added without breaking users.
-pub trait Real:
-    sealed::Sealed + Copy + PartialOrd + core::fmt::Debug + Default + Send + Sync + 'static
-{
+pub trait Real: sealed::Sealed + Copy + PartialOrd + core::fmt::Debug + Default + Send + Sync + 'static {
     /// How far `Σ p` may stray from 1 before a distribution is refused as
     /// [`crate::Error::NotNormalized`].
     ///

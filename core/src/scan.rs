@@ -99,10 +99,7 @@ pub(crate) fn mass_xlnx<T: Real>(xs: &[T]) -> Result<Mass, Error> {
         sum.add(lane_sum(&s));
         ent.add(lane_sum(&h));
     }
-    Ok(Mass {
-        sum: sum.value(),
-        xlnx: ent.value(),
-    })
+    Ok(Mass { sum: sum.value(), xlnx: ent.value() })
 }
 
 #[inline(always)]
@@ -191,11 +188,7 @@ pub(crate) fn kl_pass<T: Real>(p: &[T], q: &[T]) -> Result<(f64, f64, f64), Erro
         }
         sp.add(lane_sum(&a));
         sq.add(lane_sum(&c));
-        d.add(if inf.iter().any(|&f| f) {
-            f64::INFINITY
-        } else {
-            lane_sum(&k)
-        });
+        d.add(if inf.iter().any(|&f| f) { f64::INFINITY } else { lane_sum(&k) });
     }
     Ok((sp.value(), sq.value(), d.value()))
 }
@@ -207,11 +200,7 @@ pub(crate) fn kl_term(x: f64, y: f64) -> f64 {
     if x > 0.0 {
         if y > 0.0 {
             let r = x / y;
-            if r > 0.0 && r <= f64::MAX {
-                x * ln(r)
-            } else {
-                x * (ln(x) - ln(y))
-            }
+            if r > 0.0 && r <= f64::MAX { x * ln(r) } else { x * (ln(x) - ln(y)) }
         } else {
             f64::INFINITY
         }
@@ -226,10 +215,7 @@ pub(crate) fn same_len(a: usize, b: usize) -> Result<(), Error> {
         return Err(Error::Empty);
     }
     if a != b {
-        return Err(Error::LengthMismatch {
-            expected: a,
-            found: b,
-        });
+        return Err(Error::LengthMismatch { expected: a, found: b });
     }
     Ok(())
 }

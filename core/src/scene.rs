@@ -83,11 +83,7 @@ fn relative_area_entropy<T: Real>(areas: &[T]) -> Result<(f64, f64), Error> {
 /// let m = scene_measures(&[1.0f64; 4], &f, Base::Bits).unwrap();
 /// assert!((m.mutual_information - (4.0f64 / 3.0).log2()).abs() < 1e-12);
 /// ```
-pub fn scene_measures<T: Real>(
-    areas: &[T],
-    form_factors: &[T],
-    base: Base,
-) -> Result<SceneMeasures, Error> {
+pub fn scene_measures<T: Real>(areas: &[T], form_factors: &[T], base: Base) -> Result<SceneMeasures, Error> {
     let n = areas.len();
     let (total, hp) = relative_area_entropy(areas)?;
     let f = MatrixRef::new(form_factors, n, n)?;
@@ -143,19 +139,12 @@ pub fn scene_measures_from_counts<T: Real>(
     for (index, p) in pairs.iter().enumerate() {
         for idx in [p.from, p.to] {
             if idx as usize >= n {
-                return Err(Error::LabelOutOfRange {
-                    index,
-                    label: idx as usize,
-                    groups: n,
-                });
+                return Err(Error::LabelOutOfRange { index, label: idx as usize, groups: n });
             }
         }
         if let Some(pr) = prev {
             if (p.from, p.to) < pr {
-                return Err(Error::InvalidParameter {
-                    name: "pairs",
-                    value: index as f64,
-                });
+                return Err(Error::InvalidParameter { name: "pairs", value: index as f64 });
             }
         }
         prev = Some((p.from, p.to));
@@ -216,11 +205,7 @@ pub fn mutual_information_matrix_into<T: Real>(
         for j in 0..n {
             let fij = f.row(i)[j].to_f64();
             let aj = areas[j].to_f64() / total;
-            let v = if fij > 0.0 && ai > 0.0 {
-                ai * fij * (ln(fij) - ln(aj))
-            } else {
-                0.0
-            };
+            let v = if fij > 0.0 && ai > 0.0 { ai * fij * (ln(fij) - ln(aj)) } else { 0.0 };
             out[i * n + j] = T::from_f64(v * k);
             row.add(v);
         }
@@ -258,15 +243,9 @@ impl ContinuousMutualInformation {
     /// [`Error::InvalidParameter`] unless `total_area` is positive and finite.
     pub fn new(total_area: f64) -> Result<Self, Error> {
         if !(total_area > 0.0 && total_area.is_finite()) {
-            return Err(Error::InvalidParameter {
-                name: "total_area",
-                value: total_area,
-            });
+            return Err(Error::InvalidParameter { name: "total_area", value: total_area });
         }
-        Ok(Self {
-            total_area,
-            ..Self::default()
-        })
+        Ok(Self { total_area, ..Self::default() })
     }
 
     /// Adds one sample given its point-to-point form factor `F(x, y) > 0`.
@@ -343,11 +322,7 @@ pub fn continuous_mutual_information<T: Real>(
 }
 
 fn check_areas(area_i: f64, area_j: f64, total: f64) -> Result<(), Error> {
-    for (name, v) in [
-        ("area_i", area_i),
-        ("area_j", area_j),
-        ("total_area", total),
-    ] {
+    for (name, v) in [("area_i", area_i), ("area_j", area_j), ("total_area", total)] {
         if !(v > 0.0 && v.is_finite()) {
             return Err(Error::InvalidParameter { name, value: v });
         }
@@ -406,10 +381,7 @@ pub fn discretisation_error_lines<T: Real>(
 ) -> Result<f64, Error> {
     check_areas(area_i, area_j, total_area)?;
     if !(f_ij > 0.0 && f_ij <= 1.0) {
-        return Err(Error::InvalidParameter {
-            name: "f_ij",
-            value: f_ij,
-        });
+        return Err(Error::InvalidParameter { name: "f_ij", value: f_ij });
     }
     non_empty(point_form_factors.len())?;
     mass(point_form_factors)?;

@@ -25,10 +25,7 @@ impl Neumaier {
     /// An empty sum.
     #[must_use]
     pub const fn new() -> Self {
-        Self {
-            sum: 0.0,
-            compensation: 0.0,
-        }
+        Self { sum: 0.0, compensation: 0.0 }
     }
 
     /// Adds one term.

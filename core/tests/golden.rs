@@ -2,8 +2,7 @@
 //! printed and why its tolerance is what it is.
 
 use itgfx_core::{
-    Base, KullbackLeibler, binary_entropy, continuous_mutual_information, entropy, f_term,
-    grouping, scene_measures,
+    Base, KullbackLeibler, binary_entropy, continuous_mutual_information, entropy, f_term, grouping, scene_measures,
 };
 
 /// Part II Fig. 1 (Shannon's grouping example):
@@ -12,8 +11,7 @@ use itgfx_core::{
 #[test]
 fn part2_figure1_grouping() {
     let lhs: f64 = entropy(&[0.5, 1.0 / 3.0, 1.0 / 6.0], Base::Bits).unwrap();
-    let rhs = binary_entropy(0.5, Base::Bits).unwrap()
-        + 0.5 * entropy(&[2.0 / 3.0, 1.0 / 3.0], Base::Bits).unwrap();
+    let rhs = binary_entropy(0.5, Base::Bits).unwrap() + 0.5 * entropy(&[2.0 / 3.0, 1.0 / 3.0], Base::Bits).unwrap();
     assert!((lhs - rhs).abs() < 1e-15, "{lhs} vs {rhs}");
     assert!((lhs - 1.459_147_917_027_245).abs() < 1e-14);
 }
@@ -24,27 +22,17 @@ fn part2_figure1_grouping() {
 /// the three computed values must agree with each other to 1e-14.
 #[test]
 fn part4_figure9_recursive_decomposition() {
-    let p = [
-        1.0 / 6.0,
-        1.0 / 12.0,
-        1.0 / 12.0,
-        1.0 / 6.0,
-        1.0 / 5.0,
-        3.0 / 10.0,
-    ];
+    let p = [1.0 / 6.0, 1.0 / 12.0, 1.0 / 12.0, 1.0 / 6.0, 1.0 / 5.0, 3.0 / 10.0];
     let a = entropy(&p, Base::Bits).unwrap();
     // (b): groups {1/6}, {1/12, 1/12, 1/6}, {1/5, 3/10}.
     let mut q = [0.0; 3];
-    let b = grouping(&p, &[0, 1, 1, 1, 2, 2], 3, &mut q, Base::Bits)
-        .unwrap()
-        .total();
+    let b = grouping(&p, &[0, 1, 1, 1, 2, 2], 3, &mut q, Base::Bits).unwrap().total();
     let b_printed = entropy(&[1.0 / 6.0, 1.0 / 3.0, 1.0 / 2.0], Base::Bits).unwrap()
         + entropy(&[0.25, 0.25, 0.5], Base::Bits).unwrap() / 3.0
         + entropy(&[0.4, 0.6], Base::Bits).unwrap() / 2.0;
     // (c): the middle group split again into {1/12} and {1/12, 1/6}.
     let c = entropy(&[1.0 / 6.0, 1.0 / 3.0, 1.0 / 2.0], Base::Bits).unwrap()
-        + (entropy(&[0.25, 0.75], Base::Bits).unwrap()
-            + 0.75 * entropy(&[1.0 / 3.0, 2.0 / 3.0], Base::Bits).unwrap())
+        + (entropy(&[0.25, 0.75], Base::Bits).unwrap() + 0.75 * entropy(&[1.0 / 3.0, 2.0 / 3.0], Base::Bits).unwrap())
             / 3.0
         + entropy(&[0.4, 0.6], Base::Bits).unwrap() / 2.0;
     for v in [b, b_printed, c] {
@@ -74,10 +62,7 @@ fn part34_kl_contribution_minimum() {
             }
         }
     }
-    assert!(
-        (best.0 - want).abs() < 1e-6 && best.2 == 1.0 && (best.1 - 1.0 / e).abs() < 1e-3,
-        "{best:?}"
-    );
+    assert!((best.0 - want).abs() < 1e-6 && best.2 == 1.0 && (best.1 - 1.0 / e).abs() < 1e-3, "{best:?}");
 }
 
 /// Part III Table 8, Fig. 19a: a regular tetrahedron with one patch per face
@@ -91,10 +76,7 @@ fn part3_table8_tetrahedron() {
     let m = scene_measures(&[1.0; 4], &f, Base::Bits).unwrap();
     assert!((m.mutual_information - (4.0f64 / 3.0).log2()).abs() < 1e-15);
     assert!((m.mutual_information - 0.415).abs() < 5e-4);
-    assert!(
-        (m.positional_entropy - 2.0).abs() < 1e-15,
-        "H_P = log n_p (Part III eq. (48))"
-    );
+    assert!((m.positional_entropy - 2.0).abs() < 1e-15, "H_P = log n_p (Part III eq. (48))");
 }
 
 /// Part III §3.1 / eq. (49): the sphere with equal-area patches has
@@ -129,10 +111,7 @@ fn entropy_accuracy() {
         .collect();
     let total = dd_sum(w.iter().copied());
     w.iter_mut().for_each(|x| *x /= total);
-    let reference = -dd_sum(
-        w.iter()
-            .map(|&p| if p > 0.0 { p * libm::log(p) } else { 0.0 }),
-    );
+    let reference = -dd_sum(w.iter().map(|&p| if p > 0.0 { p * libm::log(p) } else { 0.0 }));
     let got = entropy(&w, Base::Nats).unwrap();
     let rel = ((got - reference) / reference).abs();
     assert!(rel < 1e-13, "relative error {rel:e}");

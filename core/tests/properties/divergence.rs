@@ -55,14 +55,7 @@ proptest! {
 fn bad_input_table() {
     let cases: &[(&[f64], &[f64], Error)] = &[
         (&[], &[], Error::Empty),
-        (
-            &[1.0],
-            &[0.5, 0.5],
-            Error::LengthMismatch {
-                expected: 1,
-                found: 2,
-            },
-        ),
+        (&[1.0], &[0.5, 0.5], Error::LengthMismatch { expected: 1, found: 2 }),
         (&[f64::NAN, 1.0], &[0.5, 0.5], Error::NonFinite { index: 0 }),
         (&[0.5, 0.5], &[1.5, -0.5], Error::Negative { index: 1 }),
         (&[0.0, 0.0], &[0.5, 0.5], Error::ZeroMass),

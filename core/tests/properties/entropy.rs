@@ -1,6 +1,4 @@
-use itgfx_core::{
-    Base, binary_entropy, entropy, entropy_of_weights, renyi_entropy, tsallis_entropy,
-};
+use itgfx_core::{Base, binary_entropy, entropy, entropy_of_weights, renyi_entropy, tsallis_entropy};
 use proptest::prelude::*;
 
 use crate::strategies::*;

@@ -1,7 +1,7 @@
 use itgfx_core::{
-    ArithmeticGeometric, Base, ChiSquare, FGenerator, Hellinger, KullbackLeibler, Square,
-    TotalVariation, ULogU, bregman, burbea_rao, chi_square, divergences, f_divergence, hellinger,
-    jensen_shannon, kl_divergence, l_alpha, vasershtein_ornstein,
+    ArithmeticGeometric, Base, ChiSquare, FGenerator, Hellinger, KullbackLeibler, Square, TotalVariation, ULogU,
+    bregman, burbea_rao, chi_square, divergences, f_divergence, hellinger, jensen_shannon, kl_divergence, l_alpha,
+    vasershtein_ornstein,
 };
 use proptest::prelude::*;
 

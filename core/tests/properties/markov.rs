@@ -1,6 +1,5 @@
 use itgfx_core::{
-    Base, entropy, entropy_rate, excess_entropy_from_blocks, markov_excess_entropy,
-    stationary_distribution_into,
+    Base, entropy, entropy_rate, excess_entropy_from_blocks, markov_excess_entropy, stationary_distribution_into,
 };
 use proptest::prelude::*;
 

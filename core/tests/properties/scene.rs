@@ -1,7 +1,7 @@
 use itgfx_core::oracle::{DivergenceKernel, divergence_oracle, mutual_information_oracle};
 use itgfx_core::{
-    Base, Channel, PairCount, discretisation_error_area_sampling, mutual_information_matrix_into,
-    scene_measures, scene_measures_from_counts,
+    Base, Channel, PairCount, discretisation_error_area_sampling, mutual_information_matrix_into, scene_measures,
+    scene_measures_from_counts,
 };
 use proptest::prelude::*;
 

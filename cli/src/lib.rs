@@ -1,0 +1,42 @@
+//! Library side of the `itgfx` command line: argument and CSV parsing,
+//! reports, and the commands themselves (the binary is a thin `main`).
+
+pub mod args;
+pub mod input;
+pub mod measure;
+pub mod report;
+
+use std::fmt;
+
+/// A command-line failure, printed as one line and exit code 2.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CliError {
+    message: String,
+}
+
+impl CliError {
+    /// A usage error (bad or missing option).
+    pub fn usage(message: impl Into<String>) -> Self {
+        Self { message: message.into() }
+    }
+
+    /// An input parsing error.
+    #[must_use]
+    pub fn input(e: input::InputError) -> Self {
+        Self { message: e.to_string() }
+    }
+}
+
+impl fmt::Display for CliError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for CliError {}
+
+/// A core error, prefixed with what was being measured.
+#[must_use]
+pub fn core_err(what: &str, e: itgfx_core::Error) -> CliError {
+    CliError { message: format!("{what}: {e}") }
+}

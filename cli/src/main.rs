@@ -1,0 +1,62 @@
+//! `itgfx`: information theory for computer graphics, from the command line.
+
+use std::ffi::OsString;
+use std::io::Write;
+use std::process::ExitCode;
+
+use itgfx_cli::args::Args;
+use itgfx_cli::{CliError, measure};
+
+const USAGE: &str = "itgfx — information theory for computer graphics
+
+Usage:
+  itgfx measure NAME [OPTIONS]   evaluate an information measure (itgfx measure --help)
+  itgfx --version
+
+Every command accepts --json (one JSON object on stdout) and --base 2|e|10.
+Errors are one line on stderr and exit code 2.";
+
+fn run(mut words: Vec<OsString>) -> Result<Option<String>, CliError> {
+    if words.is_empty() {
+        return Ok(Some(USAGE.to_string()));
+    }
+    let cmd = words.remove(0).into_string().map_err(|_| CliError::usage("command is not UTF-8"))?;
+    match cmd.as_str() {
+        "-h" | "--help" | "help" => Ok(Some(USAGE.to_string())),
+        "-V" | "--version" => Ok(Some(format!("itgfx {}", env!("CARGO_PKG_VERSION")))),
+        "measure" => {
+            if words.is_empty() {
+                return Ok(Some(measure::help()));
+            }
+            let name = words.remove(0).into_string().map_err(|_| CliError::usage("measure name is not UTF-8"))?;
+            if name == "--help" || name == "-h" || name == "help" {
+                return Ok(Some(measure::help()));
+            }
+            let args = Args::parse(words)?;
+            if args.flag("help") {
+                return Ok(Some(measure::help()));
+            }
+            let json = args.flag("json");
+            let report = measure::run(&name, &args)?;
+            Ok(Some(if json { report.to_json().to_string() } else { report.to_table().trim_end().to_string() }))
+        }
+        other => Err(CliError::usage(format!("unknown command {other:?}; try `itgfx --help`"))),
+    }
+}
+
+fn main() -> ExitCode {
+    let words: Vec<OsString> = std::env::args_os().skip(1).collect();
+    match run(words) {
+        Ok(Some(out)) => {
+            let mut stdout = std::io::stdout().lock();
+            // A closed pipe (e.g. `| head`) is not an error worth a panic.
+            let _ = writeln!(stdout, "{out}");
+            ExitCode::SUCCESS
+        }
+        Ok(None) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("itgfx: {e}");
+            ExitCode::from(2)
+        }
+    }
+}

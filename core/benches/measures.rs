@@ -48,7 +48,7 @@ fn main() {
         let reps = if n >= 100_000_000 { 3 } else { 7 };
         let p = normalized(xorshift(1, n));
         let q = normalized(xorshift(2, n));
-        let mut report = |name: &str, secs: f64| {
+        let report = |name: &str, secs: f64| {
             let rate = n as f64 / secs / 1e6;
             if json {
                 println!(

@@ -2,7 +2,7 @@
 
 use crate::math::{ln, xlnx};
 use crate::matrix::{MatrixRef, for_column_blocks};
-use crate::scan::{check_normalized, entropy_nats, mass, mass_xlnx, non_empty};
+use crate::scan::{check_normalized, entropy_nats, mass, mass_xlnx, non_empty, weights_entropy_nats};
 use crate::sum::{Neumaier, sum_map};
 use crate::{Base, Error, Real};
 
@@ -39,11 +39,8 @@ pub fn entropy<T: Real>(p: &[T], base: Base) -> Result<T, Error> {
 /// As [`entropy`] but never [`Error::NotNormalized`].
 pub fn entropy_of_weights<T: Real>(w: &[T], base: Base) -> Result<T, Error> {
     non_empty(w.len())?;
-    let m = mass_xlnx(w)?;
-    if m.sum == 0.0 {
-        return Err(Error::ZeroMass);
-    }
-    Ok(T::from_f64(entropy_nats(m) * base.per_nat()))
+    let h = weights_entropy_nats(w)?.ok_or(Error::ZeroMass)?;
+    Ok(T::from_f64(h * base.per_nat()))
 }
 
 /// Binary entropy `H(p, 1−p)` (Part II eq. (4)).
@@ -239,6 +236,17 @@ mod tests {
         }
         // -0.0 is a zero, not a negative.
         assert_eq!(entropy(&[-0.0, 1.0], Base::Bits).unwrap(), 0.0);
+    }
+
+    /// Found by the `entropy` fuzz target: a single subnormal weight gave
+    /// H = 0.001 through the precision lost in `x ln x`.
+    #[test]
+    fn weights_at_extreme_scales() {
+        assert_eq!(entropy_of_weights(&[1.23e-321f64], Base::Bits).unwrap(), 0.0);
+        let h: f64 = entropy_of_weights(&[5e-324, 5e-324], Base::Bits).unwrap();
+        assert!((h - 1.0).abs() < 1e-15, "{h}");
+        let h: f64 = entropy_of_weights(&[1e308, 1e308, 1e308, 1e308], Base::Bits).unwrap();
+        assert!((h - 2.0).abs() < 1e-15, "{h}");
     }
 
     #[test]

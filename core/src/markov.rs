@@ -36,8 +36,7 @@ pub fn stationary_distribution_into<T: Real>(
     out.iter_mut().for_each(|w| *w = uniform);
     for it in 1..=max_iter {
         scratch.iter_mut().for_each(|v| *v = 0.0);
-        for i in 0..n {
-            let wi = out[i];
+        for (i, &wi) in out.iter().enumerate() {
             if wi != 0.0 {
                 for (v, pij) in scratch.iter_mut().zip(p.row(i)) {
                     *v += wi * pij.to_f64();

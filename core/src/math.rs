@@ -10,14 +10,24 @@
 //! Zero, negatives, infinities and NaN are never passed to it: callers
 //! validate first, and map `0` to `1` before the call where `0 · ln 0 = 0`.
 
+// The classical constants keep their published digits (more than f64 holds).
+#[allow(clippy::excessive_precision)]
 const LN2_HI: f64 = 6.931_471_803_691_238_164_90e-01;
+#[allow(clippy::excessive_precision)]
 const LN2_LO: f64 = 1.908_214_929_270_587_700_02e-10;
+#[allow(clippy::excessive_precision)]
 const LG1: f64 = 6.666_666_666_666_735_130e-01;
+#[allow(clippy::excessive_precision)]
 const LG2: f64 = 3.999_999_999_940_941_908e-01;
+#[allow(clippy::excessive_precision)]
 const LG3: f64 = 2.857_142_874_366_239_149e-01;
+#[allow(clippy::excessive_precision)]
 const LG4: f64 = 2.222_219_843_214_978_396e-01;
+#[allow(clippy::excessive_precision)]
 const LG5: f64 = 1.818_357_216_161_805_012e-01;
+#[allow(clippy::excessive_precision)]
 const LG6: f64 = 1.531_383_769_920_937_332e-01;
+#[allow(clippy::excessive_precision)]
 const LG7: f64 = 1.479_819_860_511_658_591e-01;
 const SQRT2: f64 = core::f64::consts::SQRT_2;
 /// 2^54, used to lift subnormals into the normal range.

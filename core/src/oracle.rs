@@ -158,3 +158,36 @@ pub fn divergence_oracle(
     let f_hat = if kernel == DivergenceKernel::Variance { sum * sum } else { sum };
     Ok(divergence_from_uniform(kernel, samples, sum).map_or(0.0, |d| scale * f_hat * d))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn classic_oracles() {
+        assert_eq!(power_oracle(0.5, 2.0, 0.25, 4.0).unwrap(), 1.0);
+        let s = [0.1, 0.4, 0.3];
+        assert!((kernel_smoothness_oracle(0.5, &s, 2.0, 1.0).unwrap() - 0.3).abs() < 1e-15);
+        // av = 0.8/3 ≈ 0.2667; max(0.4 − av, av − 0.1) = av − 0.1
+        let av = 0.8 / 3.0;
+        assert!((kernel_smoothness_average_oracle(1.0, &s, 1.0, 1.0).unwrap() - (av - 0.1)).abs() < 1e-15);
+        assert!(power_oracle(-1.0, 1.0, 1.0, 1.0).is_err());
+        assert!(kernel_smoothness_oracle(1.0, &[], 1.0, 1.0).is_err());
+    }
+
+    #[test]
+    fn divergence_oracles_vanish_on_a_constant_kernel() {
+        for k in [
+            DivergenceKernel::KullbackLeibler,
+            DivergenceKernel::ChiSquare,
+            DivergenceKernel::Hellinger,
+            DivergenceKernel::Variance,
+        ] {
+            assert!(divergence_oracle(k, 0.7, 1.0, 1.0, &[0.2; 10], 1.0).unwrap().abs() < 1e-15);
+            assert_eq!(divergence_oracle(k, 0.7, 1.0, 1.0, &[0.0; 10], 1.0).unwrap(), 0.0, "full occlusion");
+            assert!(divergence_oracle(k, 0.7, 1.0, 1.0, &[0.0, 0.0, 1.0], 1.0).unwrap() > 0.0);
+        }
+        let m = mutual_information_oracle(1.0, 1.0, 1.0, 6.0, &[0.2; 10], 1.0, Base::Bits).unwrap();
+        assert!(m.abs() < 1e-15);
+    }
+}

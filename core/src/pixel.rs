@@ -9,7 +9,7 @@
 use crate::entropy::binary_entropy_nats;
 use crate::math::ln;
 use crate::oracle::{DivergenceKernel, divergence_from_uniform};
-use crate::scan::{entropy_nats, mass, mass_xlnx, same_len};
+use crate::scan::{mass, same_len, weights_entropy_nats};
 use crate::sum::Neumaier;
 use crate::{Base, Error, Real};
 
@@ -39,8 +39,7 @@ fn at_least_two(n: usize) -> Result<(), Error> {
 /// [`Error::NonFinite`], [`Error::Negative`].
 pub fn pixel_entropy<T: Real>(samples: &[T], base: Base) -> Result<f64, Error> {
     at_least_two(samples.len())?;
-    let m = mass_xlnx(samples)?;
-    let nats = if m.sum == 0.0 { ln(samples.len() as f64) } else { entropy_nats(m) };
+    let nats = weights_entropy_nats(samples)?.unwrap_or_else(|| ln(samples.len() as f64));
     Ok(nats * base.per_nat())
 }
 
@@ -62,20 +61,19 @@ pub fn pixel_contrast<T: Real>(samples: &[T]) -> Result<f64, Error> {
     pixel_quality(samples).map(|q| 1.0 - q)
 }
 
-/// `(p_min, p_max)` of the normalised samples; `None` if all are zero.
-fn extremes<T: Real>(samples: &[T]) -> Result<Option<(f64, f64)>, Error> {
+/// `r = min / max` of the samples, in `[0, 1]`; `None` if all are zero.
+/// Every extreme-based contrast depends on `p_min/p_max` alone, and the
+/// ratio of raw values never overflows (their sum can).
+fn extremes<T: Real>(samples: &[T]) -> Result<Option<f64>, Error> {
     at_least_two(samples.len())?;
-    let s = mass(samples)?;
-    if s == 0.0 {
-        return Ok(None);
-    }
+    mass(samples)?;
     let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
     for x in samples {
         let x = x.to_f64();
         lo = lo.min(x);
         hi = hi.max(x);
     }
-    Ok(Some((lo / s, hi / s)))
+    Ok((hi > 0.0).then(|| lo / hi))
 }
 
 /// Binary contrast `C_b = 1 − H_b(p_min/(p_min+p_max))`, with `H_b` in bits
@@ -86,7 +84,8 @@ fn extremes<T: Real>(samples: &[T]) -> Result<Option<(f64, f64)>, Error> {
 pub fn binary_contrast<T: Real>(samples: &[T]) -> Result<f64, Error> {
     Ok(match extremes(samples)? {
         None => 0.0,
-        Some((lo, hi)) => 1.0 - binary_entropy_nats(lo / (lo + hi)) * Base::Bits.per_nat(),
+        // p_min/(p_min+p_max) = r/(1+r); H_b ≤ 1 bit exactly, rounding can exceed it by an ulp.
+        Some(r) => (1.0 - binary_entropy_nats(r / (1.0 + r)) * Base::Bits.per_nat()).clamp(0.0, 1.0),
     })
 }
 
@@ -99,8 +98,8 @@ pub fn binary_contrast<T: Real>(samples: &[T]) -> Result<f64, Error> {
 pub fn log_difference_contrast<T: Real>(samples: &[T], base: Base) -> Result<f64, Error> {
     Ok(match extremes(samples)? {
         None => 0.0,
-        Some((lo, _)) if lo == 0.0 => f64::INFINITY,
-        Some((lo, hi)) => (ln(hi) - ln(lo)) * base.per_nat(),
+        Some(0.0) => f64::INFINITY,
+        Some(r) => -ln(r) * base.per_nat(),
     })
 }
 
@@ -179,7 +178,7 @@ pub fn mixed_contrast(delta: f64, colour: f64, geometry: f64) -> Result<f64, Err
 pub fn classic_contrast<T: Real>(samples: &[T]) -> Result<f64, Error> {
     Ok(match extremes(samples)? {
         None => 0.0,
-        Some((lo, hi)) => (hi - lo) / (hi + lo),
+        Some(r) => (1.0 - r) / (1.0 + r),
     })
 }
 
@@ -210,7 +209,7 @@ pub fn priority_colour<T: Real>(r: &[T], g: &[T], b: &[T]) -> Result<f64, Error>
 pub fn depth_difference<T: Real>(depths: &[T]) -> Result<f64, Error> {
     Ok(match extremes(depths)? {
         None => 0.0,
-        Some((lo, hi)) => 1.0 - lo / hi,
+        Some(r) => 1.0 - r,
     })
 }
 
@@ -377,4 +376,90 @@ pub fn image_error(a: &[f64], b: &[f64], channels: usize, weights: &[f64], peak:
     let mse = mse / sw;
     let psnr = if mse > 0.0 { 10.0 * libm::log10(peak * peak / mse) } else { f64::INFINITY };
     Ok(ImageError { rmse: libm::sqrt(mse), psnr })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn contrasts_on_known_sets() {
+        // Uniform samples: quality 1, every contrast 0.
+        let flat = [0.3f64; 8];
+        assert!((pixel_quality(&flat).unwrap() - 1.0).abs() < 1e-15);
+        assert_eq!(binary_contrast(&flat).unwrap(), 0.0);
+        assert_eq!(classic_contrast(&flat).unwrap(), 0.0);
+        // One bright sample among dark ones.
+        let edge = [1.0f64, 0.0, 0.0, 0.0];
+        assert_eq!(pixel_contrast(&edge).unwrap(), 1.0);
+        assert_eq!(binary_contrast(&edge).unwrap(), 1.0);
+        assert_eq!(classic_contrast(&edge).unwrap(), 1.0);
+        assert_eq!(log_difference_contrast(&edge, Base::Bits).unwrap(), f64::INFINITY);
+        // min/max = 1/3: classic (3-1)/(3+1) = 0.5; binary 1 - H(1/4) in bits.
+        let s = [1.0f64, 3.0];
+        assert!((classic_contrast(&s).unwrap() - 0.5).abs() < 1e-15);
+        let hb = -(0.25f64 * 0.25f64.log2() + 0.75 * 0.75f64.log2());
+        assert!((binary_contrast(&s).unwrap() - (1.0 - hb)).abs() < 1e-15);
+        assert!((log_difference_contrast(&s, Base::Bits).unwrap() - 3f64.log2()).abs() < 1e-15);
+        assert!((depth_difference(&[2.0f64, 8.0]).unwrap() - 0.75).abs() < 1e-15);
+        assert_eq!(pixel_entropy(&[0.0f64; 4], Base::Bits).unwrap(), 2.0, "black pixel is homogeneous");
+        assert_eq!(pixel_entropy(&[1.0f64], Base::Bits), Err(Error::LengthMismatch { expected: 2, found: 1 }));
+    }
+
+    #[test]
+    fn colour_contrast_weights_channels_by_mean() {
+        // Eq. (18): a dark channel's contrast matters less.
+        let c = colour_contrast(&[1.0, 0.0, 0.0], &[1.0, 1.0, 1.0], &[0.1, 0.9, 0.0]).unwrap();
+        assert!((c - 0.1).abs() < 1e-15);
+        assert_eq!(colour_contrast(&[1.0, 1.0], &[1.0, 1.0], &[0.0, 0.0]).unwrap(), 0.0);
+        assert!((mixed_contrast(0.9, 1.0, 0.0).unwrap() - 0.9).abs() < 1e-15);
+        assert!(mixed_contrast(1.5, 1.0, 0.0).is_err());
+    }
+
+    #[test]
+    fn priority_value_matches_equation_2() {
+        let (r, g, b) = ([1.0f64, 3.0], [2.0f64, 2.0], [0.0f64, 4.0]);
+        let want = 0.4 * 0.5 * 2.0 + 0.3 * 0.0 * 2.0 + 0.6 * 1.0 * 2.0;
+        assert!((priority_colour(&r, &g, &b).unwrap() - want).abs() < 1e-15);
+        assert!((priority_value(0.9, 1.0, 0.5).unwrap() - 0.95).abs() < 1e-15);
+    }
+
+    #[test]
+    fn confidence_test_uses_student_t() {
+        let s = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0];
+        let ct = confidence_test(&s, 0.1, 10.0).unwrap();
+        // mean 4.5, sd = sqrt(6), t_{0.95,7} = 1.894579
+        let want = 1.894_579 * 6f64.sqrt() / 8f64.sqrt();
+        assert!((ct.mean - 4.5).abs() < 1e-15 && (ct.half_width - want).abs() < 1e-5 && ct.satisfied);
+        assert!(!confidence_test(&s, 0.1, 0.025).unwrap().satisfied);
+    }
+
+    #[test]
+    fn divergence_criterion_and_importance() {
+        let flat = [2.0; 8];
+        assert_eq!(divergence_criterion(DivergenceKernel::Hellinger, &flat, true).unwrap(), 0.0);
+        let l = [1.0, 0.0, 0.0, 0.0];
+        // p = (1,0,0,0), u = 1/4: KL = ln 4; (1/N) L̄ KL with L̄ = 1/4.
+        let want = 0.25 * 0.25 * 4f64.ln();
+        assert!((divergence_criterion(DivergenceKernel::KullbackLeibler, &l, false).unwrap() - want).abs() < 1e-15);
+        assert!(
+            (divergence_criterion(DivergenceKernel::KullbackLeibler, &l, true).unwrap() - 0.0625 * 4f64.ln().sqrt())
+                .abs()
+                < 1e-15
+        );
+        assert!((node_importance(0.8, 4, 3).unwrap() - 0.05).abs() < 1e-15);
+        assert!((tree_colour_contrast(&[0.5, 1.0], &[0.5, 0.5], &[1.0, 0.2]).unwrap() - 0.35).abs() < 1e-15);
+    }
+
+    #[test]
+    fn image_error_matches_definitions() {
+        let a = [10.0, 20.0, 30.0, 10.0, 20.0, 30.0];
+        let b = [12.0, 20.0, 30.0, 10.0, 20.0, 26.0];
+        let e = image_error(&a, &b, 3, &[1.0, 1.0, 1.0], 255.0).unwrap();
+        // MSE per channel: R (4+0)/2 = 2, G 0, B 16/2 = 8; mean 10/3.
+        let mse: f64 = 10.0 / 3.0;
+        assert!((e.rmse - mse.sqrt()).abs() < 1e-12);
+        assert!((e.psnr - 10.0 * (255.0f64 * 255.0 / mse).log10()).abs() < 1e-12);
+        assert_eq!(image_error(&a, &a, 3, &SRGB_LUMINANCE_WEIGHTS, 255.0).unwrap().psnr, f64::INFINITY);
+    }
 }

@@ -78,7 +78,7 @@ pub(crate) fn student_t_quantile(p: f64, dof: usize) -> f64 {
         if dof < 5 {
             c += 0.3 * (n - 4.5) * (x + 0.6);
         }
-        c = (((0.05 * d * x - 5.0) * x - 7.0) * x - 2.0) * x + b + c;
+        c += (((0.05 * d * x - 5.0) * x - 7.0) * x - 2.0) * x + b;
         y = (((((0.4 * y + 6.3) * y + 36.0) * y + 94.5) / c - y - 3.0) / b + 1.0) * x;
         y = a * y * y;
         y = if y > 0.002 { libm::exp(y) - 1.0 } else { 0.5 * y * y + y };

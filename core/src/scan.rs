@@ -17,6 +17,8 @@ pub(crate) struct Mass {
 }
 
 #[inline(always)]
+// `&` rather than `contains` (which short-circuits): branch-free in the lanes.
+#[allow(clippy::manual_range_contains)]
 fn bad(x: f64) -> bool {
     // NaN fails both comparisons; +inf fails the second; negatives the first.
     !((x >= 0.0) & (x <= f64::MAX))
@@ -63,6 +65,13 @@ pub(crate) fn mass<T: Real>(xs: &[T]) -> Result<f64, Error> {
     Ok(total.value())
 }
 
+/// Whether `r` is a positive normal double (branch-free).
+#[allow(clippy::manual_range_contains)]
+#[inline(always)]
+fn normal_ratio(r: f64) -> bool {
+    (r >= f64::MIN_POSITIVE) & (r <= f64::MAX)
+}
+
 /// Lanes of the unrolled inner loops: wide enough for the SLP vectoriser
 /// to fill 2- to 8-wide registers and hide the latency of `ln`.
 const LANES: usize = 8;
@@ -105,6 +114,34 @@ pub(crate) fn mass_xlnx<T: Real>(xs: &[T]) -> Result<Mass, Error> {
 #[inline(always)]
 fn lane_sum(a: &[f64; LANES]) -> f64 {
     ((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7]))
+}
+
+/// Entropy in nats of non-negative weights `w / Σw`, robust to scale:
+/// totals outside `[2^-900, 2^900]` (subnormal weights lose digits in
+/// `x ln x`; huge ones overflow `Σw`) are recomputed after an exact
+/// power-of-two rescaling by the largest weight. `None` for zero mass.
+pub(crate) fn weights_entropy_nats<T: Real>(xs: &[T]) -> Result<Option<f64>, Error> {
+    let m = mass_xlnx(xs)?;
+    if m.sum == 0.0 {
+        return Ok(None);
+    }
+    const LO: f64 = 1.0e-271; // ≈ 2^-900
+    const HI: f64 = 1.0e271;
+    if m.sum >= LO && m.sum <= HI {
+        return Ok(Some(entropy_nats(m)));
+    }
+    let max = xs.iter().map(|x| x.to_f64()).fold(0.0, f64::max);
+    // 2^-e with e the binary exponent of max (max is finite and positive).
+    let e = libm::ilogb(max);
+    let mut sum = Neumaier::new();
+    let mut ent = Neumaier::new();
+    for x in xs {
+        // Per element: 2^-e itself may not be representable (e < -1023).
+        let y = libm::scalbn(x.to_f64(), -e);
+        sum.add(y);
+        ent.add(xlnx(y));
+    }
+    Ok(Some(entropy_nats(Mass { sum: sum.value(), xlnx: ent.value() })))
 }
 
 /// Refuses zero mass and sums outside `T::MASS_TOLERANCE` of 1.
@@ -162,7 +199,7 @@ pub(crate) fn kl_pass<T: Real>(p: &[T], q: &[T]) -> Result<(f64, f64, f64), Erro
                 inf[l] |= xp & !yp;
                 let both = xp & yp;
                 let r = if both { x[l] / y[l] } else { 1.0 };
-                odd[l] |= !((r >= f64::MIN_POSITIVE) & (r <= f64::MAX));
+                odd[l] |= !normal_ratio(r);
                 k[l] += if both { x[l] * ln(r) } else { 0.0 };
             }
         }

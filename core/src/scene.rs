@@ -8,7 +8,7 @@
 
 use crate::math::{ln, xlnx};
 use crate::matrix::MatrixRef;
-use crate::scan::{entropy_nats, mass, mass_xlnx, non_empty, same_len};
+use crate::scan::{entropy_nats, mass, mass_xlnx, non_empty, same_len, weights_entropy_nats};
 use crate::sum::Neumaier;
 use crate::{Base, Error, Real};
 
@@ -60,11 +60,12 @@ impl SceneMeasures {
 
 fn relative_area_entropy<T: Real>(areas: &[T]) -> Result<(f64, f64), Error> {
     non_empty(areas.len())?;
-    let m = mass_xlnx(areas)?;
-    if m.sum == 0.0 {
-        return Err(Error::ZeroMass);
+    let total = mass(areas)?;
+    let h = weights_entropy_nats(areas)?.ok_or(Error::ZeroMass)?;
+    if !total.is_finite() {
+        return Err(Error::InvalidParameter { name: "total_area", value: total });
     }
-    Ok((m.sum, entropy_nats(m)))
+    Ok((total, h))
 }
 
 /// Scene measures from patch areas and a dense `n × n` form-factor matrix

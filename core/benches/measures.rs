@@ -37,8 +37,55 @@ fn best(reps: usize, mut f: impl FnMut() -> f64) -> f64 {
     best
 }
 
+/// Double-double (TwoSum) accumulation, the accuracy reference.
+fn dd_sum(xs: impl Iterator<Item = f64>) -> f64 {
+    let (mut hi, mut lo) = (0.0f64, 0.0f64);
+    for x in xs {
+        let s = hi + x;
+        let bp = s - hi;
+        lo += (hi - (s - bp)) + (x - bp);
+        hi = s;
+        let t = hi + lo;
+        lo -= t - hi;
+        hi = t;
+    }
+    hi + lo
+}
+
+/// `--accuracy`: relative error of H(p) against a double-double reference of
+/// libm terms, for each size.
+fn accuracy(sizes: &[usize]) {
+    for &n in sizes {
+        let w = xorshift(7, n);
+        let total = dd_sum(w.iter().copied());
+        let p: Vec<f64> = w.iter().map(|x| x / total).collect();
+        let reference = -dd_sum(p.iter().map(|&x| if x > 0.0 { x * libm_log(x) } else { 0.0 }));
+        let got = entropy(&p, Base::Nats).unwrap();
+        let naive: f64 = -p.iter().map(|&x| if x > 0.0 { x * x.ln() } else { 0.0 }).sum::<f64>();
+        println!(
+            "accuracy n={n:<10} H={got:.17} nats  relative error {:.2e} (naive left-to-right sum: {:.2e})",
+            ((got - reference) / reference).abs(),
+            ((naive - reference) / reference).abs()
+        );
+    }
+}
+
+fn libm_log(x: f64) -> f64 {
+    // std's ln is correctly rounded to within 1 ulp like libm's.
+    x.ln()
+}
+
 fn main() {
     let json = std::env::args().any(|a| a == "--json");
+    if std::env::args().any(|a| a == "--accuracy") {
+        let sizes: Vec<usize> = std::env::var("ITGFX_BENCH_SIZES")
+            .unwrap_or_else(|_| "1e6,1e7,1e8".into())
+            .split(',')
+            .map(|s| s.trim().parse::<f64>().expect("ITGFX_BENCH_SIZES: numbers like 1e6") as usize)
+            .collect();
+        accuracy(&sizes);
+        return;
+    }
     let sizes: Vec<usize> = std::env::var("ITGFX_BENCH_SIZES")
         .unwrap_or_else(|_| "1e6,1e7,1e8".into())
         .split(',')

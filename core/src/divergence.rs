@@ -304,6 +304,15 @@ pub(crate) fn mixture_divergence<T: Real, W: Real>(w: &[W], m: &MatrixRef<'_, T>
 /// `Σ_i w_i H(M_i)` in nats: one logarithm per matrix element serves both
 /// the divergence and the row entropies.
 pub(crate) fn mixture_divergence_and_entropy<T: Real, W: Real>(w: &[W], m: &MatrixRef<'_, T>) -> (f64, f64, f64) {
+    #[cfg(all(feature = "std", target_arch = "x86_64"))]
+    if crate::dispatch::avx2() {
+        return crate::dispatch::mixture(w, m);
+    }
+    mixture_body(w, m)
+}
+
+#[inline(always)]
+pub(crate) fn mixture_body<T: Real, W: Real>(w: &[W], m: &MatrixRef<'_, T>) -> (f64, f64, f64) {
     let mut d = Neumaier::new();
     let mut h = Neumaier::new();
     let mut rows = Neumaier::new();

@@ -34,7 +34,9 @@
 //! `f64` result of its inputs rounded once (within half an `f32` ulp).
 
 #![no_std]
-#![forbid(unsafe_code)]
+// `unsafe` appears only in `dispatch` (calling AVX2 builds after detection).
+#![deny(unsafe_code)]
+#![deny(clippy::undocumented_unsafe_blocks)]
 #![deny(missing_docs)]
 #![doc(test(attr(deny(warnings))))]
 // Validation is written `!(x >= lo)` on purpose: NaN fails every comparison,
@@ -43,12 +45,16 @@
 
 #[cfg(feature = "alloc")]
 extern crate alloc;
+#[cfg(feature = "std")]
+extern crate std;
 
 mod base;
 #[cfg(feature = "alloc")]
 mod bottleneck;
 mod channel;
 mod coding;
+#[cfg(all(feature = "std", target_arch = "x86_64"))]
+mod dispatch;
 mod divergence;
 mod entropy;
 mod error;

@@ -95,6 +95,7 @@ pub(crate) fn offset(e: Error, by: usize) -> Error {
 /// Calls `f(c0, m)` for each block of at most [`COL_BLOCK`] columns, where
 /// `m[j - c0] = Σ_i w_i M_ij` (or `Σ_i M_ij` when `weights` is `None`).
 /// Rows with zero weight are skipped.
+#[inline(always)]
 pub(crate) fn for_column_blocks<T: Real, W: Real>(
     m: &MatrixRef<'_, T>,
     weights: Option<&[W]>,

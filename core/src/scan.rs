@@ -16,9 +16,9 @@ pub(crate) struct Mass {
     pub xlnx: f64,
 }
 
-#[inline(always)]
 // `&` rather than `contains` (which short-circuits): branch-free in the lanes.
 #[allow(clippy::manual_range_contains)]
+#[inline(always)]
 fn bad(x: f64) -> bool {
     // NaN fails both comparisons; +inf fails the second; negatives the first.
     !((x >= 0.0) & (x <= f64::MAX))
@@ -40,6 +40,15 @@ pub(crate) fn first_invalid<T: Real>(xs: &[T], base: usize) -> Result<(), Error>
 
 /// Checks every element is finite and non-negative; returns the compensated sum.
 pub(crate) fn mass<T: Real>(xs: &[T]) -> Result<f64, Error> {
+    #[cfg(all(feature = "std", target_arch = "x86_64"))]
+    if crate::dispatch::avx2() {
+        return crate::dispatch::mass(xs);
+    }
+    mass_body(xs)
+}
+
+#[inline(always)]
+pub(crate) fn mass_body<T: Real>(xs: &[T]) -> Result<f64, Error> {
     let mut total = Neumaier::new();
     for (b, block) in xs.chunks(BLOCK).enumerate() {
         let mut acc = [0.0f64; 4];
@@ -78,6 +87,15 @@ const LANES: usize = 8;
 
 /// Checks every element and returns `Σ x` and `Σ x ln x` in one pass.
 pub(crate) fn mass_xlnx<T: Real>(xs: &[T]) -> Result<Mass, Error> {
+    #[cfg(all(feature = "std", target_arch = "x86_64"))]
+    if crate::dispatch::avx2() {
+        return crate::dispatch::mass_xlnx(xs);
+    }
+    mass_xlnx_body(xs)
+}
+
+#[inline(always)]
+pub(crate) fn mass_xlnx_body<T: Real>(xs: &[T]) -> Result<Mass, Error> {
     let mut sum = Neumaier::new();
     let mut ent = Neumaier::new();
     for (b, block) in xs.chunks(BLOCK).enumerate() {
@@ -169,6 +187,15 @@ pub(crate) fn entropy_nats(m: Mass) -> f64 {
 /// `x ln(x/y)` summed over two validated slices in one pass, with
 /// `Σ x` and `Σ y` (nats). Conventions of Part II eq. (8).
 pub(crate) fn kl_pass<T: Real>(p: &[T], q: &[T]) -> Result<(f64, f64, f64), Error> {
+    #[cfg(all(feature = "std", target_arch = "x86_64"))]
+    if crate::dispatch::avx2() {
+        return crate::dispatch::kl_pass(p, q);
+    }
+    kl_pass_body(p, q)
+}
+
+#[inline(always)]
+pub(crate) fn kl_pass_body<T: Real>(p: &[T], q: &[T]) -> Result<(f64, f64, f64), Error> {
     let mut sp = Neumaier::new();
     let mut sq = Neumaier::new();
     let mut d = Neumaier::new();

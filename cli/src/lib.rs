@@ -2,6 +2,7 @@
 //! reports, and the commands themselves (the binary is a thin `main`).
 
 pub mod args;
+pub mod complexity;
 pub mod input;
 pub mod measure;
 pub mod report;

@@ -5,16 +5,38 @@ use std::io::Write;
 use std::process::ExitCode;
 
 use itgfx_cli::args::Args;
-use itgfx_cli::{CliError, measure};
+use itgfx_cli::{CliError, complexity, measure};
 
 const USAGE: &str = "itgfx — information theory for computer graphics
 
 Usage:
+  itgfx complexity SCENE [OPTIONS]  scene visibility channel: H_P, H_S, I_S, I_S^c (itgfx complexity --help)
   itgfx measure NAME [OPTIONS]   evaluate an information measure (itgfx measure --help)
   itgfx --version
 
 Every command accepts --json (one JSON object on stdout) and --base 2|e|10.
 Errors are one line on stderr and exit code 2.";
+
+fn complexity_help() -> String {
+    let mut s = String::from(
+        "itgfx complexity SCENE [OPTIONS] — the scene visibility channel (Part III)\n\n\
+         SCENE is an .obj file (one patch per polygon) or a built-in:\n",
+    );
+    for (n, d) in itgfx_backends::scene::BUILT_IN {
+        s.push_str(&format!("  {n}\n      {d}\n"));
+    }
+    s.push_str(
+        "\nOptions:\n  --lines N        lines to cast (default 1e6; global lines that miss count)\n\
+         \x20 --seed S         seed (default 1); same seed, same numbers, any thread count\n\
+         \x20 --local          local lines from the patches instead of global lines\n\
+         \x20 --subdivide K    split every patch into K x K cells\n\
+         \x20 --blocks B       jackknife blocks for standard errors (default 8; 1 = none)\n\
+         \x20 --backend cpu|reference|vulkan   (default cpu)\n\
+         \x20 --threads T      worker threads (default: all cores)\n\
+         \x20 --base 2|e|10    --json\n",
+    );
+    s
+}
 
 fn run(mut words: Vec<OsString>) -> Result<Option<String>, CliError> {
     if words.is_empty() {
@@ -38,6 +60,22 @@ fn run(mut words: Vec<OsString>) -> Result<Option<String>, CliError> {
             }
             let json = args.flag("json");
             let report = measure::run(&name, &args)?;
+            Ok(Some(if json { report.to_json().to_string() } else { report.to_table().trim_end().to_string() }))
+        }
+        "complexity" => {
+            let args = Args::parse(words)?;
+            if args.flag("help") {
+                return Ok(Some(complexity_help()));
+            }
+            if let Some(t) = args.integer("threads")? {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(t.max(1) as usize)
+                    .build_global()
+                    .map_err(|e| CliError::usage(format!("--threads: {e}")))?;
+            }
+            let json = args.flag("json");
+            let (report, _counts, _scene) = complexity::run(&args)?;
+            args.finish()?;
             Ok(Some(if json { report.to_json().to_string() } else { report.to_table().trim_end().to_string() }))
         }
         other => Err(CliError::usage(format!("unknown command {other:?}; try `itgfx --help`"))),

@@ -1,0 +1,18 @@
+//! # itgfx-backends
+//!
+//! Scenes and the backends that trace lines through them for itgfx:
+//!
+//! * [`scene`]: patches of triangles; built-in scenes ([`scene::built_in`])
+//!   and Wavefront OBJ ([`obj::load_obj`]), subdivision.
+//! * [`tracer`]: the [`tracer::Tracer`] seam, the CPU backend (rayon +
+//!   obvhs) and the brute-force reference backend.
+//! * [`lines`]: seeded counter-based global and local lines.
+//! * [`visibility`]: the scene visibility channel of Part III, with
+//!   jackknife standard errors.
+
+pub mod lines;
+pub mod obj;
+pub mod scene;
+pub mod solids;
+pub mod tracer;
+pub mod visibility;

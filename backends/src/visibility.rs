@@ -51,6 +51,8 @@ pub struct LineOptions {
     pub local: bool,
     /// Jackknife blocks (1 disables the standard errors).
     pub blocks: u32,
+    /// Index of the first line (shards of one run use disjoint ranges).
+    pub offset: u64,
 }
 
 /// Counts of one block of lines.
@@ -298,7 +300,7 @@ pub fn count_visibility(
     let mut out = Vec::new();
     let mut done = 0;
     for b in 0..blocks {
-        let (start, end) = (opts.lines * b / blocks, opts.lines * (b + 1) / blocks);
+        let (start, end) = (opts.offset + opts.lines * b / blocks, opts.offset + opts.lines * (b + 1) / blocks);
         let mut map = KeyMap::default();
         let mut block = BlockCounts {
             lines: end - start,
@@ -351,6 +353,146 @@ pub fn count_visibility(
         out.push(block);
     }
     Ok(VisibilityCounts { areas: scene.areas(), local: opts.local, blocks: out })
+}
+
+impl VisibilityCounts {
+    /// Writes the counts as text (one block after another), so shards of a
+    /// run can be merged: `N_ij`, background counts, endpoint sums and the
+    /// `I_S^c` sums, floats in shortest round-trip form.
+    ///
+    /// # Errors
+    /// I/O errors.
+    pub fn save(&self, name: &str, out: &mut impl std::io::Write) -> std::io::Result<()> {
+        writeln!(out, "itgfx-counts 1")?;
+        writeln!(out, "scene {name}")?;
+        writeln!(out, "patches {} local {}", self.areas.len(), u8::from(self.local))?;
+        for a in &self.areas {
+            writeln!(out, "area {a:?}")?;
+        }
+        for b in &self.blocks {
+            let (at, n, s, s2) = b.continuous.to_parts();
+            writeln!(out, "block {} {} {} {at:?} {n} {s:?} {s2:?} {}", b.lines, b.segments, b.escaped, b.pairs.len())?;
+            for p in &b.pairs {
+                writeln!(out, "{} {} {}", p.from, p.to, p.count)?;
+            }
+            for (i, ((bg, e), l)) in b.background.iter().zip(&b.endpoints).zip(&b.endpoint_log).enumerate() {
+                if *bg > 0 || *e > 0 {
+                    writeln!(out, "p {i} {bg} {e} {l:?}")?;
+                }
+            }
+            writeln!(out, "end")?;
+        }
+        Ok(())
+    }
+
+    /// Reads counts written by [`VisibilityCounts::save`]; returns the scene name too.
+    ///
+    /// # Errors
+    /// A message with the line number for any malformed line.
+    pub fn load(text: &str) -> Result<(String, Self), String> {
+        let mut lines = text.lines().enumerate().peekable();
+        let mut next = |what: &str| {
+            lines.next().map(|(i, l)| (i + 1, l)).ok_or_else(|| format!("unexpected end of file, expected {what}"))
+        };
+        let bad = |n: usize, m: &str| format!("line {n}: {m}");
+        let (n1, h) = next("header")?;
+        if h != "itgfx-counts 1" {
+            return Err(bad(n1, "not an itgfx counts file (expected 'itgfx-counts 1')"));
+        }
+        let (_, s) = next("scene")?;
+        let name = s.strip_prefix("scene ").unwrap_or(s).to_string();
+        let (n3, p) = next("patches")?;
+        let f: Vec<&str> = p.split_whitespace().collect();
+        let (patches, local) = match f.as_slice() {
+            ["patches", n, "local", l] => (n.parse::<usize>().map_err(|_| bad(n3, "bad patch count"))?, *l == "1"),
+            _ => return Err(bad(n3, "expected 'patches N local 0|1'")),
+        };
+        let mut areas = Vec::with_capacity(patches);
+        for _ in 0..patches {
+            let (n, l) = next("area")?;
+            areas.push(
+                l.strip_prefix("area ")
+                    .and_then(|x| x.parse::<f64>().ok())
+                    .ok_or_else(|| bad(n, "expected 'area A'"))?,
+            );
+        }
+        let mut blocks = Vec::new();
+        while let Ok((n, l)) = next("block") {
+            let f: Vec<&str> = l.split_whitespace().collect();
+            if f.first() != Some(&"block") || f.len() != 9 {
+                return Err(bad(n, "expected 'block ...'"));
+            }
+            let num = |k: usize| f[k].parse::<f64>().map_err(|_| bad(n, "bad number"));
+            let int = |k: usize| f[k].parse::<u64>().map_err(|_| bad(n, "bad integer"));
+            let cont = ContinuousMutualInformation::from_parts(num(4)?, int(5)?, num(6)?, num(7)?)
+                .map_err(|e| bad(n, &e.to_string()))?;
+            let mut b = BlockCounts {
+                lines: int(1)?,
+                segments: int(2)?,
+                escaped: int(3)?,
+                continuous: cont,
+                background: vec![0; patches],
+                endpoints: vec![0; patches],
+                endpoint_log: vec![0.0; patches],
+                pairs: Vec::with_capacity(int(8)? as usize),
+            };
+            for _ in 0..int(8)? {
+                let (n, l) = next("pair")?;
+                let f: Vec<u64> = l.split_whitespace().filter_map(|x| x.parse().ok()).collect();
+                match f.as_slice() {
+                    [i, j, c] if (*i as usize) < patches && (*j as usize) < patches => {
+                        b.pairs.push(PairCount { from: *i as u32, to: *j as u32, count: *c });
+                    }
+                    _ => return Err(bad(n, "expected 'i j count' with patch indices in range")),
+                }
+            }
+            loop {
+                let (n, l) = next("end")?;
+                if l == "end" {
+                    break;
+                }
+                let f: Vec<&str> = l.split_whitespace().collect();
+                match f.as_slice() {
+                    ["p", i, bg, e, lg] => {
+                        let i: usize = i
+                            .parse()
+                            .ok()
+                            .filter(|&i| i < patches)
+                            .ok_or_else(|| bad(n, "patch index out of range"))?;
+                        b.background[i] = bg.parse().map_err(|_| bad(n, "bad integer"))?;
+                        b.endpoints[i] = e.parse().map_err(|_| bad(n, "bad integer"))?;
+                        b.endpoint_log[i] = lg.parse().map_err(|_| bad(n, "bad number"))?;
+                    }
+                    _ => return Err(bad(n, "expected 'p i background endpoints logsum' or 'end'")),
+                }
+            }
+            if !b.pairs.windows(2).all(|w| (w[0].from, w[0].to) < (w[1].from, w[1].to)) {
+                return Err(format!("block {}: pairs are not sorted", blocks.len()));
+            }
+            blocks.push(b);
+        }
+        if blocks.is_empty() {
+            return Err("no blocks".into());
+        }
+        Ok((name, Self { areas, local, blocks }))
+    }
+
+    /// Appends the blocks of another run of the same scene (a shard).
+    ///
+    /// # Errors
+    /// A message if the scenes or line kinds differ.
+    pub fn merge(&mut self, other: VisibilityCounts) -> Result<(), String> {
+        if other.areas.len() != self.areas.len()
+            || other.areas.iter().zip(&self.areas).any(|(a, b)| (a - b).abs() > 1e-9 * b.abs())
+        {
+            return Err("the count files are for different scenes (patch areas differ)".into());
+        }
+        if other.local != self.local {
+            return Err("cannot merge local-line and global-line counts".into());
+        }
+        self.blocks.extend(other.blocks);
+        Ok(())
+    }
 }
 
 /// What `itgfx complexity` reports.

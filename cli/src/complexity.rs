@@ -110,10 +110,38 @@ pub fn run(args: &Args) -> Result<(Report, VisibilityCounts, Scene), CliError> {
     let t0 = Instant::now();
     let prepared = Prepared::new(&scene);
     let tracer = open(choice, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
-    let opts = LineOptions { lines, seed, local, blocks: blocks as u32 };
-    let mut progress = Progress::new();
-    let counts = count_visibility(&scene, &prepared, tracer.as_ref(), &opts, &mut |d, t| progress.update(d, t))
-        .map_err(|e| CliError::usage(e.to_string()))?;
+    let offset = args.integer("offset")?.unwrap_or(0);
+    let opts = LineOptions { lines, seed, local, blocks: blocks as u32, offset };
+    let mut counts = if let Some(list) = args.value("merge") {
+        // Evaluate saved shards instead of tracing.
+        let mut merged: Option<VisibilityCounts> = None;
+        for f in list.split(',') {
+            let text = std::fs::read_to_string(f).map_err(|e| CliError::usage(format!("{f}: {e}")))?;
+            let (_, c) = VisibilityCounts::load(&text).map_err(|e| CliError::usage(format!("{f}: {e}")))?;
+            match &mut merged {
+                None => merged = Some(c),
+                Some(m) => m.merge(c).map_err(|e| CliError::usage(format!("{f}: {e}")))?,
+            }
+        }
+        merged.ok_or_else(|| CliError::usage("--merge: no files"))?
+    } else {
+        let mut progress = Progress::new();
+        count_visibility(&scene, &prepared, tracer.as_ref(), &opts, &mut |d, t| progress.update(d, t))
+            .map_err(|e| CliError::usage(e.to_string()))?
+    };
+    if counts.areas.len() != scene.patches.len() {
+        return Err(CliError::usage(format!(
+            "--merge: the counts have {} patches, the scene {}",
+            counts.areas.len(),
+            scene.patches.len()
+        )));
+    }
+    if let Some(p) = args.value("save-counts") {
+        let mut bytes = Vec::new();
+        counts.save(&scene.name, &mut bytes).map_err(|e| CliError::usage(format!("{p}: {e}")))?;
+        crate::export::atomic_write(Path::new(p), &bytes)?;
+    }
+    let _ = &mut counts;
     let c = counts.complexity(base);
     let seconds = t0.elapsed().as_secs_f64();
     let m = &c.measures;
@@ -137,5 +165,33 @@ pub fn run(args: &Args) -> Result<(Report, VisibilityCounts, Scene), CliError> {
     }
     r.real("H_S_normalized", m.normalized_entropy, None).real("I_S_normalized", m.normalized_mutual_information, None);
     r.real("seconds", seconds, Some("s"));
+    // Pictures: information (or discretisation error) per unit area.
+    let by = args.value("color-by").unwrap_or("information");
+    let ply = args.value("export-ply");
+    let png = args.value("image");
+    if ply.is_some() || png.is_some() {
+        let total = scene.total_area();
+        let values: Vec<f64> = match by {
+            "information" => {
+                c.patch_information.iter().zip(&scene.patches).map(|(v, p)| v / (p.area / total)).collect()
+            }
+            "delta" => c
+                .patch_continuous
+                .iter()
+                .zip(&c.patch_information)
+                .zip(&scene.patches)
+                .map(|((ic, i), p)| (ic - i) / (p.area / total))
+                .collect(),
+            other => return Err(CliError::usage(format!("--color-by: expected information or delta, got {other:?}"))),
+        };
+        if let Some(p) = ply {
+            crate::export::write_ply(&scene, &values, Path::new(p))?;
+            r.text("ply", p);
+        }
+        if let Some(p) = png {
+            crate::export::render_png(tracer.as_ref(), &values, Path::new(p), (640, 480))?;
+            r.text("image", p);
+        }
+    }
     Ok((r, counts, scene))
 }

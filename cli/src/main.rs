@@ -32,6 +32,10 @@ fn complexity_help() -> String {
          \x20 --subdivide K    split every patch into K x K cells\n\
          \x20 --blocks B       jackknife blocks for standard errors (default 8; 1 = none)\n\
          \x20 --backend cpu|reference|vulkan   (default cpu)\n\
+         \x20 --export-ply F   mesh coloured by information per unit area (--color-by delta: by I_i^c - I_i)\n\
+         \x20 --image F.png    the same, rendered from a default camera\n\
+         \x20 --offset K       first line index (shards of one run: same seed, disjoint ranges)\n\
+         \x20 --save-counts F  write the counts; --merge F1,F2,... evaluates saved shards together\n\
          \x20 --threads T      worker threads (default: all cores)\n\
          \x20 --base 2|e|10    --json\n",
     );

@@ -282,6 +282,27 @@ impl ContinuousMutualInformation {
         self.samples
     }
 
+    /// `(A_T, N, Σ log(A_T F), Σ log²(A_T F))` in nats, for saving a shard.
+    #[must_use]
+    pub fn to_parts(&self) -> (f64, u64, f64, f64) {
+        (self.total_area, self.samples, self.sum.value(), self.sum_sq.value())
+    }
+
+    /// Rebuilds an estimate saved with [`ContinuousMutualInformation::to_parts`].
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for a bad area or non-finite sums.
+    pub fn from_parts(total_area: f64, samples: u64, sum: f64, sum_sq: f64) -> Result<Self, Error> {
+        let mut s = Self::new(total_area)?;
+        if !(sum.is_finite() && sum_sq.is_finite() && sum_sq >= 0.0) {
+            return Err(Error::InvalidParameter { name: "sum", value: sum });
+        }
+        s.samples = samples;
+        s.sum.add(sum);
+        s.sum_sq.add(sum_sq);
+        Ok(s)
+    }
+
     /// `I_S^c` in `base`; `None` before the first sample.
     #[must_use]
     pub fn estimate(&self, base: Base) -> Option<f64> {

@@ -39,7 +39,7 @@ pub fn run_scene(
         &scene,
         &prepared,
         tracer.as_ref(),
-        &LineOptions { lines, seed, local, blocks: 8 },
+        &LineOptions { lines, seed, local, blocks: 8, offset: 0 },
         &mut |_, _| {},
     )
     .expect("trace");

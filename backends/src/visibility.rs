@@ -28,7 +28,7 @@ use glam::DVec3;
 use itgfx_core::{Base, ContinuousMutualInformation, PairCount, SceneMeasures, scene_measures_from_counts};
 use rayon::prelude::*;
 
-use crate::lines::{Line, cosine_direction, global_line, sample_cdf, uniform};
+use crate::lines::{Line, LineRng, cosine_direction, global_line, sample_cdf};
 use crate::scene::Scene;
 use crate::tracer::{BackendError, CrossingBuffer, Prepared, Tracer};
 
@@ -105,11 +105,125 @@ impl Hasher for KeyHasher {
 }
 type KeyMap = HashMap<u64, u64, BuildHasherDefault<KeyHasher>>;
 
+/// Where a block's pair counts accumulate: a dense `n × n` matrix of `u32`
+/// when it fits in [`DENSE_LIMIT`] entries (chunks arrive as sorted runs, so
+/// the adds sweep it in order), a hash map of the pairs hit otherwise.
+enum Accumulator {
+    Dense { n: usize, counts: Vec<u32>, overflow: KeyMap },
+    Sparse(KeyMap),
+}
+
+/// Largest `n²` counted densely (6000 patches: 144 MB of `u32` per block).
+const DENSE_LIMIT: usize = 36_000_000;
+
+impl Accumulator {
+    fn new(n: usize) -> Self {
+        if n.saturating_mul(n) <= DENSE_LIMIT {
+            Accumulator::Dense { n, counts: vec![0; n * n], overflow: KeyMap::default() }
+        } else {
+            Accumulator::Sparse(KeyMap::default())
+        }
+    }
+
+    fn add(&mut self, runs: &[(u64, u64)]) {
+        match self {
+            Accumulator::Dense { n, counts, overflow } => {
+                for &(k, c) in runs {
+                    let idx = (k >> 32) as usize * *n + (k as u32) as usize;
+                    let (sum, carry) = counts[idx].overflowing_add(c as u32);
+                    if carry || c > u64::from(u32::MAX) {
+                        // Counts past 2^32 for one pair: keep the excess exactly.
+                        *overflow.entry(k).or_insert(0) += c;
+                    } else {
+                        counts[idx] = sum;
+                    }
+                }
+            }
+            Accumulator::Sparse(map) => {
+                for &(k, c) in runs {
+                    *map.entry(k).or_insert(0) += c;
+                }
+            }
+        }
+    }
+
+    fn into_pairs(self) -> Vec<PairCount> {
+        let mut pairs: Vec<PairCount> = match self {
+            Accumulator::Dense { n, counts, overflow } => {
+                let mut v: Vec<PairCount> = counts
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, c)| **c > 0)
+                    .map(|(idx, &c)| PairCount { from: (idx / n) as u32, to: (idx % n) as u32, count: u64::from(c) })
+                    .collect();
+                for (k, c) in overflow {
+                    let (i, j) = ((k >> 32) as u32, k as u32);
+                    match v.binary_search_by_key(&(i, j), |p| (p.from, p.to)) {
+                        Ok(pos) => v[pos].count += c,
+                        Err(pos) => v.insert(pos, PairCount { from: i, to: j, count: c }),
+                    }
+                }
+                v
+            }
+            Accumulator::Sparse(map) => {
+                map.into_iter().map(|(k, c)| PairCount { from: (k >> 32) as u32, to: k as u32, count: c }).collect()
+            }
+        };
+        pairs.sort_unstable();
+        pairs
+    }
+}
+
+/// Per-chunk endpoint sums: dense arrays for up to [`DENSE_ENDPOINTS`]
+/// patches, a list of `(patch, log)` above (a 10^6-patch mesh would make
+/// each chunk allocate 16 MB).
+enum Endpoints {
+    Dense(Vec<f64>, Vec<u64>),
+    List(Vec<(u32, f64)>),
+}
+
+const DENSE_ENDPOINTS: usize = 16_384;
+
+impl Endpoints {
+    fn new(n: usize) -> Self {
+        if n <= DENSE_ENDPOINTS { Endpoints::Dense(vec![0.0; n], vec![0; n]) } else { Endpoints::List(Vec::new()) }
+    }
+
+    #[inline]
+    fn add(&mut self, i: u32, l: f64) {
+        match self {
+            Endpoints::Dense(s, c) => {
+                s[i as usize] += l;
+                c[i as usize] += 1;
+            }
+            Endpoints::List(v) => v.push((i, l)),
+        }
+    }
+
+    fn add_into(self, sums: &mut [f64], counts: &mut [u64]) {
+        match self {
+            Endpoints::Dense(s, c) => {
+                for ((a, b), (x, y)) in sums.iter_mut().zip(counts.iter_mut()).zip(s.into_iter().zip(c)) {
+                    *a += x;
+                    *b += y;
+                }
+            }
+            Endpoints::List(v) => {
+                for (i, l) in v {
+                    sums[i as usize] += l;
+                    counts[i as usize] += 1;
+                }
+            }
+        }
+    }
+}
+
 struct ChunkResult {
     keys: Vec<(u64, u64)>,
     background: Vec<(u32, u64)>,
     cont: ContinuousMutualInformation,
-    endpoint: Vec<(u32, f64)>,
+    /// Segment endpoints: `log(A_T F)` summed per patch.
+    endpoint: Endpoints,
     segments: u64,
     escaped: u64,
 }
@@ -149,6 +263,8 @@ impl Sampler {
 
     /// Local line `index`: (origin patch, point, unit normal, line).
     fn line(&self, p: &Prepared, seed: u64, index: u64) -> (u32, DVec3, DVec3, Line) {
+        let rng = LineRng::new(seed, index);
+        let uniform = |_: u64, _: u64, k: u32| rng.uniform(k);
         let total = *self.patch_cdf.last().unwrap_or(&1.0);
         let i = sample_cdf(&self.patch_cdf, uniform(seed, index, 0) * total);
         let (x, n) = if let Some(s) = &p.sphere {
@@ -210,7 +326,7 @@ fn process_chunk(
     tracer.trace_all(&lines, &mut buf)?;
     let mut keys = Vec::new();
     let mut background = Vec::new();
-    let mut endpoint = Vec::new();
+    let mut endpoint = Endpoints::new(p.patches);
     let mut cont = ContinuousMutualInformation::new(total_area_norm).map_err(|_| BackendError::DeviceLost)?;
     let (mut segments, mut escaped) = (0, 0);
     for (li, line) in lines.iter().enumerate() {
@@ -225,7 +341,7 @@ fn process_chunk(
                     let r = f64::from(h.t) - BACKOFF;
                     let l = (total_area_norm * n.dot(d) * f64::from(-h.cos) / (std::f64::consts::PI * r * r)).ln();
                     if cont.add_form_factor(n.dot(d) * f64::from(-h.cos) / (std::f64::consts::PI * r * r)) {
-                        endpoint.push((from, l));
+                        endpoint.add(from, l);
                     }
                     segments += 1;
                 }
@@ -249,8 +365,8 @@ fn process_chunk(
                         keys.push(key(g.patch, h.patch));
                         if cont.add_form_factor(f) {
                             let l = (total_area_norm * f).ln();
-                            endpoint.push((h.patch, l));
-                            endpoint.push((g.patch, l));
+                            endpoint.add(h.patch, l);
+                            endpoint.add(g.patch, l);
                         }
                         segments += 1;
                         k += 2;
@@ -301,7 +417,7 @@ pub fn count_visibility(
     let mut done = 0;
     for b in 0..blocks {
         let (start, end) = (opts.offset + opts.lines * b / blocks, opts.offset + opts.lines * (b + 1) / blocks);
-        let mut map = KeyMap::default();
+        let mut acc = Accumulator::new(n);
         let mut block = BlockCounts {
             lines: end - start,
             background: vec![0; n],
@@ -311,9 +427,8 @@ pub fn count_visibility(
             ..BlockCounts::default()
         };
         let chunks: Vec<u64> = (start..end).step_by(CHUNK as usize).collect();
-        for w in chunks.chunks(wave as usize) {
-            let results: Vec<Result<ChunkResult, BackendError>> = w
-                .par_iter()
+        let run_wave = |w: &[u64]| -> Vec<Result<ChunkResult, BackendError>> {
+            w.par_iter()
                 .map(|&c| {
                     process_chunk(
                         prepared,
@@ -326,30 +441,39 @@ pub fn count_visibility(
                         radius,
                     )
                 })
-                .collect();
+                .collect()
+        };
+        // Merge wave k (in chunk order: deterministic) while wave k+1 traces.
+        let mut merge = |results: Vec<Result<ChunkResult, BackendError>>| -> Result<(), BackendError> {
             for r in results {
                 let r = r?;
-                for (k, c) in r.keys {
-                    *map.entry(k).or_insert(0) += c;
-                }
+                acc.add(&r.keys);
                 for (i, c) in r.background {
                     block.background[i as usize] += c;
                 }
-                for (i, l) in r.endpoint {
-                    block.endpoint_log[i as usize] += l;
-                    block.endpoints[i as usize] += 1;
-                }
+                r.endpoint.add_into(&mut block.endpoint_log, &mut block.endpoints);
                 block.continuous.merge(&r.cont);
                 block.segments += r.segments;
                 block.escaped += r.escaped;
             }
+            Ok(())
+        };
+        let waves: Vec<&[u64]> = chunks.chunks(wave as usize).collect();
+        let mut pending: Option<Vec<Result<ChunkResult, BackendError>>> = None;
+        for w in &waves {
+            let (merged, next) = match pending.take() {
+                Some(prev) => rayon::join(|| merge(prev), || run_wave(w)),
+                None => (Ok(()), run_wave(w)),
+            };
+            merged?;
+            pending = Some(next);
             done += w.iter().map(|&c| CHUNK.min(end - c)).sum::<u64>();
             progress(done, opts.lines);
         }
-        let mut pairs: Vec<PairCount> =
-            map.into_iter().map(|(k, c)| PairCount { from: (k >> 32) as u32, to: k as u32, count: c }).collect();
-        pairs.sort_unstable();
-        block.pairs = pairs;
+        if let Some(prev) = pending {
+            merge(prev)?;
+        }
+        block.pairs = acc.into_pairs();
         out.push(block);
     }
     Ok(VisibilityCounts { areas: scene.areas(), local: opts.local, blocks: out })

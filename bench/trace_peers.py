@@ -1,0 +1,116 @@
+#!/usr/bin/env python3
+"""All crossings of the same global lines with Embree and Mitsuba 3, for BENCHMARKS.md.
+
+Usage:  python3 bench/trace_peers.py DIR [--lines N]
+DIR holds scene.obj and lines.f32 written by
+  cargo bench -p itgfx-backends --bench trace -- SCENE N --export DIR
+Each peer finds every crossing of each line by repeated closest-hit queries
+(the ray restarted just past each hit), which is the job itgfx's tracer does
+in one traversal. Prints one JSON line per peer: seconds, lines/s, crossings
+found (to check all tracers saw the same crossings).
+
+Embree: embreex (Embree 4 through its Python binding; one thread per process,
+so the 2-core figure runs two processes on halves of the lines).
+Mitsuba 3: the llvm_ad_rgb variant (Embree-backed packet tracing on all cores).
+"""
+import json, os, sys, time
+import numpy as np
+
+# Restart offset past a hit: 1e-6 re-hits the same triangle in f32; 1e-4 is
+# also obvhs's near cutoff, so all tracers skip the same near crossings.
+EPS = 1e-4
+
+
+def load(d, n=None):
+    import trimesh
+    mesh = trimesh.load(os.path.join(d, "scene.obj"), process=False, force="mesh")
+    raw = np.fromfile(os.path.join(d, "lines.f32"), dtype="<f4").reshape(-1, 7)
+    if n:
+        raw = raw[:n]
+    return np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.int64), raw
+
+
+def embree_worker(args):
+    d, lo, hi = args
+    from embreex import rtcore_scene as rtcs
+    from embreex.mesh_construction import TriangleMesh
+    v, f, raw = load(d)
+    raw = raw[lo:hi]
+    scene = rtcs.EmbreeScene()
+    TriangleMesh(scene, v[f].astype(np.float32))
+    t0 = time.perf_counter()
+    org = raw[:, 0:3].astype(np.float32).copy()
+    dirs = raw[:, 3:6].astype(np.float32).copy()
+    tmax = raw[:, 6].astype(np.float32)
+    tnear = np.zeros(len(raw), dtype=np.float32)
+    alive = np.arange(len(raw))
+    crossings = 0
+    while len(alive):
+        res = scene.run(org[alive], dirs[alive], output=1, dists=tmax[alive] - tnear[alive])
+        hit = res["geomID"] >= 0
+        crossings += int(hit.sum())
+        idx = alive[hit]
+        t = res["tfar"][hit]
+        org[idx] += dirs[idx] * (t + EPS)[:, None]
+        tnear[idx] += t + EPS
+        alive = idx
+    return time.perf_counter() - t0, crossings
+
+
+def embree(d, n, procs=2):
+    from multiprocessing import Pool
+    with Pool(procs) as p:
+        cuts = [n * k // procs for k in range(procs + 1)]
+        t0 = time.perf_counter()
+        out = p.map(embree_worker, [(d, cuts[k], cuts[k + 1]) for k in range(procs)])
+        wall = time.perf_counter() - t0
+    return max(t for t, _ in out), wall, sum(c for _, c in out)
+
+
+def mitsuba(d, n):
+    import mitsuba as mi
+    mi.set_variant("llvm_ad_rgb")
+    import drjit as dr
+    scene = mi.load_dict({"type": "scene", "m": {"type": "obj", "filename": os.path.join(d, "scene.obj"), "face_normals": True}})
+    _, _, raw = load(d, n)
+    def run():
+        o = mi.Point3f(*[mi.Float(raw[:, k].copy()) for k in range(3)])
+        dd = mi.Vector3f(*[mi.Float(raw[:, 3 + k].copy()) for k in range(3)])
+        tmax = mi.Float(raw[:, 6].copy())
+        crossings = 0
+        active = dr.full(mi.Bool, True, len(raw))
+        for _ in range(64):
+            ray = mi.Ray3f(o, dd, tmax)
+            si = scene.ray_intersect_preliminary(ray, active)
+            hit = active & si.is_valid()
+            c = dr.count(hit)
+            dr.eval(c)
+            c = int(c[0]) if hasattr(c, "__len__") else int(c)
+            if c == 0:
+                break
+            crossings += c
+            step = dr.select(hit, si.t + EPS, 0.0)
+            o = o + dd * step
+            tmax = tmax - step
+            active = hit
+            dr.eval(o, tmax, active)
+        return crossings
+    run()  # JIT warm-up (kernel compilation is not tracing)
+    t0 = time.perf_counter()
+    c = run()
+    return time.perf_counter() - t0, c
+
+
+def main():
+    d = sys.argv[1]
+    n = int(float(sys.argv[sys.argv.index("--lines") + 1])) if "--lines" in sys.argv else None
+    _, _, raw = load(d, n)
+    n = len(raw)
+    t, wall, c = embree(d, n)
+    print(json.dumps({"impl": "embree (embreex, 2 processes)", "lines": n, "seconds": round(t, 3), "wall_s": round(wall, 3), "mlines_per_s": round(n / t / 1e6, 2), "crossings": c}))
+    t, c = mitsuba(d, n)
+    print(json.dumps({"impl": "mitsuba3 llvm_ad_rgb", "lines": n, "seconds": round(t, 3), "mlines_per_s": round(n / t / 1e6, 2), "crossings": c}))
+
+
+if __name__ == "__main__":
+    main()

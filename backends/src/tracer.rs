@@ -94,8 +94,10 @@ pub trait Tracer: Send + Sync {
     fn name(&self) -> &'static str;
 
     /// Appends every crossing of each line within `[tmin, tmax]`, sorted by
-    /// `t`; coincident crossings facing the same way (|Δt| ≤ 1e-6: a line
-    /// through an edge shared by two triangles) are merged into the first.
+    /// `t`. Crossings within 1e-6 of each other are one event: facing the
+    /// same way (a line through an edge shared by two triangles) they are
+    /// merged into the first; facing opposite ways (a line touching the
+    /// surface at an edge) both are dropped.
     ///
     /// # Errors
     /// Device failures only; scene problems are caught when preparing.
@@ -250,18 +252,22 @@ impl Shear {
 /// Sorts and merges coincident crossings, appending them to `out`.
 fn finish(hits: &mut Vec<Crossing>, out: &mut CrossingBuffer) {
     hits.sort_unstable_by(|a, b| a.t.total_cmp(&b.t).then(a.primitive.cmp(&b.primitive)));
-    // A line through an edge shared by two triangles crosses both at (almost)
-    // the same t, facing the same way: keep one. Crossings facing opposite
-    // ways are an entry and an exit (a line clipping a corner), however close.
-    let mut last: Option<Crossing> = None;
+    // Crossings closer than 1e-6 along the line are one event:
+    // * facing the same way: the line goes through an edge shared by two
+    //   triangles, crossing the surface once; keep one;
+    // * facing opposite ways: the line only touches the surface there (it
+    //   grazes an edge or clips a corner by less than 1e-6); keep neither.
+    let start = out.crossings.len();
     for h in hits.drain(..) {
-        if let Some(l) = last {
-            if h.t - l.t <= 1e-6 && (h.cos > 0.0) == (l.cos > 0.0) {
+        if let Some(l) = out.crossings[start..].last().copied() {
+            if h.t - l.t <= 1e-6 {
+                if (h.cos > 0.0) != (l.cos > 0.0) {
+                    out.crossings.pop();
+                }
                 continue;
             }
         }
         out.crossings.push(h);
-        last = Some(h);
     }
     out.offsets.push(out.crossings.len() as u32);
 }
@@ -299,10 +305,14 @@ impl CpuTracer {
     #[must_use]
     pub fn new(scene: &Prepared) -> Self {
         let bvh = (!scene.triangles.is_empty()).then(|| {
+            // Boxes padded by 1e-5 (normalised units): obvhs's f32 slab test
+            // can cull a box the line only grazes, and wall triangles have
+            // flat boxes. The watertight triangle test still decides every hit.
+            let pad = Vec3A::splat(1e-5);
             let aabbs: Vec<Aabb> = scene
                 .triangles
                 .iter()
-                .map(|t| Aabb { min: t[0].min(t[1]).min(t[2]), max: t[0].max(t[1]).max(t[2]) })
+                .map(|t| Aabb { min: t[0].min(t[1]).min(t[2]) - pad, max: t[0].max(t[1]).max(t[2]) + pad })
                 .collect();
             let mut params = obvhs::BvhBuildParams::medium_build();
             params.search_depth_threshold = 0;
@@ -353,6 +363,14 @@ impl Tracer for CpuTracer {
 /// Slow by design; the oracle both real backends are tested against.
 pub struct ReferenceTracer {
     scene: Prepared,
+}
+
+impl ReferenceTracer {
+    /// A reference tracer over a prepared scene.
+    #[must_use]
+    pub fn new(scene: &Prepared) -> Self {
+        Self { scene: scene.clone() }
+    }
 }
 
 impl Tracer for ReferenceTracer {

@@ -156,13 +156,15 @@ pub fn run(args: &Args) -> Result<(Report, VisibilityCounts, Scene), CliError> {
     r.count("escaped", c.escaped).count("unsampled_patches", m.unsampled_patches as u64);
     r.real("H_P", m.positional_entropy, unit).real("H_S", m.scene_entropy, unit).real("H_J", m.joint_entropy, unit);
     r.real("I_S", m.mutual_information, unit);
-    r.real("I_S_stderr", c.mutual_information_stderr.unwrap_or(f64::NAN), unit);
-    r.real("I_S_corrected", c.mutual_information_corrected.unwrap_or(f64::NAN), unit);
-    r.real("I_S_cont", c.continuous.unwrap_or(f64::NAN), unit);
-    r.real("I_S_cont_stderr", c.continuous_stderr.unwrap_or(f64::NAN), unit);
-    if let Some(ic) = c.continuous {
-        r.real("discretisation_accuracy", if ic > 0.0 { m.mutual_information / ic } else { f64::NAN }, None);
-    }
+    r.maybe_real("I_S_stderr", c.mutual_information_stderr, unit);
+    r.maybe_real("I_S_corrected", c.mutual_information_corrected, unit);
+    r.maybe_real("I_S_cont", c.continuous, unit);
+    r.maybe_real("I_S_cont_stderr", c.continuous_stderr, unit);
+    r.maybe_real(
+        "discretisation_accuracy",
+        c.continuous.filter(|&ic| ic > 0.0).map(|ic| m.mutual_information / ic),
+        None,
+    );
     r.real("H_S_normalized", m.normalized_entropy, None).real("I_S_normalized", m.normalized_mutual_information, None);
     r.real("seconds", seconds, Some("s"));
     // Pictures: information (or discretisation error) per unit area.

@@ -4,7 +4,8 @@
 //! JSON has no infinity: `+∞` and `−∞` are written as the strings `"inf"`
 //! and `"-inf"` (KL divergence with disjoint supports, for example). NaN is
 //! never produced by the core; if it ever were, it is written as `"nan"`
-//! rather than as invalid JSON.
+//! rather than as invalid JSON. A quantity that is not available (a standard
+//! error with a single block of lines) is `null`.
 
 use serde_json::{Map, Value};
 
@@ -21,6 +22,8 @@ pub enum Item {
     Text(String),
     /// A nested list of objects (e.g. merge steps).
     Records(Vec<Report>),
+    /// Not available (JSON `null`).
+    Missing,
 }
 
 /// Named quantities in the order they are reported.
@@ -53,6 +56,19 @@ impl Report {
     /// Adds a real number with a unit.
     pub fn real(&mut self, key: &str, v: f64, unit: Option<&'static str>) -> &mut Self {
         self.items.push((key.to_string(), Item::Real(v, unit)));
+        self
+    }
+
+    /// Adds a real number that may be unavailable: JSON `null`, table `n/a`.
+    pub fn maybe_real(&mut self, key: &str, v: Option<f64>, unit: Option<&'static str>) -> &mut Self {
+        match v {
+            Some(x) => self.real(key, x, unit),
+            None => self.text_null(key),
+        }
+    }
+
+    fn text_null(&mut self, key: &str) -> &mut Self {
+        self.items.push((key.to_string(), Item::Missing));
         self
     }
 
@@ -100,6 +116,7 @@ impl Report {
                 Item::Reals(xs) => Value::Array(xs.iter().map(|&x| json_real(x)).collect()),
                 Item::Text(s) => Value::String(s.clone()),
                 Item::Records(rs) => Value::Array(rs.iter().map(Report::to_json).collect()),
+                Item::Missing => Value::Null,
             };
             m.insert(k.clone(), j);
         }
@@ -128,6 +145,7 @@ impl Report {
                 }
                 Item::Text(s) => s.clone(),
                 Item::Records(rs) => format!("{} records (use --json for all)", rs.len()),
+                Item::Missing => "n/a".into(),
             };
             out.push_str(&format!("{k:<width$}  {val}\n"));
         }

@@ -47,6 +47,9 @@ fn json_has_the_documented_keys() {
     assert_eq!(v["lines"], 20000);
     assert_eq!(v["backend"], "cpu");
     assert_eq!(v["escaped"], 0);
+    // With one block there is no standard error: null, never "nan".
+    let v = json(&["complexity", "cube", "--lines", "1000", "--blocks", "1", "--json"]);
+    assert!(v["I_S_stderr"].is_null() && v["I_S_corrected"].is_null(), "{v}");
 }
 
 #[test]

@@ -249,6 +249,17 @@ impl Shear {
     }
 }
 
+/// Records the crossing of line `l` with triangle `tri`, if any, within `[tmin, tmax]`.
+#[inline]
+fn test_triangle(scene: &Prepared, shear: &Shear, l: &Line, dir: Vec3A, tri: usize, hits: &mut Vec<Crossing>) {
+    if let Some(t) = shear.hit(&scene.triangles[tri]) {
+        if t >= l.tmin && t <= l.tmax {
+            let cos = scene.normals[tri].dot(dir);
+            hits.push(Crossing { t, patch: scene.triangle_patch[tri], cos, primitive: tri as u32 });
+        }
+    }
+}
+
 /// Sorts and merges coincident crossings, appending them to `out`.
 fn finish(hits: &mut Vec<Crossing>, out: &mut CrossingBuffer) {
     hits.sort_unstable_by(|a, b| a.t.total_cmp(&b.t).then(a.primitive.cmp(&b.primitive)));
@@ -339,18 +350,7 @@ impl Tracer for CpuTracer {
                 let shear = Shear::new(org, dir);
                 let ray = Ray::new(org, dir, l.tmin, l.tmax);
                 bvh.ray_traverse_anyhit(ray, |_, id| {
-                    let tri = bvh.primitive_indices[id] as usize;
-                    if let Some(t) = shear.hit(&self.scene.triangles[tri]) {
-                        if t >= l.tmin && t <= l.tmax {
-                            let cos = self.scene.normals[tri].dot(dir);
-                            hits.push(Crossing {
-                                t,
-                                patch: self.scene.triangle_patch[tri],
-                                cos,
-                                primitive: tri as u32,
-                            });
-                        }
-                    }
+                    test_triangle(&self.scene, &shear, l, dir, bvh.primitive_indices[id] as usize, &mut hits);
                 });
             }
             finish(&mut hits, out);
@@ -388,18 +388,8 @@ impl Tracer for ReferenceTracer {
                 let org = Vec3A::from(Vec3::from(l.origin));
                 let dir = Vec3A::from(Vec3::from(l.direction));
                 let shear = Shear::new(org, dir);
-                for (tri, v) in self.scene.triangles.iter().enumerate() {
-                    if let Some(t) = shear.hit(v) {
-                        if t >= l.tmin && t <= l.tmax {
-                            let cos = self.scene.normals[tri].dot(dir);
-                            hits.push(Crossing {
-                                t,
-                                patch: self.scene.triangle_patch[tri],
-                                cos,
-                                primitive: tri as u32,
-                            });
-                        }
-                    }
+                for tri in 0..self.scene.triangles.len() {
+                    test_triangle(&self.scene, &shear, l, dir, tri, &mut hits);
                 }
             }
             finish(&mut hits, out);

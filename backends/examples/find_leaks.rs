@@ -9,8 +9,21 @@ use itgfx_backends::visibility::SPHERE_SCALE;
 use rayon::prelude::*;
 
 fn unpaired(c: &[itgfx_backends::tracer::Crossing]) -> bool {
-    // In a closed scene crossings alternate: forward-facing then backward-facing.
-    c.len() % 2 == 1 || c.chunks(2).any(|p| !(p[0].cos > 0.0 && p[1].cos < 0.0))
+    // In a closed scene crossings alternate: forward-facing then backward-facing,
+    // once touches (opposite-facing crossings < 1e-6 apart) are dropped.
+    let mut kept: Vec<_> = Vec::new();
+    let mut a = 0;
+    while a < c.len() {
+        let mut b = a + 1;
+        while b < c.len() && c[b].t - c[b - 1].t <= 1e-6 {
+            b += 1;
+        }
+        if c[a..b].iter().all(|h| (h.cos > 0.0) == (c[a].cos > 0.0)) {
+            kept.push(c[a]);
+        }
+        a = b;
+    }
+    kept.len() % 2 == 1 || kept.chunks(2).any(|p| !(p[0].cos > 0.0 && p[1].cos < 0.0))
 }
 
 fn main() {

@@ -94,10 +94,8 @@ pub trait Tracer: Send + Sync {
     fn name(&self) -> &'static str;
 
     /// Appends every crossing of each line within `[tmin, tmax]`, sorted by
-    /// `t`. Crossings within 1e-6 of each other are one event: facing the
-    /// same way (a line through an edge shared by two triangles) they are
-    /// merged into the first; facing opposite ways (a line touching the
-    /// surface at an edge) both are dropped.
+    /// `t`. Crossings within 1e-6 of each other and facing the same way (a
+    /// line through an edge shared by two triangles) are merged into the first.
     ///
     /// # Errors
     /// Device failures only; scene problems are caught when preparing.
@@ -263,18 +261,14 @@ fn test_triangle(scene: &Prepared, shear: &Shear, l: &Line, dir: Vec3A, tri: usi
 /// Sorts and merges coincident crossings, appending them to `out`.
 fn finish(hits: &mut Vec<Crossing>, out: &mut CrossingBuffer) {
     hits.sort_unstable_by(|a, b| a.t.total_cmp(&b.t).then(a.primitive.cmp(&b.primitive)));
-    // Crossings closer than 1e-6 along the line are one event:
-    // * facing the same way: the line goes through an edge shared by two
-    //   triangles, crossing the surface once; keep one;
-    // * facing opposite ways: the line only touches the surface there (it
-    //   grazes an edge or clips a corner by less than 1e-6); keep neither.
-    let start = out.crossings.len();
+    // Crossings chained less than 1e-6 apart and facing the same way are one
+    // crossing of the surface (through an edge or vertex shared by several
+    // triangles): keep the first. Opposite-facing ones are kept: whether they
+    // are a touch or a real tiny segment is the caller's question.
     for h in hits.drain(..) {
-        if let Some(l) = out.crossings[start..].last().copied() {
-            if h.t - l.t <= 1e-6 {
-                if (h.cos > 0.0) != (l.cos > 0.0) {
-                    out.crossings.pop();
-                }
+        if let Some(l) = out.crossings.last() {
+            let same_line = out.crossings.len() > *out.offsets.last().unwrap_or(&0) as usize;
+            if same_line && h.t - l.t <= 1e-6 && (h.cos > 0.0) == (l.cos > 0.0) {
                 continue;
             }
         }

@@ -296,6 +296,15 @@ impl Sampler {
 
 const BACKOFF: f64 = 1e-3;
 
+/// Local line `index` of a run with `seed` over a prepared scene: its origin
+/// patch and the line (which starts `1e-3` behind the surface; crossings up
+/// to that distance belong to the origin).
+#[must_use]
+pub fn local_line(prepared: &Prepared, seed: u64, index: u64) -> (u32, Line) {
+    let (p, _, _, l) = Sampler::new(prepared).line(prepared, seed, index);
+    (p, l)
+}
+
 fn key(i: u32, j: u32) -> u64 {
     (u64::from(i) << 32) | u64::from(j)
 }
@@ -352,7 +361,24 @@ fn process_chunk(
             }
             continue;
         }
-        // Global line: pair forward-facing crossings with the next backward-facing one.
+        // Global line. Crossings less than 1e-6 apart that face both ways are
+        // a touch (the line grazes an edge or clips a corner by < 1e-6):
+        // whether it was in free space or not, it still is; drop the cluster.
+        let mut kept = Vec::with_capacity(hits.len());
+        let mut a = 0;
+        while a < hits.len() {
+            let mut b = a + 1;
+            while b < hits.len() && hits[b].t - hits[b - 1].t <= 1e-6 {
+                b += 1;
+            }
+            let forward = hits[a].cos > 0.0;
+            if hits[a..b].iter().all(|h| (h.cos > 0.0) == forward) {
+                kept.push(hits[a]);
+            }
+            a = b;
+        }
+        let hits = &kept[..];
+        // Pair forward-facing crossings with the next backward-facing one.
         let mut k = 0;
         while k < hits.len() {
             let h = hits[k];

@@ -1,8 +1,8 @@
 //! Compensated summation: the only place a float reduction is written.
 //!
 //! Reductions over long slices are done in blocks: inside a block of
-//! [`BLOCK`] elements, four plain partial sums (which the compiler keeps in
-//! registers and can vectorise); the block totals are then added with
+//! 256 elements, several plain partial sums (8 lanes in the hot kernels of
+//! `scan`, 4 here; the compiler keeps them in registers and vectorises them); the block totals are then added with
 //! Neumaier's compensated algorithm. The error is that of a naive sum of at
 //! most `BLOCK / 4` terms plus a compensated sum of the blocks: for
 //! `H(p)` with 10^8 `f64` elements the result stays within 1e-12 relative of

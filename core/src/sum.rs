@@ -1,13 +1,13 @@
-//! Compensated summation: the only place a float reduction is written.
+//! Compensated summation, which every reduction of the core ends in.
 //!
-//! Reductions over long slices are done in blocks: inside a block of
-//! 256 elements, several plain partial sums (8 lanes in the hot kernels of
-//! `scan`, 4 here; the compiler keeps them in registers and vectorises them); the block totals are then added with
-//! Neumaier's compensated algorithm. The error is that of a naive sum of at
-//! most `BLOCK / 4` terms plus a compensated sum of the blocks: for
-//! `H(p)` with 10^8 `f64` elements the result stays within 1e-12 relative of
-//! a high-precision reference (a test in `core/tests/golden.rs` checks 10^7
-//! elements against a double-double reference).
+//! Reductions over long slices are done in blocks of 256 elements: inside a
+//! block, plain partial sums (8 lanes in the kernels of `scan`, 4 in
+//! [`sum_map`]) that the compiler keeps in registers and vectorises; the
+//! block totals are then added with Neumaier's compensated algorithm. The
+//! error is that of a naive sum of at most 64 terms plus a compensated sum of
+//! the blocks: the entropy of 10^6, 10^7 and 10^8 elements equals a
+//! double-double reference (`cargo bench -p itgfx-core --bench measures --
+//! --accuracy`; a golden test checks 10^7 elements to 1e-13).
 
 use crate::Real;
 

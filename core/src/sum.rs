@@ -2,7 +2,7 @@
 //!
 //! Reductions over long slices are done in blocks of 256 elements: inside a
 //! block, plain partial sums (8 lanes in the kernels of `scan`, 4 in
-//! [`sum_map`]) that the compiler keeps in registers and vectorises; the
+//! `sum_map`) that the compiler keeps in registers and vectorises; the
 //! block totals are then added with Neumaier's compensated algorithm. The
 //! error is that of a naive sum of at most 64 terms plus a compensated sum of
 //! the blocks: the entropy of 10^6, 10^7 and 10^8 elements equals a

@@ -15,4 +15,5 @@ pub mod obj;
 pub mod scene;
 pub mod solids;
 pub mod tracer;
+pub mod viewpoint;
 pub mod visibility;

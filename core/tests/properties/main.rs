@@ -25,5 +25,7 @@ mod coding;
 mod grouping;
 // Part II eqs. (13)-(14): entropy rate, stationarity and excess entropy of reversible chains.
 mod markov;
+// Part V §3.2: VMI invariant and VE rising by p(o|v) when a polygon is split.
+mod viewpoint;
 // Part III: scene reversibility, H_J identities, MI matrix, δ_ij ≥ 0, oracle identities.
 mod scene;

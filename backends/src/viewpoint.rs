@@ -262,6 +262,62 @@ impl ViewpointChannel {
         }
     }
 
+    /// Polygonal mutual information `I(o;V) = D_KL(p(V|o) ‖ p(V))` of every
+    /// patch (the reversed channel, Part V), and `p(o)`; patches never seen
+    /// get 0 and `p(o) = 0`.
+    #[must_use]
+    pub fn polygonal_information(&self, weights: ViewpointWeights, base: Base) -> (Vec<f64>, Vec<f64>) {
+        let (m, seen, _) = self.conditional();
+        let nv = seen.len();
+        let w: Vec<f64> = match weights {
+            ViewpointWeights::ProjectedArea => {
+                let t: f64 = seen.iter().sum();
+                seen.iter().map(|s| s / t).collect()
+            }
+            ViewpointWeights::Uniform => vec![1.0 / nv as f64; nv],
+        };
+        let ch = Channel::new(&w, &m, self.patches).expect("rows of p(O|v) are distributions");
+        let mut po = vec![0.0; self.patches];
+        ch.output_into(&mut po).expect("sizes");
+        let mut rev = vec![0.0; nv * self.patches];
+        ch.reversed_into(&mut rev).expect("sizes");
+        let mut info = vec![0.0; self.patches];
+        ch.output_specific_information_into(&rev, base, &mut info).expect("sizes");
+        for (i, p) in info.iter_mut().zip(&po) {
+            if *p == 0.0 {
+                *i = 0.0;
+            }
+        }
+        (info, po)
+    }
+
+    /// Viewpoint stability: the mean dissimilarity of each viewpoint to its
+    /// `k` nearest neighbours on the viewpoint sphere (low = stable).
+    #[must_use]
+    pub fn instability(&self, measures: &ViewpointMeasures, k: usize, base: Base) -> Vec<f64> {
+        let n = self.positions.len();
+        (0..n)
+            .map(|a| {
+                if measures.weight[a] == 0.0 {
+                    return f64::NAN;
+                }
+                let mut near: Vec<(f64, usize)> = (0..n)
+                    .filter(|&b| b != a && measures.weight[b] > 0.0)
+                    .map(|b| ((self.positions[a] - self.positions[b]).length(), b))
+                    .collect();
+                near.sort_by(|x, y| x.0.total_cmp(&y.0));
+                let near = &near[..k.min(near.len())];
+                if near.is_empty() {
+                    return 0.0;
+                }
+                near.iter()
+                    .map(|&(_, b)| self.dissimilarity(a, b, (measures.weight[a], measures.weight[b]), base))
+                    .sum::<f64>()
+                    / near.len() as f64
+            })
+            .collect()
+    }
+
     /// Dissimilarity of two viewpoints: the Jensen–Shannon divergence of
     /// their `p(O|v)` weighted by `p(v)` (Part II eq. (17)); 0 for identical views.
     ///

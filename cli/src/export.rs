@@ -134,14 +134,29 @@ pub fn write_ply(scene: &Scene, values: &[f64], path: &Path) -> Result<(), CliEr
 /// # Errors
 /// Tracing and encoding errors, one line.
 pub fn render_png(tracer: &dyn Tracer, values: &[f64], path: &Path, size: (u32, u32)) -> Result<(), CliError> {
-    let cols = colours(values);
-    let (w, h) = size;
     // Camera on the -z side, a little above, 3.2 half-diagonals away.
-    let eye = DVec3::new(0.35, 0.45, -3.2);
+    render_png_from(tracer, &colours(values), DVec3::new(0.35, 0.45, -3.2), path, size)
+}
+
+/// Renders with explicit patch colours from `eye` (normalised coordinates)
+/// looking at the origin.
+///
+/// # Errors
+/// Tracing and encoding errors, one line.
+pub fn render_png_from(
+    tracer: &dyn Tracer,
+    cols: &[[u8; 3]],
+    eye: DVec3,
+    path: &Path,
+    size: (u32, u32),
+) -> Result<(), CliError> {
+    let (w, h) = size;
     let fwd = (-eye).normalize();
-    let right = fwd.cross(DVec3::Y).normalize();
+    let up_hint = if fwd.cross(DVec3::Y).length() < 1e-6 { DVec3::Z } else { DVec3::Y };
+    let right = fwd.cross(up_hint).normalize();
     let up = right.cross(fwd);
-    let tan = (20f64).to_radians().tan();
+    // Field of view: the unit bounding sphere with a margin.
+    let tan = (1.15 / eye.length()).min(0.9).asin().tan();
     let mut lines = Vec::with_capacity((w * h) as usize);
     for y in 0..h {
         for x in 0..w {

@@ -7,6 +7,7 @@ pub mod export;
 pub mod input;
 pub mod measure;
 pub mod report;
+pub mod viewpoints;
 
 use std::fmt;
 

@@ -5,17 +5,31 @@ use std::io::Write;
 use std::process::ExitCode;
 
 use itgfx_cli::args::Args;
-use itgfx_cli::{CliError, complexity, measure};
+use itgfx_cli::{CliError, complexity, measure, viewpoints};
 
 const USAGE: &str = "itgfx — information theory for computer graphics
 
 Usage:
   itgfx complexity SCENE [OPTIONS]  scene visibility channel: H_P, H_S, I_S, I_S^c (itgfx complexity --help)
   itgfx measure NAME [OPTIONS]   evaluate an information measure (itgfx measure --help)
+  itgfx viewpoints MESH [OPTIONS]   viewpoint channel: VE, VMI, best views (itgfx viewpoints --help)
   itgfx --version
 
 Every command accepts --json (one JSON object on stdout) and --base 2|e|10.
 Errors are one line on stderr and exit code 2.";
+
+const VIEWPOINTS_HELP: &str = "itgfx viewpoints MESH [OPTIONS] — the viewpoint channel V -> O (Part V)
+
+MESH is an .obj file (polygons facing outwards) or a built-in scene name.
+Options:
+  --viewpoints N     12, 42 (default), 162, 642 or 2562 points of a subdivided icosahedron
+  --resolution R     R x R rays per viewpoint over the cone around the object (default 128)
+  --distance D       viewpoint distance in bounding-sphere radii (default 3)
+  --uniform-input    p(V) uniform instead of the projected area
+  --best-image F.png, --worst-image F.png   renders of the best (min VMI) and worst views
+  --ao-image F.png   information-theoretic ambient occlusion (grey from I(o;V))
+  --info-image F.png, --export-ply F.ply    the mesh coloured by I(o;V)
+  --json, --base 2|e|10, --backend cpu|reference";
 
 fn complexity_help() -> String {
     let mut s = String::from(
@@ -79,6 +93,16 @@ fn run(mut words: Vec<OsString>) -> Result<Option<String>, CliError> {
             }
             let json = args.flag("json");
             let (report, _counts, _scene) = complexity::run(&args)?;
+            args.finish()?;
+            Ok(Some(if json { report.to_json().to_string() } else { report.to_table().trim_end().to_string() }))
+        }
+        "viewpoints" => {
+            let args = Args::parse(words)?;
+            if args.flag("help") {
+                return Ok(Some(VIEWPOINTS_HELP.to_string()));
+            }
+            let json = args.flag("json");
+            let report = viewpoints::run(&args)?;
             args.finish()?;
             Ok(Some(if json { report.to_json().to_string() } else { report.to_table().trim_end().to_string() }))
         }

@@ -1,0 +1,56 @@
+//! `itgfx viewpoints` end to end.
+
+use std::process::{Command, Output};
+
+fn itgfx(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_itgfx")).args(args).output().expect("run itgfx")
+}
+
+#[test]
+fn cube_json_and_pictures() {
+    let dir = std::env::temp_dir().join(format!("itgfx-vp-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let obj = dir.join("box.obj");
+    // A cube with faces wound outwards: seen from outside.
+    std::fs::write(
+        &obj,
+        "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n\
+         f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n",
+    )
+    .unwrap();
+    let best = dir.join("best.png");
+    let out = itgfx(&[
+        "viewpoints",
+        obj.to_str().unwrap(),
+        "--viewpoints",
+        "42",
+        "--resolution",
+        "64",
+        "--best-image",
+        best.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["polygons"], 6);
+    assert_eq!(v["views"].as_array().unwrap().len(), 42);
+    // The best view sees three faces: its direction is far from every axis.
+    let d: Vec<f64> = v["best_view_direction"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    assert!(d.iter().all(|c| c.abs() > 0.2), "best direction {d:?}");
+    let best_vmi = v["views"][v["best_view"].as_u64().unwrap() as usize]["VMI"].as_f64().unwrap();
+    for view in v["views"].as_array().unwrap() {
+        assert!(view["VMI"].as_f64().unwrap() >= best_vmi);
+    }
+    assert_eq!(&std::fs::read(&best).unwrap()[1..4], b"PNG");
+    for (args, needle) in [
+        (&["viewpoints", "/nonexistent/mesh.obj"][..], "/nonexistent/mesh.obj"),
+        (&["viewpoints", "cube", "--resolution", "2"][..], "--resolution"),
+        (&["viewpoints", "cube", "--distance", "0.5"][..], "--distance"),
+    ] {
+        let out = itgfx(args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert!(String::from_utf8_lossy(&out.stderr).contains(needle), "{args:?}");
+    }
+    let out = itgfx(&["viewpoints", obj.to_str().unwrap(), "--viewpoints", "50"]);
+    assert_eq!(out.status.code(), Some(2));
+}

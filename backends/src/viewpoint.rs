@@ -73,6 +73,21 @@ pub enum ViewpointWeights {
     Uniform,
 }
 
+impl ViewpointWeights {
+    /// `p(V)` over the viewpoints that see the object, from their projected
+    /// solid angles `seen`.
+    #[must_use]
+    pub fn distribution(self, seen: &[f64]) -> Vec<f64> {
+        match self {
+            ViewpointWeights::ProjectedArea => {
+                let t: f64 = seen.iter().sum();
+                seen.iter().map(|s| s / t).collect()
+            }
+            ViewpointWeights::Uniform => vec![1.0 / seen.len() as f64; seen.len()],
+        }
+    }
+}
+
 /// The sampled channel.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ViewpointChannel {
@@ -212,13 +227,7 @@ impl ViewpointChannel {
         let (m, seen, idx) = self.conditional();
         let nv = seen.len();
         assert!(nv > 0, "no viewpoint sees the object");
-        let w: Vec<f64> = match weights {
-            ViewpointWeights::ProjectedArea => {
-                let t: f64 = seen.iter().sum();
-                seen.iter().map(|s| s / t).collect()
-            }
-            ViewpointWeights::Uniform => vec![1.0 / nv as f64; nv],
-        };
+        let w = weights.distribution(&seen);
         let ch = Channel::new(&w, &m, self.patches).expect("rows of p(O|v) are distributions");
         let cm = ch.measures(base);
         let mut po = vec![0.0; self.patches];
@@ -269,13 +278,7 @@ impl ViewpointChannel {
     pub fn polygonal_information(&self, weights: ViewpointWeights, base: Base) -> (Vec<f64>, Vec<f64>) {
         let (m, seen, _) = self.conditional();
         let nv = seen.len();
-        let w: Vec<f64> = match weights {
-            ViewpointWeights::ProjectedArea => {
-                let t: f64 = seen.iter().sum();
-                seen.iter().map(|s| s / t).collect()
-            }
-            ViewpointWeights::Uniform => vec![1.0 / nv as f64; nv],
-        };
+        let w = weights.distribution(&seen);
         let ch = Channel::new(&w, &m, self.patches).expect("rows of p(O|v) are distributions");
         let mut po = vec![0.0; self.patches];
         ch.output_into(&mut po).expect("sizes");

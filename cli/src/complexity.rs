@@ -112,7 +112,7 @@ pub fn run(args: &Args) -> Result<(Report, VisibilityCounts, Scene), CliError> {
     let tracer = open(choice, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
     let offset = args.integer("offset")?.unwrap_or(0);
     let opts = LineOptions { lines, seed, local, blocks: blocks as u32, offset };
-    let mut counts = if let Some(list) = args.value("merge") {
+    let counts = if let Some(list) = args.value("merge") {
         // Evaluate saved shards instead of tracing.
         let mut merged: Option<VisibilityCounts> = None;
         for f in list.split(',') {
@@ -141,7 +141,6 @@ pub fn run(args: &Args) -> Result<(Report, VisibilityCounts, Scene), CliError> {
         counts.save(&scene.name, &mut bytes).map_err(|e| CliError::usage(format!("{p}: {e}")))?;
         crate::export::atomic_write(Path::new(p), &bytes)?;
     }
-    let _ = &mut counts;
     let c = counts.complexity(base);
     let seconds = t0.elapsed().as_secs_f64();
     let m = &c.measures;

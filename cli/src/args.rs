@@ -75,6 +75,18 @@ impl Args {
         Ok(a)
     }
 
+    /// The one positional argument a command takes (a scene, a mesh).
+    ///
+    /// # Errors
+    /// A usage error: `missing` when there is none, a count when there are several.
+    pub fn single_positional(&self, what: &str, missing: &str) -> Result<String, CliError> {
+        match self.positionals.as_slice() {
+            [s] => Ok(s.clone()),
+            [] => Err(CliError::usage(missing)),
+            more => Err(CliError::usage(format!("one {what} expected, got {}", more.len()))),
+        }
+    }
+
     /// Whether `--name` was given.
     #[must_use]
     pub fn flag(&self, name: &str) -> bool {

@@ -84,11 +84,8 @@ impl Default for Progress {
 /// # Errors
 /// Usage, scene and backend errors.
 pub fn run(args: &Args) -> Result<(Report, VisibilityCounts, Scene), CliError> {
-    let spec = match args.positionals.as_slice() {
-        [s] => s.clone(),
-        [] => return Err(CliError::usage("give a scene: a built-in name (e.g. cube-enclosure:10) or an .obj file")),
-        more => return Err(CliError::usage(format!("one scene expected, got {}", more.len()))),
-    };
+    let spec =
+        args.single_positional("scene", "give a scene: a built-in name (e.g. cube-enclosure:10) or an .obj file")?;
     let base = args.base()?;
     let unit = Some(base.unit());
     let lines = args.integer("lines")?.unwrap_or(1_000_000);

@@ -56,6 +56,11 @@ fn complexity_help() -> String {
     s
 }
 
+/// One JSON object, or the readable table.
+fn render(report: &itgfx_cli::report::Report, json: bool) -> String {
+    if json { report.to_json().to_string() } else { report.to_table().trim_end().to_string() }
+}
+
 fn run(mut words: Vec<OsString>) -> Result<Option<String>, CliError> {
     if words.is_empty() {
         return Ok(Some(USAGE.to_string()));
@@ -78,7 +83,7 @@ fn run(mut words: Vec<OsString>) -> Result<Option<String>, CliError> {
             }
             let json = args.flag("json");
             let report = measure::run(&name, &args)?;
-            Ok(Some(if json { report.to_json().to_string() } else { report.to_table().trim_end().to_string() }))
+            Ok(Some(render(&report, json)))
         }
         "complexity" => {
             let args = Args::parse(words)?;
@@ -94,7 +99,7 @@ fn run(mut words: Vec<OsString>) -> Result<Option<String>, CliError> {
             let json = args.flag("json");
             let (report, _counts, _scene) = complexity::run(&args)?;
             args.finish()?;
-            Ok(Some(if json { report.to_json().to_string() } else { report.to_table().trim_end().to_string() }))
+            Ok(Some(render(&report, json)))
         }
         "viewpoints" => {
             let args = Args::parse(words)?;
@@ -104,7 +109,7 @@ fn run(mut words: Vec<OsString>) -> Result<Option<String>, CliError> {
             let json = args.flag("json");
             let report = viewpoints::run(&args)?;
             args.finish()?;
-            Ok(Some(if json { report.to_json().to_string() } else { report.to_table().trim_end().to_string() }))
+            Ok(Some(render(&report, json)))
         }
         other => Err(CliError::usage(format!("unknown command {other:?}; try `itgfx --help`"))),
     }

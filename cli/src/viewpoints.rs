@@ -17,11 +17,7 @@ use crate::report::Report;
 /// # Errors
 /// Usage, scene and backend errors.
 pub fn run(args: &Args) -> Result<Report, CliError> {
-    let spec = match args.positionals.as_slice() {
-        [s] => s.clone(),
-        [] => return Err(CliError::usage("give a mesh: an .obj file or a built-in scene name")),
-        more => return Err(CliError::usage(format!("one mesh expected, got {}", more.len()))),
-    };
+    let spec = args.single_positional("mesh", "give a mesh: an .obj file or a built-in scene name")?;
     let base = args.base()?;
     let unit = Some(base.unit());
     let count = args.integer("viewpoints")?.unwrap_or(42);

@@ -7,10 +7,14 @@
 //! * [`tracer`]: the [`tracer::Tracer`] seam, the CPU backend (rayon +
 //!   obvhs) and the brute-force reference backend.
 //! * [`lines`]: seeded counter-based global and local lines.
+//! * [`meshes`]: built-in objects seen from outside (geodesic sphere, torus,
+//!   table with chairs).
+//! * [`viewpoint`]: the viewpoint channel of Part V.
 //! * [`visibility`]: the scene visibility channel of Part III, with
 //!   jackknife standard errors.
 
 pub mod lines;
+pub mod meshes;
 pub mod obj;
 pub mod scene;
 pub mod solids;

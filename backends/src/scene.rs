@@ -124,6 +124,9 @@ pub const BUILT_IN: &[(&str, &str)] = &[
         "cornell-box",
         "closed Cornell box from the published measurements: 5 walls, open front closed, light, two blocks (Fig. 20a)",
     ),
+    ("geosphere[:L]", "unit geodesic sphere seen from outside, 20*4^(L-1) triangles (default L = 2: 80)"),
+    ("torus[:U,V]", "ring torus (radii 1 and 0.4) seen from outside, U x V quads (default 48,24)"),
+    ("table-chairs[:N]", "a table with four chairs, 25 boxes seen from outside, faces split N x N (default 2)"),
     (
         "cubes-room:K[:clustered][:SEED]",
         "cube enclosure 10x10 per face with K small cubes, random (default) or clustered (Figs. 11, 15, 16)",
@@ -158,6 +161,12 @@ impl Scene {
             }
         }
         (lo, hi)
+    }
+
+    /// Starts a scene with one material.
+    #[must_use]
+    pub fn named(name: &str) -> Self {
+        Self::new(name)
     }
 
     /// Starts a scene with one material.
@@ -388,6 +397,28 @@ pub fn built_in(spec: &str) -> Result<Scene, SceneError> {
             }
         }
         "cornell-box" => crate::solids::cornell_box(),
+        "geosphere" => {
+            let l = parse_u32(spec, "L", parts.get(1).copied().unwrap_or("2"), 9)?;
+            crate::meshes::geosphere(spec, l - 1)
+        }
+        "torus" => {
+            let (u, v) = match parts.get(1) {
+                None => (48, 24),
+                Some(p) => {
+                    let (a, c) =
+                        p.split_once(',').ok_or_else(|| SceneError::Spec(format!("{spec}: expected torus:U,V")))?;
+                    (parse_u32(spec, "U", a, 4096)?, parse_u32(spec, "V", c, 4096)?)
+                }
+            };
+            if u < 3 || v < 3 {
+                return Err(SceneError::Spec(format!("{spec}: U and V must be at least 3")));
+            }
+            crate::meshes::torus(spec, 1.0, 0.4, u, v)
+        }
+        "table-chairs" => {
+            let n = parse_u32(spec, "N", parts.get(1).copied().unwrap_or("2"), 256)?;
+            crate::meshes::table_with_chairs(spec, n)
+        }
         "cubes-room" => {
             let k = parse_u32(spec, "K", parts.get(1).copied().unwrap_or("27"), 4096)?;
             let mut clustered = false;
@@ -407,7 +438,7 @@ pub fn built_in(spec: &str) -> Result<Scene, SceneError> {
         }
         other => {
             return Err(SceneError::Spec(format!(
-                "unknown scene {other:?}: not a built-in (cube-enclosure:N, tetrahedron, cube, octahedron, dodecahedron, icosahedron, sphere, cornell-box, cubes-room:K) and no such .obj file"
+                "unknown scene {other:?}: not a built-in (cube-enclosure:N, tetrahedron, cube, octahedron, dodecahedron, icosahedron, sphere, cornell-box, cubes-room:K, geosphere:L, torus:U,V, table-chairs:N) and no such .obj file"
             )));
         }
     };

@@ -20,7 +20,7 @@ pub struct Args {
 }
 
 /// Options that never take a value.
-const FLAGS: &[&str] = &["json", "normalize", "help", "local", "uniform-input", "sorted"];
+const FLAGS: &[&str] = &["json", "normalize", "help", "local", "uniform-input", "sorted", "background", "per-polygon"];
 
 impl Args {
     /// Parses `words` (everything after the command name): `--name value`,

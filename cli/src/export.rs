@@ -10,6 +10,7 @@ use glam::DVec3;
 use itgfx_backends::lines::Line;
 use itgfx_backends::scene::Scene;
 use itgfx_backends::tracer::{CrossingBuffer, Tracer};
+use rayon::prelude::*;
 
 use crate::CliError;
 
@@ -57,15 +58,21 @@ pub fn viridis(x: f64) -> [u8; 3] {
     out
 }
 
-/// Per-patch colours from values, scaled between their 2nd and 98th percentiles.
+/// The 2nd and 98th percentiles of the finite values (`hi > lo` always).
 #[must_use]
-pub fn colours(values: &[f64]) -> Vec<[u8; 3]> {
+pub fn percentile_range(values: &[f64]) -> (f64, f64) {
     let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
     v.sort_by(f64::total_cmp);
     let (lo, hi) =
         if v.is_empty() { (0.0, 1.0) } else { (v[v.len() * 2 / 100], v[(v.len() * 98 / 100).min(v.len() - 1)]) };
-    let span = if hi > lo { hi - lo } else { 1.0 };
-    values.iter().map(|&x| viridis((x - lo) / span)).collect()
+    (lo, if hi > lo { hi } else { lo + 1.0 })
+}
+
+/// Per-patch colours from values, scaled between their 2nd and 98th percentiles.
+#[must_use]
+pub fn colours(values: &[f64]) -> Vec<[u8; 3]> {
+    let (lo, hi) = percentile_range(values);
+    values.iter().map(|&x| viridis((x - lo) / (hi - lo))).collect()
 }
 
 /// Triangles of each patch for export (the analytic sphere is tessellated).
@@ -102,8 +109,15 @@ fn patch_triangles(scene: &Scene) -> Vec<([DVec3; 3], u32)> {
 /// # Errors
 /// I/O errors, one line.
 pub fn write_ply(scene: &Scene, values: &[f64], path: &Path) -> Result<(), CliError> {
+    write_ply_with(scene, values, &colours(values), path)
+}
+
+/// As [`write_ply`] with explicit patch colours.
+///
+/// # Errors
+/// I/O errors, one line.
+pub fn write_ply_with(scene: &Scene, values: &[f64], cols: &[[u8; 3]], path: &Path) -> Result<(), CliError> {
     let tris = patch_triangles(scene);
-    let cols = colours(values);
     let mut s = String::new();
     s.push_str(&format!(
         "ply\nformat ascii 1.0\ncomment itgfx: {} coloured per patch\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
@@ -139,7 +153,7 @@ pub fn render_png(tracer: &dyn Tracer, values: &[f64], path: &Path, size: (u32, 
 }
 
 /// Renders with explicit patch colours from `eye` (normalised coordinates)
-/// looking at the origin.
+/// looking at the origin, back faces culled, and writes a PNG.
 ///
 /// # Errors
 /// Tracing and encoding errors, one line.
@@ -150,6 +164,30 @@ pub fn render_png_from(
     path: &Path,
     size: (u32, u32),
 ) -> Result<(), CliError> {
+    write_png(&render_image(tracer, cols, eye, size, Faces::Front)?, path)
+}
+
+/// Which crossing a pixel shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Faces {
+    /// The first crossing facing the camera (enclosures seen from outside).
+    Front,
+    /// The first crossing, either side (objects; open meshes show their inside).
+    Both,
+}
+
+/// Renders patches in their colours from `eye` looking at the origin, with
+/// `|cos|` shading.
+///
+/// # Errors
+/// Tracing errors, one line.
+pub fn render_image(
+    tracer: &dyn Tracer,
+    cols: &[[u8; 3]],
+    eye: DVec3,
+    size: (u32, u32),
+    faces: Faces,
+) -> Result<image::RgbImage, CliError> {
     let (w, h) = size;
     let fwd = (-eye).normalize();
     let up_hint = if fwd.cross(DVec3::Y).length() < 1e-6 { DVec3::Z } else { DVec3::Y };
@@ -175,18 +213,90 @@ pub fn render_png_from(
     tracer.trace_all(&lines, &mut buf).map_err(|e| CliError::usage(e.to_string()))?;
     let mut img = image::RgbImage::new(w, h);
     for (i, px) in img.pixels_mut().enumerate() {
-        // First crossing facing the camera.
-        *px = match buf.line(i).iter().find(|c| c.cos < 0.0) {
+        let hit = match faces {
+            Faces::Front => buf.line(i).iter().find(|c| c.cos < 0.0),
+            Faces::Both => buf.line(i).first(),
+        };
+        *px = match hit {
             Some(c) => {
-                let shade = 0.35 + 0.65 * f64::from(-c.cos);
+                let shade = 0.35 + 0.65 * f64::from(c.cos.abs());
                 let col = cols[c.patch as usize];
                 image::Rgb(col.map(|k| (f64::from(k) * shade).round() as u8))
             }
             None => image::Rgb([24, 24, 28]),
         };
     }
+    Ok(img)
+}
+
+/// Writes an image as PNG, atomically.
+///
+/// # Errors
+/// Encoding and I/O errors, one line.
+pub fn write_png(img: &image::RgbImage, path: &Path) -> Result<(), CliError> {
     let mut bytes = Vec::new();
     img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
         .map_err(|e| CliError::usage(format!("{}: {e}", path.display())))?;
     atomic_write(path, &bytes)
+}
+
+/// Images side by side in rows of `per_row`, on a dark background.
+#[must_use]
+pub fn montage(images: &[image::RgbImage], per_row: usize) -> image::RgbImage {
+    let (w, h) = images.first().map_or((1, 1), |i| i.dimensions());
+    let per_row = per_row.clamp(1, images.len().max(1));
+    let rows = images.len().div_ceil(per_row).max(1);
+    let mut out = image::RgbImage::from_pixel(w * per_row as u32, h * rows as u32, image::Rgb([24, 24, 28]));
+    for (k, img) in images.iter().enumerate() {
+        let (x0, y0) = ((k % per_row) as u32 * w, (k / per_row) as u32 * h);
+        for (x, y, p) in img.enumerate_pixels() {
+            out.put_pixel(x0 + x, y0 + y, *p);
+        }
+    }
+    out
+}
+
+/// The viewpoint sphere seen from `+z` (left) and `−z` (right), one row per
+/// measure: each pixel of a disc takes the colour of the nearest viewpoint's
+/// value (viridis, 2nd-98th percentile); `mark` (a direction) is drawn as a
+/// red dot.
+#[must_use]
+pub fn sphere_image(directions: &[DVec3], measures: &[&[f64]], mark: DVec3, radius: u32) -> image::RgbImage {
+    let side = 2 * radius + 8;
+    let mut img = image::RgbImage::from_pixel(2 * side, side * measures.len() as u32, image::Rgb([24, 24, 28]));
+    let mark = mark.normalize();
+    // The nearest viewpoint of every disc pixel, shared by all rows.
+    let d = 2 * radius;
+    let nearest: Vec<Option<(usize, f64, bool)>> = (0..2 * d * d)
+        .into_par_iter()
+        .map(|k| {
+            let (half, py, px) = (k / (d * d), (k / d) % d, k % d);
+            let sign = if half == 0 { 1.0 } else { -1.0 };
+            let u = (f64::from(px) + 0.5) / f64::from(radius) - 1.0;
+            let v = 1.0 - (f64::from(py) + 0.5) / f64::from(radius);
+            let r2 = u * u + v * v;
+            if r2 > 1.0 {
+                return None;
+            }
+            // Seen from -z the x axis points left: mirror u.
+            let p = DVec3::new(u * sign, v, sign * (1.0 - r2).sqrt());
+            let near =
+                directions.iter().enumerate().max_by(|a, b| p.dot(*a.1).total_cmp(&p.dot(*b.1))).map_or(0, |(k, _)| k);
+            Some((near, 0.55 + 0.45 * (1.0 - r2).sqrt(), p.dot(mark) > 0.9995))
+        })
+        .collect();
+    for (row, values) in measures.iter().enumerate() {
+        let cols = colours(values);
+        for (k, n) in nearest.iter().enumerate() {
+            let Some((near, shade, marked)) = *n else { continue };
+            let (half, py, px) = (k as u32 / (d * d), (k as u32 / d) % d, k as u32 % d);
+            let c = if marked { [230, 40, 40] } else { cols[near] };
+            img.put_pixel(
+                half * side + 4 + px,
+                row as u32 * side + 4 + py,
+                image::Rgb(c.map(|k| (f64::from(k) * shade).round() as u8)),
+            );
+        }
+    }
+    img
 }

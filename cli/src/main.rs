@@ -20,16 +20,28 @@ Errors are one line on stderr and exit code 2.";
 
 const VIEWPOINTS_HELP: &str = "itgfx viewpoints MESH [OPTIONS] — the viewpoint channel V -> O (Part V)
 
-MESH is an .obj file (polygons facing outwards) or a built-in scene name.
-Options:
+MESH is an .obj file or a built-in (geosphere:L, torus:U,V, table-chairs:N, the regular
+solids, ...; see itgfx complexity --help). The first surface a ray meets is what it sees.
+Channel:
   --viewpoints N     12, 42 (default), 162, 642 or 2562 points of a subdivided icosahedron
-  --resolution R     R x R rays per viewpoint over the cone around the object (default 128)
+  --resolution R     R x R rays per viewpoint over the cone around the object (default 128);
+                     small polygons need more: aim for several rays per visible polygon
   --distance D       viewpoint distance in bounding-sphere radii (default 3)
   --uniform-input    p(V) uniform instead of the projected area
-  --best-image F.png, --worst-image F.png   renders of the best (min VMI) and worst views
-  --ao-image F.png   information-theoretic ambient occlusion (grey from I(o;V))
-  --info-image F.png, --export-ply F.ply    the mesh coloured by I(o;V)
-  --json, --base 2|e|10, --backend cpu|reference";
+  --background       count the background as an extra polygon
+Selection:
+  --best-n N         at most N best views, greedy (default 6)
+  --capture F        stop once the views capture F of I(V;O) (default 0.9)
+  --explore S        steps of the guided exploration path from the best view (default 12)
+Pictures (PNG renders, PLY with vertex colours; all written atomically):
+  --out DIR          every picture below under its default name in DIR
+  --best-image F, --worst-image F, --best-n-image F, --importance-image F
+  --sphere-image F   the viewpoint sphere coloured by VMI (top) and VE (bottom), best view red
+  --saliency-image F, --ao-image F, --info-image F, --export-ply F (AO), --saliency-ply F
+  --smooth K         pictures average each polygon with its neighbours K times (default 2);
+                     JSON values are never smoothed
+Output: --json, --per-polygon (I(o;V), saliency and p(o) per polygon), --base 2|e|10,
+        --backend cpu|reference";
 
 fn complexity_help() -> String {
     let mut s = String::from(

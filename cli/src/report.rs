@@ -20,6 +20,10 @@ pub enum Item {
     Reals(Vec<f64>),
     /// A short text.
     Text(String),
+    /// A list of counts (e.g. indices).
+    Counts(Vec<u64>),
+    /// A list of short texts (e.g. files written).
+    Texts(Vec<String>),
     /// A nested list of objects (e.g. merge steps).
     Records(Vec<Report>),
     /// Not available (JSON `null`).
@@ -90,6 +94,18 @@ impl Report {
         self
     }
 
+    /// Adds a list of counts.
+    pub fn counts(&mut self, key: &str, v: Vec<u64>) -> &mut Self {
+        self.items.push((key.to_string(), Item::Counts(v)));
+        self
+    }
+
+    /// Adds a list of texts.
+    pub fn texts(&mut self, key: &str, v: Vec<String>) -> &mut Self {
+        self.items.push((key.to_string(), Item::Texts(v)));
+        self
+    }
+
     /// Adds nested records.
     pub fn records(&mut self, key: &str, v: Vec<Report>) -> &mut Self {
         self.items.push((key.to_string(), Item::Records(v)));
@@ -115,6 +131,8 @@ impl Report {
                 Item::Count(n) => Value::from(*n),
                 Item::Reals(xs) => Value::Array(xs.iter().map(|&x| json_real(x)).collect()),
                 Item::Text(s) => Value::String(s.clone()),
+                Item::Counts(n) => Value::Array(n.iter().map(|&x| Value::from(x)).collect()),
+                Item::Texts(s) => Value::Array(s.iter().cloned().map(Value::String).collect()),
                 Item::Records(rs) => Value::Array(rs.iter().map(Report::to_json).collect()),
                 Item::Missing => Value::Null,
             };
@@ -144,6 +162,8 @@ impl Report {
                     format!("[{}]{more}", shown.join(", "))
                 }
                 Item::Text(s) => s.clone(),
+                Item::Counts(n) => format!("{n:?}"),
+                Item::Texts(s) => s.join(", "),
                 Item::Records(rs) => format!("{} records (use --json for all)", rs.len()),
                 Item::Missing => "n/a".into(),
             };

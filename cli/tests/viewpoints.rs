@@ -53,4 +53,55 @@ fn cube_json_and_pictures() {
     }
     let out = itgfx(&["viewpoints", obj.to_str().unwrap(), "--viewpoints", "50"]);
     assert_eq!(out.status.code(), Some(2));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `--out DIR` writes every picture of a built-in mesh; the JSON names them,
+/// carries the best-n selection and the exploration path, and per-polygon
+/// arrays only on request.
+#[test]
+fn built_in_mesh_writes_every_picture() {
+    let dir = std::env::temp_dir().join(format!("itgfx-vp-out-{}", std::process::id()));
+    let out = itgfx(&[
+        "viewpoints",
+        "table-chairs",
+        "--viewpoints",
+        "42",
+        "--resolution",
+        "48",
+        "--out",
+        dir.to_str().unwrap(),
+        "--per-polygon",
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let names = [
+        "best.png",
+        "worst.png",
+        "best-n.png",
+        "best-importance.png",
+        "sphere.png",
+        "ao.png",
+        "saliency.png",
+        "info.png",
+        "ao.ply",
+        "saliency.ply",
+    ];
+    let wrote = v["wrote"].as_array().unwrap();
+    assert_eq!(wrote.len(), names.len());
+    for n in names {
+        let bytes = std::fs::read(dir.join(n)).unwrap();
+        assert!(bytes.starts_with(b"\x89PNG") || bytes.starts_with(b"ply"), "{n}");
+    }
+    let polygons = v["polygons"].as_u64().unwrap() as usize;
+    assert_eq!(v["saliency"].as_array().unwrap().len(), polygons);
+    assert_eq!(v["best_n_views"][0], v["best_view"]);
+    assert!(v["exploration_path"].as_array().unwrap().len() > 1);
+    assert!(v["views"][0]["saliency"].as_f64().unwrap() >= 0.0);
+    // No per-polygon arrays by default.
+    let out = itgfx(&["viewpoints", "torus:12,6", "--viewpoints", "12", "--resolution", "16", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(v.get("saliency").is_none() && v.get("wrote").is_none());
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -70,6 +70,7 @@ mod quantile;
 mod real;
 mod scan;
 pub mod scene;
+mod sparse;
 pub mod sum;
 
 pub use base::Base;
@@ -100,3 +101,4 @@ pub use scene::{
     discretisation_error_area_sampling, discretisation_error_lines, mutual_information_matrix_into, point_form_factor,
     scene_measures, scene_measures_from_counts,
 };
+pub use sparse::{SparseChannel, jensen_shannon_sparse};

@@ -1,0 +1,254 @@
+//! The measures of the viewpoint channel (Part V §3): `p(V)`, `p(O|v)` and
+//! `p(O)` over the viewpoints that see the object, and everything computed
+//! from them through [`itgfx_core::SparseChannel`].
+
+use itgfx_core::{Base, Error, SparseChannel, jensen_shannon_sparse};
+
+use super::ViewpointChannel;
+
+/// How the input distribution `p(V)` is chosen (Part V §3.1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViewpointWeights {
+    /// Proportional to the object's projected solid angle at `v` (the default).
+    ProjectedArea,
+    /// `1 / N_v` over the viewpoints that see the object.
+    Uniform,
+}
+
+/// The normalised channel `V → O` over the viewpoints that see the object.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ViewpointAnalysis {
+    /// Viewpoint index (in the sampled channel) of each row.
+    pub seen: Vec<usize>,
+    /// `p(v)` of each row.
+    pub p_v: Vec<f64>,
+    /// `p(o)`, the output marginal (the last entry is the background when
+    /// it is counted as a polygon).
+    pub p_o: Vec<f64>,
+    /// Projected solid angle of the object at each row's viewpoint.
+    pub seen_angle: Vec<f64>,
+    /// Whether the background is the extra output `patches`.
+    pub background: bool,
+    /// Viewpoints in the sampled channel.
+    pub viewpoints: usize,
+    /// Patches in the scene.
+    pub patches: usize,
+    starts: Vec<usize>,
+    cols: Vec<u32>,
+    values: Vec<f64>,
+}
+
+/// Per-viewpoint measures over all sampled viewpoints, in one unit.
+/// Viewpoints that see nothing get weight 0, VE 0 and VMI/VKL `∞`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ViewpointMeasures {
+    /// `p(v)`.
+    pub weight: Vec<f64>,
+    /// Viewpoint entropy `H(O|v)` (Part V eq. (2)).
+    pub entropy: Vec<f64>,
+    /// Viewpoint mutual information `I(v;O)` (eq. (7)).
+    pub mutual_information: Vec<f64>,
+    /// Viewpoint Kullback–Leibler distance to the actual areas (eq. (3));
+    /// NaN when the background is an output (it has no area).
+    pub kullback_leibler: Vec<f64>,
+    /// Plemenos–Benayada heuristic (eq. (1)): the fraction of polygons
+    /// visible plus the object's projected solid angle over `4π`.
+    pub heuristic: Vec<f64>,
+    /// `I(V;O)` (eq. (6)).
+    pub total_mutual_information: f64,
+    /// `H(O|V)` (eq. (5)).
+    pub conditional_entropy: f64,
+    /// `H(O)`.
+    pub object_entropy: f64,
+    /// Index of the viewpoint with minimum VMI: the best view.
+    pub best: usize,
+    /// Index of the viewpoint with maximum VMI.
+    pub worst: usize,
+}
+
+impl ViewpointAnalysis {
+    /// Normalises the sampled channel; `background` adds the background as
+    /// an extra polygon (Part V §3.1).
+    ///
+    /// # Errors
+    /// [`Error::ZeroMass`] when no viewpoint sees the object.
+    pub fn new(ch: &ViewpointChannel, weights: ViewpointWeights, background: bool) -> Result<Self, Error> {
+        let mut seen = Vec::new();
+        let mut seen_angle = Vec::new();
+        let mut starts = vec![0];
+        let (mut cols, mut values) = (Vec::new(), Vec::new());
+        for v in 0..ch.viewpoints() {
+            let (p, a) = ch.row(v);
+            let object: f64 = a.iter().sum();
+            if object <= 0.0 {
+                continue;
+            }
+            let bg = if background { ch.background[v] } else { 0.0 };
+            let total = object + bg;
+            cols.extend_from_slice(p);
+            values.extend(a.iter().map(|x| x / total));
+            if bg > 0.0 {
+                cols.push(ch.patches as u32);
+                values.push(bg / total);
+            }
+            starts.push(cols.len());
+            seen.push(v);
+            seen_angle.push(object);
+        }
+        if seen.is_empty() {
+            return Err(Error::ZeroMass);
+        }
+        let p_v = match weights {
+            ViewpointWeights::ProjectedArea => {
+                let t: f64 = seen_angle.iter().sum();
+                seen_angle.iter().map(|s| s / t).collect()
+            }
+            ViewpointWeights::Uniform => vec![1.0 / seen.len() as f64; seen.len()],
+        };
+        let outputs = ch.patches + usize::from(background);
+        let mut an = Self {
+            seen,
+            p_v,
+            p_o: vec![0.0; outputs],
+            seen_angle,
+            background,
+            viewpoints: ch.viewpoints(),
+            patches: ch.patches,
+            starts,
+            cols,
+            values,
+        };
+        let mut p_o = vec![0.0; outputs];
+        an.channel()?.output_into(&mut p_o)?;
+        an.p_o = p_o;
+        Ok(an)
+    }
+
+    /// The core's view of the channel.
+    ///
+    /// # Errors
+    /// Never for an analysis built by [`ViewpointAnalysis::new`].
+    pub fn channel(&self) -> Result<SparseChannel<'_, f64>, Error> {
+        SparseChannel::new(&self.p_v, &self.starts, &self.cols, &self.values, self.outputs())
+    }
+
+    /// Outputs: patches, plus one for the background when counted.
+    #[must_use]
+    pub fn outputs(&self) -> usize {
+        self.patches + usize::from(self.background)
+    }
+
+    /// Rows (viewpoints that see the object).
+    #[must_use]
+    pub fn rows(&self) -> usize {
+        self.seen.len()
+    }
+
+    /// Row `x`: outputs seen and `p(o|v)`.
+    #[must_use]
+    pub fn row(&self, x: usize) -> (&[u32], &[f64]) {
+        (&self.cols[self.starts[x]..self.starts[x + 1]], &self.values[self.starts[x]..self.starts[x + 1]])
+    }
+
+    /// The row of viewpoint `v`, if it sees the object.
+    #[must_use]
+    pub fn row_of(&self, v: usize) -> Option<usize> {
+        self.seen.binary_search(&v).ok()
+    }
+
+    /// Spreads per-row values over all viewpoints, `missing` elsewhere.
+    #[must_use]
+    pub fn expand(&self, rows: &[f64], missing: f64) -> Vec<f64> {
+        let mut out = vec![missing; self.viewpoints];
+        for (x, &v) in self.seen.iter().enumerate() {
+            out[v] = rows[x];
+        }
+        out
+    }
+
+    /// Every per-viewpoint measure; `areas` are the patch areas (for VKL).
+    ///
+    /// # Errors
+    /// [`Error::LengthMismatch`] if `areas` is not one per patch.
+    pub fn measures(&self, areas: &[f64], base: Base) -> Result<ViewpointMeasures, Error> {
+        if areas.len() != self.patches {
+            return Err(Error::LengthMismatch { expected: self.patches, found: areas.len() });
+        }
+        let ch = self.channel()?;
+        let cm = ch.measures(&self.p_o, base)?;
+        let n = self.rows();
+        let mut vmi = vec![0.0; n];
+        ch.specific_information_into(&self.p_o, base, &mut vmi)?;
+        let mut ve = vec![0.0; n];
+        ch.row_entropies_into(base, &mut ve)?;
+        let vkl = if self.background {
+            vec![f64::NAN; n]
+        } else {
+            let total: f64 = areas.iter().sum();
+            let rel: Vec<f64> = areas.iter().map(|a| a / total).collect();
+            let mut d = vec![0.0; n];
+            ch.specific_information_into(&rel, base, &mut d)?;
+            d
+        };
+        let heuristic: Vec<f64> = (0..n)
+            .map(|x| {
+                let visible = self.row(x).0.iter().filter(|&&o| (o as usize) < self.patches).count();
+                visible as f64 / self.patches as f64 + self.seen_angle[x] / (4.0 * std::f64::consts::PI)
+            })
+            .collect();
+        let best = self.seen[(0..n).min_by(|&a, &b| vmi[a].total_cmp(&vmi[b])).unwrap_or(0)];
+        let worst = self.seen[(0..n).max_by(|&a, &b| vmi[a].total_cmp(&vmi[b])).unwrap_or(0)];
+        Ok(ViewpointMeasures {
+            weight: self.expand(&self.p_v, 0.0),
+            entropy: self.expand(&ve, 0.0),
+            mutual_information: self.expand(&vmi, f64::INFINITY),
+            kullback_leibler: self.expand(&vkl, f64::INFINITY),
+            heuristic: self.expand(&heuristic, 0.0),
+            total_mutual_information: cm.mutual_information,
+            conditional_entropy: cm.h_y_given_x,
+            object_entropy: cm.h_y,
+            best,
+            worst,
+        })
+    }
+
+    /// Polygonal mutual information `I(o;V) = D_KL(p(V|o) ‖ p(V))` of every
+    /// output (the reversed channel, Part V); 0 where `p(o) = 0`.
+    ///
+    /// # Errors
+    /// None in practice (sizes are consistent by construction).
+    pub fn polygonal_information(&self, base: Base) -> Result<Vec<f64>, Error> {
+        let mut info = vec![0.0; self.outputs()];
+        self.channel()?.output_specific_information_into(&self.p_o, base, &mut info)?;
+        Ok(info)
+    }
+
+    /// Dissimilarity of rows `a` and `b`: the Jensen–Shannon divergence of
+    /// their `p(O|v)` with weights `p(v)/(p(a)+p(b))` (Part II eq. (17)).
+    ///
+    /// # Errors
+    /// None in practice.
+    pub fn dissimilarity(&self, a: usize, b: usize, base: Base) -> Result<f64, Error> {
+        let t = self.p_v[a] + self.p_v[b];
+        jensen_shannon_sparse((self.p_v[a] / t, self.p_v[b] / t), self.row(a), self.row(b), base)
+    }
+
+    /// Viewpoint instability: the mean dissimilarity of each viewpoint to
+    /// its neighbours that see the object (low = stable); NaN for
+    /// viewpoints that see nothing. `neighbours` is over all viewpoints.
+    ///
+    /// # Errors
+    /// None in practice.
+    pub fn instability(&self, neighbours: &[Vec<usize>], base: Base) -> Result<Vec<f64>, Error> {
+        let mut out = vec![f64::NAN; self.viewpoints];
+        for (x, &v) in self.seen.iter().enumerate() {
+            let near: Vec<usize> = neighbours[v].iter().filter_map(|&u| self.row_of(u)).collect();
+            let mut s = 0.0;
+            for &y in &near {
+                s += self.dissimilarity(x, y, base)?;
+            }
+            out[v] = if near.is_empty() { 0.0 } else { s / near.len() as f64 };
+        }
+        Ok(out)
+    }
+}

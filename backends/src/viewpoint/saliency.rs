@@ -1,0 +1,187 @@
+//! Mesh saliency from the reversed viewpoint channel (Part V): a polygon is
+//! salient when the viewpoints that see it differ from those that see its
+//! neighbours. With `p(V|o)` the reversed channel,
+//! `S(o) = (1/|N(o)|) Σ_{o' ∈ N(o)} JS(p(o)/(p(o)+p(o')), p(o')/(p(o)+p(o')); p(V|o), p(V|o'))`
+//! (Part II eq. (17) for the weighted Jensen–Shannon divergence), and the
+//! saliency of a viewpoint is `S(v) = Σ_o p(o|v) S(o)`.
+
+use itgfx_core::{Base, Error, jensen_shannon_sparse};
+use rayon::prelude::*;
+
+use super::ViewpointAnalysis;
+use crate::scene::Scene;
+
+/// Patches that share an edge with each patch (sorted, without itself).
+/// Vertices are identified by their exact coordinates; for the analytic
+/// sphere the cells' grid neighbours are used.
+#[must_use]
+pub fn patch_adjacency(scene: &Scene) -> Vec<Vec<u32>> {
+    let n = scene.patches.len();
+    let mut adj: Vec<Vec<u32>> = vec![Vec::new(); n];
+    if let Some(s) = scene.sphere {
+        for b in 0..s.bands {
+            for c in 0..s.sectors {
+                let id = (b * s.sectors + c) as usize;
+                let mut push = |bb: u32, cc: u32| adj[id].push(bb * s.sectors + cc);
+                if b > 0 {
+                    push(b - 1, c);
+                }
+                if b + 1 < s.bands {
+                    push(b + 1, c);
+                }
+                if s.sectors > 1 {
+                    push(b, (c + 1) % s.sectors);
+                    push(b, (c + s.sectors - 1) % s.sectors);
+                }
+            }
+        }
+    } else {
+        // Vertex ids by exact position.
+        let key = |p: glam::DVec3| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+        let mut verts: Vec<([u64; 3], u32)> = Vec::with_capacity(scene.triangles.len() * 3);
+        for (t, tri) in scene.triangles.iter().enumerate() {
+            for (k, p) in tri.iter().enumerate() {
+                verts.push((key(*p), (3 * t + k) as u32));
+            }
+        }
+        verts.sort_unstable();
+        let mut id = vec![0u32; verts.len()];
+        let mut next = 0u32;
+        for (i, (k, slot)) in verts.iter().enumerate() {
+            if i > 0 && verts[i - 1].0 != *k {
+                next += 1;
+            }
+            id[*slot as usize] = next;
+        }
+        // Edges (low id, high id, patch), grouped.
+        let mut edges: Vec<(u32, u32, u32)> = Vec::with_capacity(scene.triangles.len() * 3);
+        for (t, &p) in scene.triangle_patch.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (id[3 * t + k], id[3 * t + (k + 1) % 3]);
+                edges.push((a.min(b), a.max(b), p));
+            }
+        }
+        edges.sort_unstable();
+        for group in edges.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)) {
+            for x in group {
+                for y in group {
+                    if x.2 != y.2 {
+                        adj[x.2 as usize].push(y.2);
+                    }
+                }
+            }
+        }
+    }
+    for a in &mut adj {
+        a.sort_unstable();
+        a.dedup();
+    }
+    adj
+}
+
+/// The reversed channel `p(V|o)` as compressed columns: for each output,
+/// the rows that see it (increasing) and `p(v|o) = p(v) p(o|v) / p(o)`.
+fn reversed_columns(an: &ViewpointAnalysis) -> (Vec<usize>, Vec<u32>, Vec<f64>) {
+    let m = an.outputs();
+    let mut starts = vec![0usize; m + 1];
+    for x in 0..an.rows() {
+        for &o in an.row(x).0 {
+            starts[o as usize + 1] += 1;
+        }
+    }
+    for o in 0..m {
+        starts[o + 1] += starts[o];
+    }
+    let mut fill = starts.clone();
+    let nnz = starts[m];
+    let (mut rows, mut vals) = (vec![0u32; nnz], vec![0.0; nnz]);
+    for x in 0..an.rows() {
+        let (cols, p) = an.row(x);
+        for (&o, &q) in cols.iter().zip(p) {
+            let k = &mut fill[o as usize];
+            rows[*k] = x as u32;
+            vals[*k] = an.p_v[x] * q / an.p_o[o as usize];
+            *k += 1;
+        }
+    }
+    // Renormalise each column against rounding (Σ_v p(v|o) = 1 exactly in maths).
+    for o in 0..m {
+        let col = &mut vals[starts[o]..starts[o + 1]];
+        let s: f64 = col.iter().sum();
+        if s > 0.0 {
+            col.iter_mut().for_each(|v| *v /= s);
+        }
+    }
+    (starts, rows, vals)
+}
+
+/// Mesh saliency `S(o)` of every patch; patches never seen (or with no seen
+/// neighbour) get 0.
+///
+/// # Errors
+/// Core errors (none in practice).
+///
+/// # Panics
+/// If `adjacency` does not have one list per patch.
+pub fn mesh_saliency(an: &ViewpointAnalysis, adjacency: &[Vec<u32>], base: Base) -> Result<Vec<f64>, Error> {
+    assert_eq!(adjacency.len(), an.patches, "one adjacency list per patch");
+    let (starts, rows, vals) = reversed_columns(an);
+    let col = |o: usize| (&rows[starts[o]..starts[o + 1]], &vals[starts[o]..starts[o + 1]]);
+    (0..an.patches)
+        .into_par_iter()
+        .map(|o| {
+            let po = an.p_o[o];
+            if po == 0.0 {
+                return Ok(0.0);
+            }
+            let (mut sum, mut k) = (0.0, 0usize);
+            for &n in &adjacency[o] {
+                let pn = an.p_o[n as usize];
+                if pn > 0.0 {
+                    let t = po + pn;
+                    sum += jensen_shannon_sparse((po / t, pn / t), col(o), col(n as usize), base)?;
+                    k += 1;
+                }
+            }
+            Ok(if k == 0 { 0.0 } else { sum / k as f64 })
+        })
+        .collect()
+}
+
+/// Viewpoint saliency `S(v) = Σ_o p(o|v) S(o)` over all viewpoints (0 for
+/// those that see nothing; the background has no saliency).
+#[must_use]
+pub fn viewpoint_saliency(an: &ViewpointAnalysis, saliency: &[f64]) -> Vec<f64> {
+    let rows: Vec<f64> = (0..an.rows())
+        .map(|x| {
+            let (c, p) = an.row(x);
+            c.iter().zip(p).filter(|(o, _)| (**o as usize) < an.patches).map(|(&o, &q)| q * saliency[o as usize]).sum()
+        })
+        .collect();
+    an.expand(&rows, 0.0)
+}
+
+/// Averages each patch's value with its neighbours' `rounds` times (for
+/// display: sampled per-polygon fields are noisy where polygons are small
+/// next to the ray spacing). Non-finite values are left out of averages.
+#[must_use]
+pub fn smooth(values: &[f64], adjacency: &[Vec<u32>], rounds: u32) -> Vec<f64> {
+    let mut cur = values.to_vec();
+    for _ in 0..rounds {
+        cur = (0..cur.len())
+            .into_par_iter()
+            .map(|o| {
+                let (mut s, mut k) = (0.0, 0.0);
+                for &x in std::iter::once(&(o as u32)).chain(&adjacency[o]) {
+                    let v = cur[x as usize];
+                    if v.is_finite() {
+                        s += v;
+                        k += 1.0;
+                    }
+                }
+                if k > 0.0 { s / k } else { cur[o] }
+            })
+            .collect();
+    }
+    cur
+}

@@ -1,0 +1,232 @@
+//! Choosing views from the viewpoint channel (Part V): best-n views,
+//! a guided exploration path and importance-driven selection.
+//!
+//! Merging a set of views `S` gives the view `p(O|v̂) = Σ_{v∈S} p(v) p(O|v) / Σ_{v∈S} p(v)`;
+//! its VMI `I(v̂;O) = D_KL(p(O|v̂) ‖ p(O))` (eq. (7)) is 0 when the merged
+//! views show the object as all viewpoints together do. Both the best-n
+//! greedy selection and the exploration path add, at each step, the view that
+//! brings `I(v̂;O)` lowest.
+
+use itgfx_core::{Base, Error};
+use rayon::prelude::*;
+
+use super::ViewpointAnalysis;
+
+/// A merged view kept densely over the outputs, with `A = Σ_o m_o ln(m_o/p(o))`
+/// for `m = Σ_{v∈S} p(v) p(O|v)`, so the VMI of adding one more view costs
+/// the length of that view's row.
+struct Merged<'a> {
+    an: &'a ViewpointAnalysis,
+    m: Vec<f64>,
+    w: f64,
+    a: f64,
+}
+
+impl<'a> Merged<'a> {
+    fn new(an: &'a ViewpointAnalysis) -> Self {
+        Self { an, m: vec![0.0; an.outputs()], w: 0.0, a: 0.0 }
+    }
+
+    fn term(m: f64, q: f64) -> f64 {
+        if m > 0.0 { m * (m / q).ln() } else { 0.0 }
+    }
+
+    /// `I(v̂;O)` in nats of the merged view with row `x` added.
+    fn kl_with(&self, x: usize) -> f64 {
+        let (cols, p) = self.an.row(x);
+        let pv = self.an.p_v[x];
+        let w2 = self.w + pv;
+        let (mut a_out, mut m_out, mut inside) = (self.a, self.w, 0.0);
+        for (&o, &q) in cols.iter().zip(p) {
+            let (mo, po) = (self.m[o as usize], self.an.p_o[o as usize]);
+            a_out -= Self::term(mo, po);
+            m_out -= mo;
+            let mn = (mo + pv * q) / w2;
+            inside += Self::term(mn, po);
+        }
+        ((a_out - m_out * w2.ln()) / w2 + inside).max(0.0)
+    }
+
+    fn add(&mut self, x: usize) {
+        let (cols, p) = self.an.row(x);
+        let pv = self.an.p_v[x];
+        for (&o, &q) in cols.iter().zip(p) {
+            self.m[o as usize] += pv * q;
+        }
+        self.w += pv;
+        // Recomputed in full: no drift from incremental updates.
+        self.a = self.m.iter().zip(&self.an.p_o).map(|(&m, &q)| Self::term(m, q)).sum();
+    }
+
+    fn kl(&self) -> f64 {
+        ((self.a - self.w * self.w.ln()) / self.w).max(0.0)
+    }
+
+    /// The candidate row with the lowest merged VMI (ties: lowest index).
+    fn best_of(&self, candidates: &[usize]) -> Option<usize> {
+        candidates
+            .par_iter()
+            .map(|&x| (self.kl_with(x), x))
+            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
+            .map(|(_, x)| x)
+    }
+}
+
+/// Best-n views, greedily.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BestViews {
+    /// Selected viewpoints (indices into the sampled channel), best first.
+    pub views: Vec<usize>,
+    /// `I(v̂;O)` of the merged selection after each addition.
+    pub merged_information: Vec<f64>,
+    /// `I(V̂;O)/I(V;O)` after each addition, where `V̂` clusters every
+    /// viewpoint with the selected view it is least dissimilar to
+    /// (Jensen–Shannon, Part II eq. (17)).
+    pub captured: Vec<f64>,
+}
+
+/// Greedy best-n views: start from the minimum-VMI view; add the view that
+/// makes the merged view closest to `p(O)` until the clustering by the
+/// selected views captures `fraction` of `I(V;O)` or `max_views` are chosen.
+///
+/// # Errors
+/// Core errors (none in practice).
+pub fn best_views(an: &ViewpointAnalysis, fraction: f64, max_views: usize, base: Base) -> Result<BestViews, Error> {
+    let n = an.rows();
+    let ch = an.channel()?;
+    let total = ch.measures(&an.p_o, Base::Nats)?.mutual_information;
+    let mut vmi = vec![0.0; n];
+    ch.specific_information_into(&an.p_o, Base::Nats, &mut vmi)?;
+    let first = (0..n).min_by(|&a, &b| vmi[a].total_cmp(&vmi[b]).then(a.cmp(&b))).unwrap_or(0);
+    let mut merged = Merged::new(an);
+    let mut chosen = vec![false; n];
+    let mut nearest = vec![(f64::INFINITY, 0usize); n];
+    let mut out = BestViews { views: Vec::new(), merged_information: Vec::new(), captured: Vec::new() };
+    let mut next = Some(first);
+    while let Some(s) = next {
+        merged.add(s);
+        chosen[s] = true;
+        let d: Vec<f64> =
+            (0..n).into_par_iter().map(|x| an.dissimilarity(x, s, Base::Nats)).collect::<Result<_, _>>()?;
+        for (x, dx) in d.into_iter().enumerate() {
+            if dx < nearest[x].0 || x == s {
+                nearest[x] = (if x == s { 0.0 } else { dx }, s);
+            }
+        }
+        let captured = if total > 0.0 { clustered_information(an, &nearest) / total } else { 1.0 };
+        out.views.push(an.seen[s]);
+        out.merged_information.push(merged.kl() * base.per_nat());
+        out.captured.push(captured);
+        if captured >= fraction || out.views.len() >= max_views.min(n) {
+            break;
+        }
+        let candidates: Vec<usize> = (0..n).filter(|&x| !chosen[x]).collect();
+        next = merged.best_of(&candidates);
+    }
+    Ok(out)
+}
+
+/// `I(V̂;O)` in nats for the clustering of rows given by `nearest[x].1`.
+fn clustered_information(an: &ViewpointAnalysis, nearest: &[(f64, usize)]) -> f64 {
+    let mut clusters: Vec<(usize, usize)> = nearest.iter().enumerate().map(|(x, &(_, c))| (c, x)).collect();
+    clusters.sort_unstable();
+    let mut acc = vec![0.0; an.outputs()];
+    let mut touched = Vec::new();
+    let mut total = 0.0;
+    for group in clusters.chunk_by(|a, b| a.0 == b.0) {
+        let mut pc = 0.0;
+        for &(_, x) in group {
+            let (cols, p) = an.row(x);
+            for (&o, &q) in cols.iter().zip(p) {
+                if acc[o as usize] == 0.0 {
+                    touched.push(o as usize);
+                }
+                acc[o as usize] += an.p_v[x] * q;
+            }
+            pc += an.p_v[x];
+        }
+        for &o in &touched {
+            let m = acc[o];
+            if m > 0.0 {
+                total += m * ((m / pc) / an.p_o[o]).ln();
+            }
+            acc[o] = 0.0;
+        }
+        touched.clear();
+    }
+    total.max(0.0)
+}
+
+/// A guided tour over neighbouring viewpoints.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Exploration {
+    /// Viewpoints visited, in order (indices into the sampled channel).
+    pub path: Vec<usize>,
+    /// `I(v̂;O)` of the views visited so far, after each step.
+    pub merged_information: Vec<f64>,
+}
+
+/// Guided exploration: from `start` (a viewpoint that sees the object), move
+/// each step to the unvisited neighbour whose addition brings the merged
+/// view of the path closest to `p(O)`; when every neighbour of the current
+/// view is visited, continue from the latest path view that has an unvisited
+/// neighbour. Stops after `steps` moves or when no unvisited neighbour is left.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] if `start` sees nothing.
+pub fn exploration(
+    an: &ViewpointAnalysis,
+    neighbours: &[Vec<usize>],
+    start: usize,
+    steps: usize,
+    base: Base,
+) -> Result<Exploration, Error> {
+    let first = an.row_of(start).ok_or(Error::InvalidParameter { name: "start", value: start as f64 })?;
+    let mut merged = Merged::new(an);
+    let mut visited = vec![false; an.rows()];
+    merged.add(first);
+    visited[first] = true;
+    let mut out = Exploration { path: vec![start], merged_information: vec![merged.kl() * base.per_nat()] };
+    for _ in 0..steps {
+        let mut next = None;
+        for &from in out.path.iter().rev() {
+            let cand: Vec<usize> =
+                neighbours[from].iter().filter_map(|&u| an.row_of(u)).filter(|&x| !visited[x]).collect();
+            if let Some(x) = merged.best_of(&cand) {
+                next = Some(x);
+                break;
+            }
+        }
+        let Some(x) = next else { break };
+        merged.add(x);
+        visited[x] = true;
+        out.path.push(an.seen[x]);
+        out.merged_information.push(merged.kl() * base.per_nat());
+    }
+    Ok(out)
+}
+
+/// Importance-driven VMI: `I'(v;O) = D_KL(p(O|v) ‖ p'(O))` with
+/// `p'(o) ∝ p(o) i(o)`, so the best view (minimum) shows each polygon in
+/// proportion to its importance-weighted share; with `i = S(o)` (mesh
+/// saliency) it prefers views of salient parts. Over all viewpoints
+/// (`∞` for those that see nothing). The background, if an output, has importance 1.
+///
+/// # Errors
+/// [`Error::ZeroMass`] if no seen polygon has positive importance;
+/// [`Error::LengthMismatch`] for a wrong `importance` length.
+pub fn importance_information(an: &ViewpointAnalysis, importance: &[f64], base: Base) -> Result<Vec<f64>, Error> {
+    if importance.len() != an.patches {
+        return Err(Error::LengthMismatch { expected: an.patches, found: importance.len() });
+    }
+    let mut target: Vec<f64> =
+        an.p_o.iter().enumerate().map(|(o, p)| p * importance.get(o).copied().unwrap_or(1.0)).collect();
+    let t: f64 = target.iter().sum();
+    if !(t > 0.0) {
+        return Err(Error::ZeroMass);
+    }
+    target.iter_mut().for_each(|x| *x /= t);
+    let mut d = vec![0.0; an.rows()];
+    an.channel()?.specific_information_into(&target, base, &mut d)?;
+    Ok(an.expand(&d, f64::INFINITY))
+}

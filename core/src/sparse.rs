@@ -1,0 +1,301 @@
+//! Sparse channels: `p(y|x)` kept row by row as `(column, value)` lists
+//! (compressed sparse rows), for channels whose dense matrix would not fit,
+//! such as the viewpoint channel of a 10^6-polygon mesh (Part V), where each
+//! viewpoint sees a small fraction of the polygons.
+//!
+//! Every measure equals the one [`crate::Channel`] computes on the same
+//! matrix stored densely (zeros contribute `0 · log 0 = 0`); the property
+//! tests check this.
+
+use crate::math::ln;
+use crate::scan::{check_normalized, entropy_nats, mass, mass_xlnx, same_len};
+use crate::sum::Neumaier;
+use crate::{Base, ChannelMeasures, Error, Real};
+
+/// A borrowed sparse channel `X → Y`.
+///
+/// Row `x` holds the columns `cols[starts[x]..starts[x + 1]]` (strictly
+/// increasing, below `outputs`) with their probabilities `p(y|x)` in
+/// `values` at the same positions.
+///
+/// # Examples
+/// ```
+/// use itgfx_core::{Base, SparseChannel};
+/// // Two inputs that each see half of four outputs.
+/// let ch = SparseChannel::new(&[0.5f64, 0.5], &[0, 2, 4], &[0, 1, 2, 3], &[0.5, 0.5, 0.5, 0.5], 4).unwrap();
+/// let mut p_y = [0.0; 4];
+/// ch.output_into(&mut p_y).unwrap();
+/// assert_eq!(p_y, [0.25; 4]);
+/// let m = ch.measures(&p_y, Base::Bits).unwrap();
+/// assert!((m.mutual_information - 1.0).abs() < 1e-15);
+/// ```
+#[derive(Clone, Copy, Debug)]
+pub struct SparseChannel<'a, T> {
+    input: &'a [T],
+    starts: &'a [usize],
+    cols: &'a [u32],
+    values: &'a [T],
+    outputs: usize,
+}
+
+impl<'a, T: Real> SparseChannel<'a, T> {
+    /// Validates the input distribution, the row structure and every row's
+    /// normalisation.
+    ///
+    /// # Errors
+    /// [`Error::Empty`]; [`Error::LengthMismatch`] when `starts` does not
+    /// have `inputs + 1` entries or `cols` and `values` differ in length or
+    /// from `starts`' last entry; [`Error::InvalidParameter`] named
+    /// `"starts"` for decreasing offsets and `"cols"` (with the position as
+    /// value) for a column out of range or out of order; element errors for
+    /// `values`; [`Error::RowNotNormalized`].
+    pub fn new(
+        input: &'a [T],
+        starts: &'a [usize],
+        cols: &'a [u32],
+        values: &'a [T],
+        outputs: usize,
+    ) -> Result<Self, Error> {
+        if input.is_empty() || outputs == 0 {
+            return Err(Error::Empty);
+        }
+        check_normalized::<T>(mass(input)?)?;
+        if starts.len() != input.len() + 1 {
+            return Err(Error::LengthMismatch { expected: input.len() + 1, found: starts.len() });
+        }
+        if cols.len() != values.len() {
+            return Err(Error::LengthMismatch { expected: cols.len(), found: values.len() });
+        }
+        let last = starts[starts.len() - 1];
+        if starts[0] != 0 || last != cols.len() {
+            return Err(Error::LengthMismatch { expected: cols.len(), found: last });
+        }
+        mass(values)?;
+        for (row, w) in starts.windows(2).enumerate() {
+            if w[1] < w[0] {
+                return Err(Error::InvalidParameter { name: "starts", value: row as f64 });
+            }
+            let c = &cols[w[0]..w[1]];
+            for (k, &j) in c.iter().enumerate() {
+                if j as usize >= outputs || (k > 0 && c[k - 1] >= j) {
+                    return Err(Error::InvalidParameter { name: "cols", value: (w[0] + k) as f64 });
+                }
+            }
+            let s = mass(&values[w[0]..w[1]])?;
+            if check_normalized::<T>(s).is_err() {
+                return Err(Error::RowNotNormalized { row, sum: s });
+            }
+        }
+        Ok(Self { input, starts, cols, values, outputs })
+    }
+
+    /// `|X|`.
+    #[must_use]
+    pub fn inputs(&self) -> usize {
+        self.input.len()
+    }
+
+    /// `|Y|`.
+    #[must_use]
+    pub fn outputs(&self) -> usize {
+        self.outputs
+    }
+
+    /// Stored entries.
+    #[must_use]
+    pub fn nonzeros(&self) -> usize {
+        self.cols.len()
+    }
+
+    /// `p(x)`.
+    #[must_use]
+    pub fn input(&self) -> &'a [T] {
+        self.input
+    }
+
+    /// Row `x`: its columns and `p(y|x)`.
+    ///
+    /// # Panics
+    /// If `x >= inputs()`.
+    #[must_use]
+    pub fn row(&self, x: usize) -> (&'a [u32], &'a [T]) {
+        let (a, b) = (self.starts[x], self.starts[x + 1]);
+        (&self.cols[a..b], &self.values[a..b])
+    }
+
+    /// The output marginal `p(y) = Σ_x p(x) p(y|x)` (Part II §2).
+    ///
+    /// # Errors
+    /// [`Error::LengthMismatch`] if `out.len() != outputs()`.
+    pub fn output_into(&self, out: &mut [T]) -> Result<(), Error> {
+        same_len(self.outputs, out.len())?;
+        out.iter_mut().for_each(|o| *o = T::from_f64(0.0));
+        for (x, px) in self.input.iter().enumerate() {
+            let px = px.to_f64();
+            let (c, v) = self.row(x);
+            for (&j, p) in c.iter().zip(v) {
+                let o = &mut out[j as usize];
+                *o = T::from_f64(o.to_f64() + px * p.to_f64());
+            }
+        }
+        Ok(())
+    }
+
+    /// `H(Y|x)` of each row (Part V eq. (2) for a viewpoint).
+    ///
+    /// # Errors
+    /// [`Error::LengthMismatch`] if `out.len() != inputs()`.
+    pub fn row_entropies_into(&self, base: Base, out: &mut [T]) -> Result<(), Error> {
+        same_len(self.inputs(), out.len())?;
+        for (x, o) in out.iter_mut().enumerate() {
+            let m = mass_xlnx(self.row(x).1)?;
+            *o = T::from_f64(entropy_nats(m) * base.per_nat());
+        }
+        Ok(())
+    }
+
+    /// Specific information `I(x;Y) = D_KL(p(Y|x) ‖ p(Y))` of each input
+    /// (Part V eq. (7)); `output` is from [`SparseChannel::output_into`].
+    ///
+    /// # Errors
+    /// [`Error::LengthMismatch`] for wrong buffer lengths.
+    pub fn specific_information_into(&self, output: &[T], base: Base, out: &mut [T]) -> Result<(), Error> {
+        same_len(self.outputs, output.len())?;
+        same_len(self.inputs(), out.len())?;
+        for (x, o) in out.iter_mut().enumerate() {
+            let (c, v) = self.row(x);
+            let mut acc = Neumaier::new();
+            for (&j, p) in c.iter().zip(v) {
+                let (p, q) = (p.to_f64(), output[j as usize].to_f64());
+                if p > 0.0 {
+                    acc.add(if q > 0.0 { p * (ln(p) - ln(q)) } else { f64::INFINITY });
+                }
+            }
+            let d = acc.value();
+            *o = T::from_f64(if d < 0.0 { 0.0 } else { d * base.per_nat() });
+        }
+        Ok(())
+    }
+
+    /// Specific information of each output, `I(y;X) = D_KL(p(X|y) ‖ p(X))`,
+    /// without forming the reversed channel: by Bayes,
+    /// `I(y;X) = (1/p(y)) Σ_x p(x) p(y|x) ln(p(y|x)/p(y))` (the polygonal
+    /// mutual information of Part V). Outputs with `p(y) = 0` get 0.
+    ///
+    /// # Errors
+    /// [`Error::LengthMismatch`] for wrong buffer lengths.
+    pub fn output_specific_information_into(&self, output: &[T], base: Base, out: &mut [T]) -> Result<(), Error> {
+        same_len(self.outputs, output.len())?;
+        same_len(self.outputs, out.len())?;
+        out.iter_mut().for_each(|o| *o = T::from_f64(0.0));
+        for (x, px) in self.input.iter().enumerate() {
+            let px = px.to_f64();
+            let (c, v) = self.row(x);
+            for (&j, p) in c.iter().zip(v) {
+                let (p, q) = (p.to_f64(), output[j as usize].to_f64());
+                if p > 0.0 && q > 0.0 {
+                    let o = &mut out[j as usize];
+                    *o = T::from_f64(o.to_f64() + px * p * (ln(p) - ln(q)));
+                }
+            }
+        }
+        for (o, q) in out.iter_mut().zip(output) {
+            let q = q.to_f64();
+            let d = if q > 0.0 { o.to_f64() / q } else { 0.0 };
+            *o = T::from_f64(if d < 0.0 { 0.0 } else { d * base.per_nat() });
+        }
+        Ok(())
+    }
+
+    /// Every entropy of the channel, with `I(X;Y) = Σ_x p(x) I(x;Y)`
+    /// (Part V eq. (6)) and `H(Y|X) = Σ_x p(x) H(Y|x)` (eq. (5)).
+    ///
+    /// # Errors
+    /// [`Error::LengthMismatch`] if `output.len() != outputs()`; `output`
+    /// must be a distribution.
+    pub fn measures(&self, output: &[T], base: Base) -> Result<ChannelMeasures, Error> {
+        same_len(self.outputs, output.len())?;
+        let h_y = entropy_nats(mass_xlnx(output)?);
+        let h_x = entropy_nats(mass_xlnx(self.input)?);
+        let (mut mi, mut hyx) = (Neumaier::new(), Neumaier::new());
+        for (x, px) in self.input.iter().enumerate() {
+            let px = px.to_f64();
+            if px == 0.0 {
+                continue;
+            }
+            let (c, v) = self.row(x);
+            for (&j, p) in c.iter().zip(v) {
+                let (p, q) = (p.to_f64(), output[j as usize].to_f64());
+                if p > 0.0 {
+                    hyx.add(-px * p * ln(p));
+                    mi.add(if q > 0.0 { px * p * (ln(p) - ln(q)) } else { f64::INFINITY });
+                }
+            }
+        }
+        let k = base.per_nat();
+        let (mi, hyx) = (mi.value().max(0.0), hyx.value().max(0.0));
+        Ok(ChannelMeasures {
+            h_x: h_x * k,
+            h_y: h_y * k,
+            h_y_given_x: hyx * k,
+            h_x_given_y: (h_x - mi).max(0.0) * k,
+            h_xy: (h_x + hyx) * k,
+            mutual_information: mi * k,
+        })
+    }
+}
+
+/// Jensen–Shannon divergence of two sparse distributions with weights
+/// `(π_a, π_b)` (Part II eq. (17)): `Σ π_i D_KL(p_i ‖ π_a p_a + π_b p_b)`.
+/// Each is given by strictly increasing indices and values summing to 1;
+/// indices present in one only count against a mixture that is `π_i p_i`.
+///
+/// # Errors
+/// [`Error::LengthMismatch`], element errors, [`Error::NotNormalized`] for the
+/// weights or either distribution, and [`Error::InvalidParameter`] named
+/// `"index"` for indices out of order.
+pub fn jensen_shannon_sparse<T: Real>(
+    weights: (T, T),
+    a: (&[u32], &[T]),
+    b: (&[u32], &[T]),
+    base: Base,
+) -> Result<T, Error> {
+    let (wa, wb) = (weights.0.to_f64(), weights.1.to_f64());
+    check_normalized::<T>(mass(&[weights.0, weights.1])?)?;
+    for (idx, val) in [a, b] {
+        if idx.len() != val.len() {
+            return Err(Error::LengthMismatch { expected: idx.len(), found: val.len() });
+        }
+        if let Some(k) = idx.windows(2).position(|w| w[0] >= w[1]) {
+            return Err(Error::InvalidParameter { name: "index", value: (k + 1) as f64 });
+        }
+        check_normalized::<T>(mass(val)?)?;
+    }
+    // Σ_i π_i p_i ln(p_i / m) over the merged support.
+    let term = |w: f64, p: f64, m: f64| if w > 0.0 && p > 0.0 { w * p * (ln(p) - ln(m)) } else { 0.0 };
+    let (mut i, mut j) = (0, 0);
+    let mut acc = Neumaier::new();
+    while i < a.0.len() || j < b.0.len() {
+        let ia = a.0.get(i).copied().unwrap_or(u32::MAX);
+        let ib = b.0.get(j).copied().unwrap_or(u32::MAX);
+        let (pa, pb) = match (ia.cmp(&ib), i < a.0.len(), j < b.0.len()) {
+            (core::cmp::Ordering::Less, true, _) | (_, true, false) => {
+                i += 1;
+                (a.1[i - 1].to_f64(), 0.0)
+            }
+            (core::cmp::Ordering::Greater, _, true) | (_, false, true) => {
+                j += 1;
+                (0.0, b.1[j - 1].to_f64())
+            }
+            _ => {
+                i += 1;
+                j += 1;
+                (a.1[i - 1].to_f64(), b.1[j - 1].to_f64())
+            }
+        };
+        let m = wa * pa + wb * pb;
+        acc.add(term(wa, pa, m) + term(wb, pb, m));
+    }
+    let d = acc.value();
+    Ok(T::from_f64(if d < 0.0 { 0.0 } else { d * base.per_nat() }))
+}

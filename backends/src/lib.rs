@@ -10,6 +10,7 @@
 //! * [`meshes`]: built-in objects seen from outside (geodesic sphere, torus,
 //!   table with chairs).
 //! * [`viewpoint`]: the viewpoint channel of Part V.
+//! * [`vulkan`]: the Vulkan compute backend (ash + naga), tracing and reductions.
 //! * [`visibility`]: the scene visibility channel of Part III, with
 //!   jackknife standard errors.
 
@@ -21,3 +22,4 @@ pub mod solids;
 pub mod tracer;
 pub mod viewpoint;
 pub mod visibility;
+pub mod vulkan;

@@ -51,7 +51,7 @@ impl CrossingBuffer {
         &self.crossings[self.offsets[i] as usize..self.offsets[i + 1] as usize]
     }
 
-    fn clear(&mut self) {
+    pub(crate) fn clear(&mut self) {
         self.offsets.clear();
         self.crossings.clear();
         self.offsets.push(0);
@@ -131,15 +131,12 @@ impl BackendChoice {
 /// Opens a backend on a prepared scene.
 ///
 /// # Errors
-/// [`BackendError::Unavailable`] for Vulkan in this build.
+/// [`BackendError::Unavailable`] when Vulkan has no loader, driver or device.
 pub fn open(choice: BackendChoice, scene: &Prepared) -> Result<Box<dyn Tracer>, BackendError> {
     match choice {
         BackendChoice::Cpu => Ok(Box::new(CpuTracer::new(scene))),
         BackendChoice::Reference => Ok(Box::new(ReferenceTracer { scene: scene.clone() })),
-        BackendChoice::Vulkan => Err(BackendError::Unavailable {
-            backend: "vulkan",
-            reason: "not in this build yet (the Vulkan backend is issue 4); use --backend cpu".into(),
-        }),
+        BackendChoice::Vulkan => Ok(Box::new(crate::vulkan::tracer::VulkanTracer::new(scene)?)),
     }
 }
 
@@ -191,14 +188,14 @@ impl Prepared {
 }
 
 /// Per-ray constants of the watertight test (Woop, Benthin, Wald 2013).
-struct Shear {
+pub(crate) struct Shear {
     org: Vec3A,
-    k: [usize; 3],
-    s: [f32; 3],
+    pub(crate) k: [usize; 3],
+    pub(crate) s: [f32; 3],
 }
 
 impl Shear {
-    fn new(org: Vec3A, dir: Vec3A) -> Self {
+    pub(crate) fn new(org: Vec3A, dir: Vec3A) -> Self {
         let a = dir.abs();
         let kz = if a.x > a.y {
             if a.x > a.z { 0 } else { 2 }
@@ -249,7 +246,14 @@ impl Shear {
 
 /// Records the crossing of line `l` with triangle `tri`, if any, within `[tmin, tmax]`.
 #[inline]
-fn test_triangle(scene: &Prepared, shear: &Shear, l: &Line, dir: Vec3A, tri: usize, hits: &mut Vec<Crossing>) {
+pub(crate) fn test_triangle(
+    scene: &Prepared,
+    shear: &Shear,
+    l: &Line,
+    dir: Vec3A,
+    tri: usize,
+    hits: &mut Vec<Crossing>,
+) {
     if let Some(t) = shear.hit(&scene.triangles[tri]) {
         if t >= l.tmin && t <= l.tmax {
             let cos = scene.normals[tri].dot(dir);
@@ -259,7 +263,7 @@ fn test_triangle(scene: &Prepared, shear: &Shear, l: &Line, dir: Vec3A, tri: usi
 }
 
 /// Sorts and merges coincident crossings, appending them to `out`.
-fn finish(hits: &mut Vec<Crossing>, out: &mut CrossingBuffer) {
+pub(crate) fn finish(hits: &mut Vec<Crossing>, out: &mut CrossingBuffer) {
     hits.sort_unstable_by(|a, b| a.t.total_cmp(&b.t).then(a.primitive.cmp(&b.primitive)));
     // Crossings chained less than 1e-6 apart and facing the same way are one
     // crossing of the surface (through an edge or vertex shared by several
@@ -277,7 +281,7 @@ fn finish(hits: &mut Vec<Crossing>, out: &mut CrossingBuffer) {
     out.offsets.push(out.crossings.len() as u32);
 }
 
-fn sphere_crossings(s: &SphereCells, l: &Line, hits: &mut Vec<Crossing>) {
+pub(crate) fn sphere_crossings(s: &SphereCells, l: &Line, hits: &mut Vec<Crossing>) {
     let o = DVec3::from(l.origin.map(f64::from));
     let d = DVec3::from(l.direction.map(f64::from));
     let b = o.dot(d);

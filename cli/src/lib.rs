@@ -3,6 +3,7 @@
 
 pub mod args;
 pub mod complexity;
+pub mod devices;
 pub mod export;
 pub mod input;
 pub mod measure;

@@ -5,7 +5,7 @@ use std::io::Write;
 use std::process::ExitCode;
 
 use itgfx_cli::args::Args;
-use itgfx_cli::{CliError, complexity, measure, viewpoints};
+use itgfx_cli::{CliError, complexity, devices, measure, viewpoints};
 
 const USAGE: &str = "itgfx — information theory for computer graphics
 
@@ -13,6 +13,7 @@ Usage:
   itgfx complexity SCENE [OPTIONS]  scene visibility channel: H_P, H_S, I_S, I_S^c (itgfx complexity --help)
   itgfx measure NAME [OPTIONS]   evaluate an information measure (itgfx measure --help)
   itgfx viewpoints MESH [OPTIONS]   viewpoint channel: VE, VMI, best views (itgfx viewpoints --help)
+  itgfx devices                  Vulkan devices found, and the one --backend vulkan uses
   itgfx --version
 
 Every command accepts --json (one JSON object on stdout) and --base 2|e|10.
@@ -41,7 +42,7 @@ Pictures (PNG renders, PLY with vertex colours; all written atomically):
   --smooth K         pictures average each polygon with its neighbours K times (default 2);
                      JSON values are never smoothed
 Output: --json, --per-polygon (I(o;V), saliency and p(o) per polygon), --base 2|e|10,
-        --backend cpu|reference";
+        --backend cpu|vulkan|reference";
 
 fn complexity_help() -> String {
     let mut s = String::from(
@@ -120,6 +121,13 @@ fn run(mut words: Vec<OsString>) -> Result<Option<String>, CliError> {
             }
             let json = args.flag("json");
             let report = viewpoints::run(&args)?;
+            args.finish()?;
+            Ok(Some(render(&report, json)))
+        }
+        "devices" => {
+            let args = Args::parse(words)?;
+            let json = args.flag("json");
+            let report = devices::run()?;
             args.finish()?;
             Ok(Some(render(&report, json)))
         }

@@ -111,7 +111,6 @@ fn bad_scene_files() {
         (&["complexity", "cube-enclosure:0"][..], "N must be an integer"),
         (&["complexity", "cube", "--lines", "0"][..], "--lines must be positive"),
         (&["complexity", "cube", "--backend", "gpu"][..], "unknown backend"),
-        (&["complexity", "cube", "--backend", "vulkan"][..], "vulkan"),
         (&["complexity"][..], "give a scene"),
     ] {
         let out = itgfx(args);

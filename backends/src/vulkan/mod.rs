@@ -1,0 +1,515 @@
+//! The Vulkan compute backend (ash, loaded at run time): device discovery,
+//! one compute queue, host-visible buffers and WGSL kernels compiled to
+//! SPIR-V at build time by naga (`build.rs`).
+//!
+//! `libvulkan.so.1` is opened when a Vulkan path is first used, so the binary
+//! starts without it; its absence, a loader without a driver and a driver
+//! without a device all become [`BackendError::Unavailable`] with the fix.
+//! `ITGFX_VULKAN_LIBRARY` names another loader (tests hide the real one with it).
+//!
+//! * [`tracer`]: [`tracer::VulkanTracer`], the tracing seam on the GPU.
+//! * [`reduce`]: entropy of large weight arrays with f64 accumulation.
+
+pub mod reduce;
+pub mod tracer;
+
+use std::ffi::CStr;
+use std::sync::Mutex;
+
+use ash::vk;
+
+use crate::tracer::BackendError;
+
+/// What `itgfx devices` prints for one physical device.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DeviceInfo {
+    /// `deviceName`.
+    pub name: String,
+    /// discrete, integrated, virtual, cpu or other.
+    pub kind: &'static str,
+    /// Vulkan API version, `major.minor.patch`.
+    pub api_version: String,
+    /// Largest storage buffer binding, bytes.
+    pub max_storage_buffer_range: u32,
+    /// Invocations per workgroup.
+    pub max_workgroup_invocations: u32,
+    /// Shared memory per workgroup, bytes.
+    pub max_shared_memory: u32,
+    /// 64-bit floats in shaders (needed: f64 accumulation and the exact edge test).
+    pub float64: bool,
+    /// Size of the largest device-local heap, bytes.
+    pub heap_bytes: u64,
+}
+
+const FIX: &str = "install Mesa's Vulkan drivers (apt-get install mesa-vulkan-drivers libvulkan1) or a GPU driver, or use --backend cpu";
+
+fn unavailable(reason: impl Into<String>) -> BackendError {
+    BackendError::Unavailable { backend: "vulkan", reason: reason.into() }
+}
+
+fn vk_err(what: &str, e: vk::Result) -> BackendError {
+    match e {
+        vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => BackendError::OutOfMemory,
+        vk::Result::ERROR_DEVICE_LOST => BackendError::DeviceLost,
+        other => unavailable(format!("{what} failed: {other}")),
+    }
+}
+
+fn load_entry() -> Result<ash::Entry, BackendError> {
+    // SAFETY: loading the Vulkan loader runs its initialisers; it is the
+    // documented way to use ash's `loaded` feature.
+    let entry = match std::env::var_os("ITGFX_VULKAN_LIBRARY") {
+        Some(path) => unsafe { ash::Entry::load_from(path) },
+        None => unsafe { ash::Entry::load() },
+    };
+    entry.map_err(|e| unavailable(format!("no Vulkan loader ({e}); {FIX}")))
+}
+
+fn create_instance(entry: &ash::Entry) -> Result<ash::Instance, BackendError> {
+    let app = vk::ApplicationInfo::default()
+        .application_name(c"itgfx")
+        .engine_name(c"itgfx")
+        .api_version(vk::make_api_version(0, 1, 2, 0));
+    let info = vk::InstanceCreateInfo::default().application_info(&app);
+    // SAFETY: valid create info; the instance is destroyed in `Drop`.
+    unsafe { entry.create_instance(&info, None) }.map_err(|e| match e {
+        vk::Result::ERROR_INCOMPATIBLE_DRIVER => unavailable(format!("a Vulkan loader but no driver; {FIX}")),
+        other => vk_err("vkCreateInstance", other),
+    })
+}
+
+fn physical_devices(instance: &ash::Instance) -> Result<Vec<vk::PhysicalDevice>, BackendError> {
+    // SAFETY: the instance is live.
+    match unsafe { instance.enumerate_physical_devices() } {
+        Ok(d) if !d.is_empty() => Ok(d),
+        // Lavapipe-less driver files give ERROR_INITIALIZATION_FAILED, not an empty list.
+        Ok(_) | Err(vk::Result::ERROR_INITIALIZATION_FAILED) => Err(unavailable(format!("no Vulkan device; {FIX}"))),
+        Err(e) => Err(vk_err("vkEnumeratePhysicalDevices", e)),
+    }
+}
+
+fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice) -> DeviceInfo {
+    // SAFETY: `pd` comes from this instance.
+    let (props, features, mem) = unsafe {
+        (
+            instance.get_physical_device_properties(pd),
+            instance.get_physical_device_features(pd),
+            instance.get_physical_device_memory_properties(pd),
+        )
+    };
+    let name = props.device_name_as_c_str().map_or_else(|_| "?".into(), |c| c.to_string_lossy().into_owned());
+    let kind = match props.device_type {
+        vk::PhysicalDeviceType::DISCRETE_GPU => "discrete",
+        vk::PhysicalDeviceType::INTEGRATED_GPU => "integrated",
+        vk::PhysicalDeviceType::VIRTUAL_GPU => "virtual",
+        vk::PhysicalDeviceType::CPU => "cpu",
+        _ => "other",
+    };
+    let v = props.api_version;
+    let heap_bytes = mem.memory_heaps[..mem.memory_heap_count as usize]
+        .iter()
+        .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+        .map(|h| h.size)
+        .max()
+        .unwrap_or(0);
+    DeviceInfo {
+        name,
+        kind,
+        api_version: format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v)),
+        max_storage_buffer_range: props.limits.max_storage_buffer_range,
+        max_workgroup_invocations: props.limits.max_compute_work_group_invocations,
+        max_shared_memory: props.limits.max_compute_shared_memory_size,
+        float64: features.shader_float64 == vk::TRUE,
+        heap_bytes,
+    }
+}
+
+/// Preference among usable devices: discrete, integrated, virtual, CPU.
+fn rank(kind: &str) -> u32 {
+    match kind {
+        "discrete" => 0,
+        "integrated" => 1,
+        "virtual" => 2,
+        "cpu" => 3,
+        _ => 4,
+    }
+}
+
+/// Every Vulkan device, and the index of the one [`Gpu::open`] would use
+/// (the most capable kind with 64-bit float support and a compute queue).
+///
+/// # Errors
+/// [`BackendError::Unavailable`] with the fix when there is no loader,
+/// driver or device.
+pub fn devices() -> Result<(Vec<DeviceInfo>, Option<usize>), BackendError> {
+    let entry = load_entry()?;
+    let instance = create_instance(&entry)?;
+    let result = physical_devices(&instance).map(|pds| {
+        let infos: Vec<DeviceInfo> = pds.iter().map(|&pd| describe(&instance, pd)).collect();
+        let chosen = choose(&instance, &pds, &infos).map(|(i, _)| i);
+        (infos, chosen)
+    });
+    // SAFETY: nothing created from the instance outlives this call.
+    unsafe { instance.destroy_instance(None) };
+    result
+}
+
+fn choose(instance: &ash::Instance, pds: &[vk::PhysicalDevice], infos: &[DeviceInfo]) -> Option<(usize, u32)> {
+    (0..pds.len())
+        .filter(|&i| infos[i].float64)
+        .filter_map(|i| compute_queue(instance, pds[i]).map(|q| (i, q)))
+        .min_by_key(|&(i, _)| (rank(infos[i].kind), i))
+}
+
+fn compute_queue(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Option<u32> {
+    // SAFETY: `pd` comes from this instance.
+    let fams = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+    fams.iter().position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE)).map(|i| i as u32)
+}
+
+/// An open device with one compute queue; every submission is serialised.
+pub struct Gpu {
+    _entry: ash::Entry,
+    instance: ash::Instance,
+    device: ash::Device,
+    queue: Mutex<vk::Queue>,
+    pool: Mutex<vk::CommandPool>,
+    memory: vk::PhysicalDeviceMemoryProperties,
+    /// The device in use.
+    pub info: DeviceInfo,
+}
+
+impl Gpu {
+    /// Opens the preferred device.
+    ///
+    /// # Errors
+    /// [`BackendError::Unavailable`] with the fix; device errors.
+    pub fn open() -> Result<Self, BackendError> {
+        let entry = load_entry()?;
+        let instance = create_instance(&entry)?;
+        match Self::open_on(entry, &instance) {
+            Ok(g) => Ok(g),
+            Err(e) => {
+                // SAFETY: nothing else holds the instance.
+                unsafe { instance.destroy_instance(None) };
+                Err(e)
+            }
+        }
+    }
+
+    fn open_on(entry: ash::Entry, instance: &ash::Instance) -> Result<Self, BackendError> {
+        let pds = physical_devices(instance)?;
+        let infos: Vec<DeviceInfo> = pds.iter().map(|&pd| describe(instance, pd)).collect();
+        let (i, family) = choose(instance, &pds, &infos)
+            .ok_or_else(|| unavailable(format!("no Vulkan device with 64-bit float shaders and compute; {FIX}")))?;
+        let pd = pds[i];
+        let priorities = [1.0f32];
+        let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
+        let features = vk::PhysicalDeviceFeatures::default().shader_float64(true);
+        let info = vk::DeviceCreateInfo::default().queue_create_infos(&queues).enabled_features(&features);
+        // SAFETY: valid create info for a device of this instance.
+        let device = unsafe { instance.create_device(pd, &info, None) }.map_err(|e| vk_err("vkCreateDevice", e))?;
+        // SAFETY: the family and index exist (created above).
+        let queue = unsafe { device.get_device_queue(family, 0) };
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        // SAFETY: the device is live.
+        let pool = unsafe { device.create_command_pool(&pool_info, None) }.map_err(|e| {
+            unsafe { device.destroy_device(None) };
+            vk_err("vkCreateCommandPool", e)
+        })?;
+        // SAFETY: `pd` comes from this instance.
+        let memory = unsafe { instance.get_physical_device_memory_properties(pd) };
+        Ok(Self {
+            _entry: entry,
+            instance: instance.clone(),
+            device,
+            queue: Mutex::new(queue),
+            pool: Mutex::new(pool),
+            memory,
+            info: infos[i].clone(),
+        })
+    }
+
+    /// A host-visible, coherent storage buffer of `bytes`, mapped.
+    ///
+    /// # Errors
+    /// Allocation failures.
+    pub fn buffer(&self, bytes: u64) -> Result<Buffer, BackendError> {
+        let bytes = bytes.max(16);
+        if bytes > u64::from(self.info.max_storage_buffer_range) {
+            return Err(unavailable(format!(
+                "a {bytes}-byte buffer exceeds the device's {} (chunking bug)",
+                self.info.max_storage_buffer_range
+            )));
+        }
+        let d = &self.device;
+        let info = vk::BufferCreateInfo::default()
+            .size(bytes)
+            .usage(vk::BufferUsageFlags::STORAGE_BUFFER)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: valid create info; freed in `Buffer::drop` (or below on failure).
+        unsafe {
+            let buffer = d.create_buffer(&info, None).map_err(|e| vk_err("vkCreateBuffer", e))?;
+            let req = d.get_buffer_memory_requirements(buffer);
+            let want = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
+            let Some(ty) = (0..self.memory.memory_type_count).find(|&t| {
+                req.memory_type_bits & (1 << t) != 0
+                    && self.memory.memory_types[t as usize].property_flags.contains(want)
+            }) else {
+                d.destroy_buffer(buffer, None);
+                return Err(unavailable("no host-visible coherent memory type"));
+            };
+            let alloc = vk::MemoryAllocateInfo::default().allocation_size(req.size).memory_type_index(ty);
+            let memory = match d.allocate_memory(&alloc, None) {
+                Ok(m) => m,
+                Err(e) => {
+                    d.destroy_buffer(buffer, None);
+                    return Err(vk_err("vkAllocateMemory", e));
+                }
+            };
+            let mapped = d
+                .bind_buffer_memory(buffer, memory, 0)
+                .and_then(|()| d.map_memory(memory, 0, vk::WHOLE_SIZE, vk::MemoryMapFlags::empty()));
+            match mapped {
+                Ok(ptr) => Ok(Buffer { device: d.clone(), buffer, memory, ptr: ptr.cast(), bytes: bytes as usize }),
+                Err(e) => {
+                    d.destroy_buffer(buffer, None);
+                    d.free_memory(memory, None);
+                    Err(vk_err("vkMapMemory", e))
+                }
+            }
+        }
+    }
+
+    /// A compute kernel from SPIR-V with `bindings` storage buffers and
+    /// `push` bytes of push constants.
+    ///
+    /// # Errors
+    /// Pipeline creation failures.
+    pub fn kernel(&self, spirv: &[u8], entry: &CStr, bindings: u32, push: u32) -> Result<Kernel, BackendError> {
+        let d = &self.device;
+        let words: Vec<u32> = spirv.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+        let binding: Vec<vk::DescriptorSetLayoutBinding> = (0..bindings)
+            .map(|b| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            })
+            .collect();
+        // SAFETY: all create infos are valid; objects are destroyed in `Kernel::drop`.
+        unsafe {
+            let module = d
+                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None)
+                .map_err(|e| vk_err("vkCreateShaderModule", e))?;
+            let set_layout = d
+                .create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&binding), None)
+                .map_err(|e| vk_err("vkCreateDescriptorSetLayout", e))?;
+            let ranges = [vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::COMPUTE).size(push)];
+            let layouts = [set_layout];
+            let layout = d
+                .create_pipeline_layout(
+                    &vk::PipelineLayoutCreateInfo::default().set_layouts(&layouts).push_constant_ranges(&ranges),
+                    None,
+                )
+                .map_err(|e| vk_err("vkCreatePipelineLayout", e))?;
+            let stage = vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::COMPUTE)
+                .module(module)
+                .name(entry);
+            let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
+            let pipeline = d
+                .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
+                .map_err(|(_, e)| vk_err("vkCreateComputePipelines", e))?[0];
+            let sizes =
+                [vk::DescriptorPoolSize::default().ty(vk::DescriptorType::STORAGE_BUFFER).descriptor_count(bindings)];
+            let pool = d
+                .create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes), None)
+                .map_err(|e| vk_err("vkCreateDescriptorPool", e))?;
+            let set = d
+                .allocate_descriptor_sets(
+                    &vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&layouts),
+                )
+                .map_err(|e| vk_err("vkAllocateDescriptorSets", e))?[0];
+            Ok(Kernel { device: d.clone(), module, set_layout, layout, pipeline, pool, set, bindings })
+        }
+    }
+
+    /// Records and runs one dispatch of `groups` workgroups and waits for it.
+    ///
+    /// # Errors
+    /// Submission failures.
+    pub fn dispatch(&self, k: &Kernel, buffers: &[&Buffer], push: &[u8], groups: u32) -> Result<(), BackendError> {
+        assert_eq!(buffers.len() as u32, k.bindings, "one buffer per binding");
+        let d = &self.device;
+        let pool = self.pool.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let queue = self.queue.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        // SAFETY: the pool and queue are held exclusively; every handle is live;
+        // the fence wait ends the command buffer's use before it is freed.
+        unsafe {
+            let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
+                .iter()
+                .map(|b| [vk::DescriptorBufferInfo::default().buffer(b.buffer).offset(0).range(vk::WHOLE_SIZE)])
+                .collect();
+            let writes: Vec<vk::WriteDescriptorSet> = infos
+                .iter()
+                .enumerate()
+                .map(|(i, info)| {
+                    vk::WriteDescriptorSet::default()
+                        .dst_set(k.set)
+                        .dst_binding(i as u32)
+                        .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                        .buffer_info(info)
+                })
+                .collect();
+            d.update_descriptor_sets(&writes, &[]);
+            let cb = d
+                .allocate_command_buffers(
+                    &vk::CommandBufferAllocateInfo::default()
+                        .command_pool(*pool)
+                        .level(vk::CommandBufferLevel::PRIMARY)
+                        .command_buffer_count(1),
+                )
+                .map_err(|e| vk_err("vkAllocateCommandBuffers", e))?[0];
+            let fence = d.create_fence(&vk::FenceCreateInfo::default(), None).map_err(|e| vk_err("vkCreateFence", e));
+            let run = fence.and_then(|fence| {
+                let r = (|| {
+                    d.begin_command_buffer(
+                        cb,
+                        &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                    )
+                    .map_err(|e| vk_err("vkBeginCommandBuffer", e))?;
+                    d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, k.pipeline);
+                    d.cmd_bind_descriptor_sets(cb, vk::PipelineBindPoint::COMPUTE, k.layout, 0, &[k.set], &[]);
+                    if !push.is_empty() {
+                        d.cmd_push_constants(cb, k.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
+                    }
+                    d.cmd_dispatch(cb, groups.max(1), 1, 1);
+                    // Make shader writes visible to the host.
+                    let barrier = vk::MemoryBarrier::default()
+                        .src_access_mask(vk::AccessFlags::SHADER_WRITE)
+                        .dst_access_mask(vk::AccessFlags::HOST_READ);
+                    d.cmd_pipeline_barrier(
+                        cb,
+                        vk::PipelineStageFlags::COMPUTE_SHADER,
+                        vk::PipelineStageFlags::HOST,
+                        vk::DependencyFlags::empty(),
+                        &[barrier],
+                        &[],
+                        &[],
+                    );
+                    d.end_command_buffer(cb).map_err(|e| vk_err("vkEndCommandBuffer", e))?;
+                    let cbs = [cb];
+                    let submit = [vk::SubmitInfo::default().command_buffers(&cbs)];
+                    d.queue_submit(*queue, &submit, fence).map_err(|e| vk_err("vkQueueSubmit", e))?;
+                    d.wait_for_fences(&[fence], true, u64::MAX).map_err(|e| vk_err("vkWaitForFences", e))
+                })();
+                d.destroy_fence(fence, None);
+                r
+            });
+            d.free_command_buffers(*pool, &[cb]);
+            run
+        }
+    }
+}
+
+impl Drop for Gpu {
+    fn drop(&mut self) {
+        // SAFETY: owners drop buffers and kernels before the `Gpu` (field order).
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            self.device
+                .destroy_command_pool(*self.pool.get_mut().unwrap_or_else(std::sync::PoisonError::into_inner), None);
+            self.device.destroy_device(None);
+            self.instance.destroy_instance(None);
+        }
+    }
+}
+
+/// A mapped host-visible storage buffer. Drop it before its [`Gpu`].
+pub struct Buffer {
+    device: ash::Device,
+    buffer: vk::Buffer,
+    memory: vk::DeviceMemory,
+    ptr: *mut u8,
+    bytes: usize,
+}
+
+// SAFETY: the mapping is plain memory; access is serialised by `&mut`/`&`
+// and by the GPU's dispatch lock (no dispatch is in flight outside it).
+unsafe impl Send for Buffer {}
+// SAFETY: as above.
+unsafe impl Sync for Buffer {}
+
+impl Buffer {
+    /// The mapped bytes.
+    #[must_use]
+    pub fn bytes(&self) -> &[u8] {
+        // SAFETY: `ptr` maps `bytes` bytes for the buffer's lifetime.
+        unsafe { std::slice::from_raw_parts(self.ptr, self.bytes) }
+    }
+
+    /// The mapped bytes, writable.
+    pub fn bytes_mut(&mut self) -> &mut [u8] {
+        // SAFETY: as `bytes`, with exclusive access through `&mut self`.
+        unsafe { std::slice::from_raw_parts_mut(self.ptr, self.bytes) }
+    }
+
+    /// Copies 32-bit words in at word `offset`.
+    ///
+    /// # Panics
+    /// If they do not fit.
+    pub fn write_words(&mut self, offset: usize, words: &[u32]) {
+        let dst = &mut self.bytes_mut()[4 * offset..4 * (offset + words.len())];
+        for (d, w) in dst.chunks_exact_mut(4).zip(words) {
+            d.copy_from_slice(&w.to_le_bytes());
+        }
+    }
+
+    /// Word `i`.
+    #[must_use]
+    pub fn word(&self, i: usize) -> u32 {
+        let b = &self.bytes()[4 * i..4 * i + 4];
+        u32::from_le_bytes([b[0], b[1], b[2], b[3]])
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        // SAFETY: dispatches wait for completion, so the GPU no longer uses it.
+        unsafe {
+            self.device.unmap_memory(self.memory);
+            self.device.destroy_buffer(self.buffer, None);
+            self.device.free_memory(self.memory, None);
+        }
+    }
+}
+
+/// A compute pipeline with its descriptor set. Drop it before its [`Gpu`].
+pub struct Kernel {
+    device: ash::Device,
+    module: vk::ShaderModule,
+    set_layout: vk::DescriptorSetLayout,
+    layout: vk::PipelineLayout,
+    pipeline: vk::Pipeline,
+    pool: vk::DescriptorPool,
+    set: vk::DescriptorSet,
+    bindings: u32,
+}
+
+impl Drop for Kernel {
+    fn drop(&mut self) {
+        let d = &self.device;
+        // SAFETY: no dispatch is in flight (each waits for its fence).
+        unsafe {
+            d.destroy_descriptor_pool(self.pool, None);
+            d.destroy_pipeline(self.pipeline, None);
+            d.destroy_pipeline_layout(self.layout, None);
+            d.destroy_descriptor_set_layout(self.set_layout, None);
+            d.destroy_shader_module(self.module, None);
+        }
+    }
+}

@@ -69,3 +69,25 @@ fn complexity_matches_the_cpu_backend() {
     let devices = v["devices"].as_array().unwrap();
     assert!(devices.iter().any(|d| d["used"] == "yes"), "{v}");
 }
+
+/// The viewpoint channel traced on Vulkan gives the same JSON as on the CPU.
+#[test]
+fn viewpoints_match_the_cpu_backend() {
+    if !have_vulkan() {
+        return;
+    }
+    let run = |backend: &str| {
+        let out = itgfx(
+            &["viewpoints", "table-chairs", "--viewpoints", "42", "--resolution", "32", "--backend", backend, "--json"],
+            &[],
+        );
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let mut v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let m = v.as_object_mut().unwrap();
+        assert_eq!(m.remove("backend").unwrap(), backend);
+        m.remove("seconds");
+        m.remove("channel_seconds");
+        v
+    };
+    assert_eq!(run("cpu"), run("vulkan"));
+}

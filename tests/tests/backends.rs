@@ -94,7 +94,11 @@ fn cpu_matches_reference_on_every_built_in() {
         "icosahedron",
         "cornell-box",
         "cubes-room:8",
+        "cubes-room:512",
         "sphere:4,8",
+        "geosphere:4",
+        "torus:48,24",
+        "table-chairs",
     ] {
         agrees(&built_in(spec).unwrap(), 3000);
     }

@@ -1,18 +1,17 @@
 //! [`VulkanTracer`]: every crossing of each line, on a Vulkan device.
 //!
-//! The kernel (`shaders/trace.wgsl`) tests each line against every triangle
-//! with the watertight test of the CPU backend, taking the per-line shear
-//! constants from the host, and returns up to [`MAX_HITS`] raw hits per line
-//! (numerator and determinant of `t`, triangle). The host finishes each hit
-//! exactly as the CPU backend does (`t = num / det`, the `[tmin, tmax]` test,
-//! facing, patch, sorting and merging), so the two backends agree wherever
-//! the device's f32 products and sums round as the CPU's do. A line with more
-//! than [`MAX_HITS`] crossings is retraced on the host (counted in
+//! The kernel (`shaders/trace.wgsl`) walks a BVH2 that obvhs builds on the
+//! host over the same padded triangle boxes as the CPU backend's BVH (a
+//! loosened slab test, so it can only add candidates), and tests each
+//! candidate with the CPU backend's watertight test, taking the per-line
+//! shear constants from the host. It returns up to [`MAX_HITS`] raw hits per
+//! line (numerator and determinant of `t`, triangle). The host finishes each
+//! hit exactly as the CPU backend does (`t = num / det`, the `[tmin, tmax]`
+//! test, facing, patch, sorting and merging), so the two backends agree
+//! wherever the device's f32 products and sums round as the CPU's do. A line
+//! with more than [`MAX_HITS`] crossings, or whose traversal overflows the
+//! kernel's 64-entry stack, is retraced by the CPU backend (counted in
 //! [`VulkanTracer::host_retraced`]).
-//!
-//! The kernel is brute force, `O(lines × triangles)`: exact and simple, and
-//! fast on a GPU for scenes of up to a few thousand triangles. A BVH kernel is
-//! the next step for large meshes.
 
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -22,7 +21,7 @@ use glam::{Vec3, Vec3A};
 use super::{Buffer, Gpu, Kernel};
 use crate::lines::Line;
 use crate::tracer::{
-    BackendError, Crossing, CrossingBuffer, Prepared, Shear, Tracer, finish, sphere_crossings, test_triangle,
+    BackendError, CpuTracer, Crossing, CrossingBuffer, Prepared, Shear, Tracer, bvh_input, finish, sphere_crossings,
 };
 
 /// Raw hits kept per line on the device.
@@ -42,8 +41,12 @@ struct Staging {
 pub struct VulkanTracer {
     staging: Mutex<Staging>,
     kernel: Kernel,
+    nodes: Buffer,
     triangles: Buffer,
+    prims: Buffer,
     scene: Prepared,
+    /// Built on first need (a line with too many crossings).
+    fallback: std::sync::OnceLock<CpuTracer>,
     retraced: AtomicU64,
     gpu: Gpu,
 }
@@ -55,15 +58,29 @@ impl VulkanTracer {
     /// [`BackendError::Unavailable`] with the fix when Vulkan is missing.
     pub fn new(scene: &Prepared) -> Result<Self, BackendError> {
         let gpu = Gpu::open()?;
-        let kernel = gpu.kernel(SPIRV, c"trace", 4, 16)?;
-        let n = scene.triangles.len();
-        let mut triangles = gpu.buffer((n * 48) as u64)?;
-        let words: Vec<u32> = scene
-            .triangles
-            .iter()
-            .flat_map(|t| t.iter().flat_map(|v| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits(), 0]))
-            .collect();
-        triangles.write_words(0, &words);
+        let kernel = gpu.kernel(SPIRV, c"trace", 6, 16)?;
+        let (mut node_words, mut tri_words, mut prim_words) = (Vec::new(), Vec::new(), Vec::new());
+        if !scene.triangles.is_empty() {
+            let (aabbs, params) = bvh_input(scene);
+            let bvh = obvhs::bvh2::builder::build_bvh2(&aabbs, params, &mut std::time::Duration::default());
+            for n in &bvh.nodes {
+                let (lo, hi) = (n.aabb.min, n.aabb.max);
+                node_words.extend([lo.x.to_bits(), lo.y.to_bits(), lo.z.to_bits(), n.prim_count]);
+                node_words.extend([hi.x.to_bits(), hi.y.to_bits(), hi.z.to_bits(), n.first_index]);
+            }
+            for &p in &bvh.primitive_indices {
+                for v in &scene.triangles[p as usize] {
+                    tri_words.extend([v.x.to_bits(), v.y.to_bits(), v.z.to_bits(), 0]);
+                }
+                prim_words.push(p);
+            }
+        }
+        let upload = |words: &[u32]| -> Result<Buffer, BackendError> {
+            let mut b = gpu.buffer(4 * words.len() as u64)?;
+            b.write_words(0, words);
+            Ok(b)
+        };
+        let (nodes, triangles, prims) = (upload(&node_words)?, upload(&tri_words)?, upload(&prim_words)?);
         let staging = Staging {
             lines: gpu.buffer((CHUNK * 48) as u64)?,
             counts: gpu.buffer((CHUNK * 4) as u64)?,
@@ -72,8 +89,11 @@ impl VulkanTracer {
         Ok(Self {
             staging: Mutex::new(staging),
             kernel,
+            nodes,
             triangles,
+            prims,
             scene: scene.clone(),
+            fallback: std::sync::OnceLock::new(),
             retraced: AtomicU64::new(0),
             gpu,
         })
@@ -101,25 +121,28 @@ impl VulkanTracer {
             let k = (sh.k[0] | sh.k[1] << 2 | sh.k[2] << 4) as u32;
             words.extend([l.origin[0].to_bits(), l.origin[1].to_bits(), l.origin[2].to_bits(), l.tmin.to_bits()]);
             words.extend([sh.s[0].to_bits(), sh.s[1].to_bits(), sh.s[2].to_bits(), l.tmax.to_bits()]);
-            words.extend([k, 0, 0, 0]);
-            shears.push((sh, dir));
+            // 1/d for the slab test; a zero component gets a large finite
+            // stand-in so that 0 · ∞ never makes a NaN.
+            let inv = |d: f32| if d == 0.0 { 1e30 } else { 1.0 / d };
+            words.extend([k, inv(dir.x).to_bits(), inv(dir.y).to_bits(), inv(dir.z).to_bits()]);
+            shears.push(dir);
         }
         st.lines.write_words(0, &words);
-        let push: Vec<u8> = [lines.len() as u32, self.scene.triangles.len() as u32, MAX_HITS as u32, 0]
-            .iter()
-            .flat_map(|w| w.to_le_bytes())
-            .collect();
+        let push: Vec<u8> = [lines.len() as u32, MAX_HITS as u32, 0, 0].iter().flat_map(|w| w.to_le_bytes()).collect();
         let groups = lines.len().div_ceil(64) as u32;
-        self.gpu.dispatch(&self.kernel, &[&self.triangles, &st.lines, &st.counts, &st.hits], &push, groups)?;
+        let buffers = [&self.nodes, &self.triangles, &self.prims, &st.lines, &st.counts, &st.hits];
+        self.gpu.dispatch(&self.kernel, &buffers, &push, groups)?;
         let mut hits = Vec::with_capacity(MAX_HITS);
         for (i, l) in lines.iter().enumerate() {
             let n = st.counts.word(i) as usize;
-            let (sh, dir) = &shears[i];
+            let dir = &shears[i];
             if n > MAX_HITS {
+                // Too many crossings for the device's slots, or a stack overflow.
                 self.retraced.fetch_add(1, Ordering::Relaxed);
-                for tri in 0..self.scene.triangles.len() {
-                    test_triangle(&self.scene, sh, l, *dir, tri, &mut hits);
-                }
+                let mut one = CrossingBuffer::default();
+                let cpu = self.fallback.get_or_init(|| CpuTracer::new(&self.scene));
+                cpu.trace_all(std::slice::from_ref(l), &mut one)?;
+                hits.extend_from_slice(one.line(0));
             } else {
                 for j in 0..n {
                     let base = 4 * (i * MAX_HITS + j);

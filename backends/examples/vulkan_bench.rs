@@ -1,7 +1,8 @@
 //! Lavapipe (or any Vulkan device) against the CPU backend in one run:
 //! `cargo run --release -p itgfx-backends --example vulkan_bench -- [LINES] [ELEMENTS]`.
 //! Prints lines/s for tracing global lines through cube-enclosure:10 and
-//! elements/s for the entropy of an f32 array.
+//! elements/s for the entropy and KL divergence of f32 arrays and the mutual
+//! information of a 4096 x 4096 channel, core (f64, one thread) and device.
 
 use std::time::Instant;
 
@@ -9,8 +10,14 @@ use itgfx_backends::lines::global_line;
 use itgfx_backends::scene::built_in;
 use itgfx_backends::tracer::{BackendChoice, CrossingBuffer, Prepared, open};
 use itgfx_backends::visibility::SPHERE_SCALE;
-use itgfx_backends::vulkan::reduce::EntropyReducer;
+use itgfx_backends::vulkan::reduce::Reducer;
 use rayon::prelude::*;
+
+/// f32 values renormalised in f64 (the core wants sums within 1e-9 of 1).
+fn renorm(v: &[f32]) -> Vec<f64> {
+    let t: f64 = v.iter().map(|&x| f64::from(x)).sum();
+    v.iter().map(|&x| f64::from(x) / t).collect()
+}
 
 fn main() {
     let mut args = std::env::args().skip(1);
@@ -55,7 +62,38 @@ fn main() {
         "entropy core(f64, 1 thread) {elements} elements  {s:.4} s  {:.0} Melem/s  H = {h:.9}",
         elements as f64 / s / 1e6
     );
-    match EntropyReducer::new() {
+    // KL of two 2^24 arrays and I(X;Y) of a 4096 x 4096 channel.
+    let norm = |v: Vec<f32>| {
+        let t: f64 = v.iter().map(|&x| f64::from(x)).sum();
+        v.iter().map(|&x| (f64::from(x) / t) as f32).collect::<Vec<f32>>()
+    };
+    let p = norm(w.clone());
+    let q = norm((0..elements).map(|i| ((i as u32).wrapping_mul(2_246_822_519) >> 8) as f32 + 1.0).collect());
+    let (p64, q64): (Vec<f64>, Vec<f64>) = (renorm(&p), renorm(&q));
+    let t0 = Instant::now();
+    let d = itgfx_core::kl_divergence(&p64, &q64, itgfx_core::Base::Bits).expect("kl");
+    let s = t0.elapsed().as_secs_f64();
+    println!(
+        "kl core(f64, 1 thread) {elements} elements  {s:.4} s  {:.0} Melem/s  D = {d:.9}",
+        elements as f64 / s / 1e6
+    );
+    let side = 4096usize;
+    let input = norm((0..side).map(|i| (i % 97 + 1) as f32).collect());
+    let mut m = Vec::with_capacity(side * side);
+    for x in 0..side {
+        m.extend(norm((0..side).map(|j| (((x * 31 + j * 17) % 101) + 1) as f32).collect()));
+    }
+    let m64: Vec<f64> = m.chunks(side).flat_map(renorm).collect();
+    let in64 = renorm(&input);
+    let t0 = Instant::now();
+    let cm = itgfx_core::Channel::new(&in64, &m64, side).expect("channel").measures(itgfx_core::Base::Bits);
+    let s = t0.elapsed().as_secs_f64();
+    println!(
+        "channel core(f64, 1 thread) {side}x{side}  {s:.4} s  {:.0} Melem/s  I = {:.9}",
+        (side * side) as f64 / s / 1e6,
+        cm.mutual_information
+    );
+    match Reducer::new() {
         Ok(mut r) => {
             r.entropy(&w[..1024], itgfx_core::Base::Bits).expect("warm-up");
             let t0 = Instant::now();
@@ -65,6 +103,18 @@ fn main() {
                 "entropy vulkan ({})  {elements} elements  {s:.4} s  {:.0} Melem/s  H = {hv:.9}",
                 r.device().name,
                 elements as f64 / s / 1e6
+            );
+            let t0 = Instant::now();
+            let dv = r.kl_divergence(&p, &q, itgfx_core::Base::Bits).expect("kl");
+            let s = t0.elapsed().as_secs_f64();
+            println!("kl vulkan  {elements} elements  {s:.4} s  {:.0} Melem/s  D = {dv:.9}", elements as f64 / s / 1e6);
+            let t0 = Instant::now();
+            let c = r.channel(&input, &m, side, itgfx_core::Base::Bits).expect("channel");
+            let s = t0.elapsed().as_secs_f64();
+            println!(
+                "channel vulkan {side}x{side}  {s:.4} s  {:.0} Melem/s  I = {:.9}",
+                (side * side) as f64 / s / 1e6,
+                c.mutual_information
             );
         }
         Err(e) => println!("vulkan entropy: {e}"),

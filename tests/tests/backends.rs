@@ -130,8 +130,8 @@ fn vulkan_entropy_matches_the_core() {
     if !backends().contains(&BackendChoice::Vulkan) {
         return;
     }
-    use itgfx_backends::vulkan::reduce::{EntropyReducer, ReduceError};
-    let mut r = EntropyReducer::new().unwrap();
+    use itgfx_backends::vulkan::reduce::{ReduceError, Reducer};
+    let mut r = Reducer::new().unwrap();
     let n = (1 << 20) + 7;
     let w: Vec<f32> = (0..n).map(|i| ((i as u32).wrapping_mul(2_654_435_761) >> 8) as f32 * 1e-3).collect();
     let core =
@@ -143,4 +143,76 @@ fn vulkan_entropy_matches_the_core() {
     bad[777_777] = -1.0;
     assert_eq!(r.entropy(&bad, itgfx_core::Base::Bits), Err(ReduceError::Invalid { index: 777_777 }));
     assert_eq!(r.entropy(&[0.0; 10], itgfx_core::Base::Bits), Err(ReduceError::ZeroMass));
+}
+
+/// KL and channel information on the device agree with the core's f64
+/// measures to 1e-6 of the entropies involved (f32 logarithms on the device);
+/// bad input gets the core's kinds of error.
+#[test]
+fn vulkan_divergence_and_channel_match_the_core() {
+    if !backends().contains(&BackendChoice::Vulkan) {
+        return;
+    }
+    use itgfx_backends::vulkan::reduce::{ReduceError, Reducer};
+    use itgfx_core::{Base, Channel, kl_divergence};
+    let mut r = Reducer::new().unwrap();
+    let hash = |i: u32, s: u32| ((i.wrapping_mul(2_654_435_761) ^ s).wrapping_mul(2_246_822_519) >> 9) as f32 + 1.0;
+    let norm = |v: Vec<f32>| {
+        let t: f64 = v.iter().map(|&x| f64::from(x)).sum();
+        v.iter().map(|&x| (f64::from(x) / t) as f32).collect::<Vec<f32>>()
+    };
+    let n = 300_001;
+    let p = norm((0..n).map(|i| if i % 7 == 0 { 0.0 } else { hash(i, 1) }).collect());
+    let q = norm((0..n).map(|i| hash(i, 2)).collect());
+    let f = |v: &[f32]| v.iter().map(|&x| f64::from(x)).collect::<Vec<f64>>();
+    let core = kl_divergence(&f(&norm(p.clone())), &f(&q), Base::Bits);
+    // The core refuses f32-rounded sums beyond 1e-9: renormalise in f64 for it.
+    let fp: Vec<f64> = {
+        let v = f(&p);
+        let t: f64 = v.iter().sum();
+        v.iter().map(|x| x / t).collect()
+    };
+    let fq: Vec<f64> = {
+        let v = f(&q);
+        let t: f64 = v.iter().sum();
+        v.iter().map(|x| x / t).collect()
+    };
+    let core = core.unwrap_or_else(|_| kl_divergence(&fp, &fq, Base::Bits).unwrap());
+    let gpu = r.kl_divergence(&p, &q, Base::Bits).unwrap();
+    assert!((gpu - core).abs() <= 1e-6 * (1.0 + core), "KL device {gpu} vs core {core}");
+    assert_eq!(r.kl_divergence(&q, &p, Base::Bits).unwrap(), f64::INFINITY);
+    let mut bad = q.clone();
+    bad[123_456] = f32::NAN;
+    assert_eq!(r.kl_divergence(&p, &bad, Base::Bits), Err(ReduceError::Invalid { index: 123_456 }));
+    assert!(matches!(r.kl_divergence(&p, &vec![1.0; n as usize], Base::Bits), Err(ReduceError::NotNormalized { .. })));
+
+    let (rows, cols) = (700usize, 1500usize);
+    let input = norm((0..rows as u32).map(|i| hash(i, 3)).collect());
+    let mut m = Vec::with_capacity(rows * cols);
+    for x in 0..rows as u32 {
+        m.extend(norm((0..cols as u32).map(|j| if (j + x) % 5 == 0 { 0.0 } else { hash(x * 7919 + j, 4) }).collect()));
+    }
+    let fin: Vec<f64> = {
+        let v = f(&input);
+        let t: f64 = v.iter().sum();
+        v.iter().map(|x| x / t).collect()
+    };
+    let fm: Vec<f64> = m
+        .chunks(cols)
+        .flat_map(|row| {
+            let v = f(row);
+            let t: f64 = v.iter().sum();
+            v.into_iter().map(move |x| x / t)
+        })
+        .collect();
+    let cm = Channel::new(&fin, &fm, cols).unwrap().measures(Base::Bits);
+    let g = r.channel(&input, &m, cols, Base::Bits).unwrap();
+    let tol = 1e-6 * (1.0 + cm.h_y);
+    assert!((g.mutual_information - cm.mutual_information).abs() <= tol, "{g:?} vs {cm:?}");
+    assert!((g.h_y - cm.h_y).abs() <= tol && (g.h_y_given_x - cm.h_y_given_x).abs() <= tol, "{g:?} vs {cm:?}");
+    let mut bad = m.clone();
+    bad[5 * cols + 3] *= 2.0;
+    assert!(matches!(r.channel(&input, &bad, cols, Base::Bits), Err(ReduceError::RowNotNormalized { row: 5, .. })));
+    bad[5 * cols + 3] = -0.5;
+    assert_eq!(r.channel(&input, &bad, cols, Base::Bits), Err(ReduceError::Invalid { index: 5 * cols + 3 }));
 }

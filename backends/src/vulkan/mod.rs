@@ -240,7 +240,7 @@ impl Gpu {
         let bytes = bytes.max(16);
         if bytes > u64::from(self.info.max_storage_buffer_range) {
             return Err(unavailable(format!(
-                "a {bytes}-byte buffer exceeds this device's storage-buffer limit of {} bytes (a scene of more than about 2.7 million triangles on lavapipe); use --backend cpu",
+                "a {bytes}-byte buffer exceeds this device's storage-buffer limit of {} bytes (at 48 bytes a triangle, about 2.8 million triangles on lavapipe); use --backend cpu",
                 self.info.max_storage_buffer_range
             )));
         }

@@ -123,6 +123,15 @@ impl<'a, T: Real> SparseChannel<'a, T> {
         (&self.cols[a..b], &self.values[a..b])
     }
 
+    /// Every stored entry as `(p(x), y, p(y|x))` in f64, row by row: the one
+    /// walk the marginal, the output information and the measures share.
+    fn entries(&self) -> impl Iterator<Item = (f64, usize, f64)> + '_ {
+        self.input.iter().enumerate().flat_map(move |(x, px)| {
+            let (c, v) = self.row(x);
+            c.iter().zip(v).map(move |(&j, p)| (px.to_f64(), j as usize, p.to_f64()))
+        })
+    }
+
     /// The output marginal `p(y) = Σ_x p(x) p(y|x)` (Part II §2).
     ///
     /// # Errors
@@ -130,13 +139,8 @@ impl<'a, T: Real> SparseChannel<'a, T> {
     pub fn output_into(&self, out: &mut [T]) -> Result<(), Error> {
         same_len(self.outputs, out.len())?;
         out.iter_mut().for_each(|o| *o = T::from_f64(0.0));
-        for (x, px) in self.input.iter().enumerate() {
-            let px = px.to_f64();
-            let (c, v) = self.row(x);
-            for (&j, p) in c.iter().zip(v) {
-                let o = &mut out[j as usize];
-                *o = T::from_f64(o.to_f64() + px * p.to_f64());
-            }
+        for (px, j, p) in self.entries() {
+            out[j] = T::from_f64(out[j].to_f64() + px * p);
         }
         Ok(())
     }
@@ -188,15 +192,10 @@ impl<'a, T: Real> SparseChannel<'a, T> {
         same_len(self.outputs, output.len())?;
         same_len(self.outputs, out.len())?;
         out.iter_mut().for_each(|o| *o = T::from_f64(0.0));
-        for (x, px) in self.input.iter().enumerate() {
-            let px = px.to_f64();
-            let (c, v) = self.row(x);
-            for (&j, p) in c.iter().zip(v) {
-                let (p, q) = (p.to_f64(), output[j as usize].to_f64());
-                if p > 0.0 && q > 0.0 {
-                    let o = &mut out[j as usize];
-                    *o = T::from_f64(o.to_f64() + px * p * (ln(p) - ln(q)));
-                }
+        for (px, j, p) in self.entries() {
+            let q = output[j].to_f64();
+            if p > 0.0 && q > 0.0 {
+                out[j] = T::from_f64(out[j].to_f64() + px * p * (ln(p) - ln(q)));
             }
         }
         for (o, q) in out.iter_mut().zip(output) {
@@ -218,18 +217,12 @@ impl<'a, T: Real> SparseChannel<'a, T> {
         let h_y = entropy_nats(mass_xlnx(output)?);
         let h_x = entropy_nats(mass_xlnx(self.input)?);
         let (mut mi, mut hyx) = (Neumaier::new(), Neumaier::new());
-        for (x, px) in self.input.iter().enumerate() {
-            let px = px.to_f64();
-            if px == 0.0 {
-                continue;
-            }
-            let (c, v) = self.row(x);
-            for (&j, p) in c.iter().zip(v) {
-                let (p, q) = (p.to_f64(), output[j as usize].to_f64());
-                if p > 0.0 {
-                    hyx.add(-px * p * ln(p));
-                    mi.add(if q > 0.0 { px * p * (ln(p) - ln(q)) } else { f64::INFINITY });
-                }
+        for (px, j, p) in self.entries() {
+            // An input of zero weight contributes nothing, even where q = 0.
+            if px > 0.0 && p > 0.0 {
+                let q = output[j].to_f64();
+                hyx.add(-px * p * ln(p));
+                mi.add(if q > 0.0 { px * p * (ln(p) - ln(q)) } else { f64::INFINITY });
             }
         }
         let k = base.per_nat();

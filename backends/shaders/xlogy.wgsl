@@ -4,6 +4,7 @@
 // with a = as[k], b = bs[k % bcols], w = ws[k / wcols] (ln in f32: naga's
 // f64 log is not valid SPIR-V). Flags: 1 = some a or b negative, NaN or
 // infinite; 2 = some a > 0 where b = 0 (an infinite divergence).
+// H(w): a = w, b = [1], bcols = 1, w = [1], wcols = n (Σ a and Σ a ln a).
 // KL(p‖q): a = p, b = q, bcols = n, w = [1], wcols = n.
 // I(X;Y): a = p(y|x) row-major, b = p(y), bcols = |Y|, w = p(x), wcols = |Y|.
 

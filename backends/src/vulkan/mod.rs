@@ -458,14 +458,15 @@ impl Buffer {
         unsafe { std::slice::from_raw_parts_mut(self.ptr, self.bytes) }
     }
 
-    /// Copies 32-bit words in at word `offset`.
+    /// Copies 32-bit words in from word `offset` on (f32 values as
+    /// `x.to_bits()`), without an intermediate copy.
     ///
     /// # Panics
     /// If they do not fit.
-    pub fn write_words(&mut self, offset: usize, words: &[u32]) {
-        let dst = &mut self.bytes_mut()[4 * offset..4 * (offset + words.len())];
-        for (d, w) in dst.chunks_exact_mut(4).zip(words) {
-            d.copy_from_slice(&w.to_le_bytes());
+    pub fn write_words(&mut self, offset: usize, words: impl IntoIterator<Item = u32>) {
+        let mut dst = self.bytes_mut()[4 * offset..].chunks_exact_mut(4);
+        for w in words {
+            dst.next().expect("words fit the buffer").copy_from_slice(&w.to_le_bytes());
         }
     }
 

@@ -11,13 +11,12 @@
 //! with the core's f64 measures to about 1e-6 of the entropies involved
 //! (tested).
 
-use itgfx_core::Base;
 use itgfx_core::sum::Neumaier;
+use itgfx_core::{Base, Error};
 
 use super::{Buffer, Gpu, Kernel};
 use crate::tracer::BackendError;
 
-const SPIRV: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/entropy.spv"));
 const XLOGY: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/xlogy.spv"));
 const AXIS: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/axis_sum.spv"));
 /// Elements per dispatch (32 MiB of f32, a quarter of lavapipe's buffer limit).
@@ -29,7 +28,6 @@ const PER: usize = 256;
 
 /// Reductions on the device. Fields drop before the device.
 pub struct Reducer {
-    kernel: Kernel,
     xlogy: Kernel,
     axis: Kernel,
     input: Buffer,
@@ -52,50 +50,21 @@ pub struct ChannelInformation {
     pub h_y_given_x: f64,
 }
 
-/// Why a reduction failed.
+/// Why a reduction failed: the device, or the input (the core's own error,
+/// with the same indices and tolerances as its f32 measures).
 #[derive(Debug, Clone, PartialEq)]
 pub enum ReduceError {
     /// The device failed or is missing.
     Backend(BackendError),
-    /// Element `index` is negative, NaN or infinite (the first such).
-    Invalid {
-        /// Its position.
-        index: usize,
-    },
-    /// Every weight is zero (or the array is empty).
-    ZeroMass,
-    /// A distribution summed to `sum`, not 1.
-    NotNormalized {
-        /// The sum found.
-        sum: f64,
-    },
-    /// Row `row` of a conditional matrix summed to `sum`.
-    RowNotNormalized {
-        /// The row.
-        row: usize,
-        /// Its sum.
-        sum: f64,
-    },
-    /// Lengths disagree.
-    LengthMismatch {
-        /// Expected.
-        expected: usize,
-        /// Found.
-        found: usize,
-    },
+    /// The input was refused.
+    Measure(Error),
 }
 
 impl std::fmt::Display for ReduceError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             ReduceError::Backend(e) => e.fmt(f),
-            ReduceError::Invalid { index } => write!(f, "value at index {index} is negative or not finite"),
-            ReduceError::ZeroMass => write!(f, "all weights are zero"),
-            ReduceError::NotNormalized { sum } => write!(f, "probabilities sum to {sum}, not 1"),
-            ReduceError::RowNotNormalized { row, sum } => write!(f, "row {row} sums to {sum}, not 1"),
-            ReduceError::LengthMismatch { expected, found } => {
-                write!(f, "length mismatch: expected {expected} values, found {found}")
-            }
+            ReduceError::Measure(e) => e.fmt(f),
         }
     }
 }
@@ -108,6 +77,12 @@ impl From<BackendError> for ReduceError {
     }
 }
 
+impl From<Error> for ReduceError {
+    fn from(e: Error) -> Self {
+        ReduceError::Measure(e)
+    }
+}
+
 impl Reducer {
     /// Opens the preferred device.
     ///
@@ -115,12 +90,10 @@ impl Reducer {
     /// [`BackendError::Unavailable`] with the fix when Vulkan is missing.
     pub fn new() -> Result<Self, BackendError> {
         let gpu = Gpu::open()?;
-        let kernel = gpu.kernel(SPIRV, c"entropy", 3, 16)?;
         let xlogy = gpu.kernel(XLOGY, c"xlogy", 5, 16)?;
         let axis = gpu.kernel(AXIS, c"axis_sum", 4, 32)?;
         let invocations = CHUNK / PER;
         Ok(Self {
-            kernel,
             xlogy,
             axis,
             input: gpu.buffer((CHUNK * 4) as u64)?,
@@ -139,39 +112,27 @@ impl Reducer {
         &self.gpu.info
     }
 
-    /// `H(w / Σw)` of non-negative weights, in `base`.
+    /// `H(w / Σw)` of non-negative weights, in `base`: the `xlogy` kernel
+    /// with `b = 1` gives `Σ w` and `Σ w ln w`.
     ///
     /// # Errors
-    /// [`ReduceError::Invalid`] naming the first bad element,
-    /// [`ReduceError::ZeroMass`], device errors.
+    /// [`Error::NonFinite`] or [`Error::Negative`] naming the first bad
+    /// element, [`Error::ZeroMass`], device errors.
     pub fn entropy(&mut self, weights: &[f32], base: Base) -> Result<f64, ReduceError> {
-        let (mut sum, mut xlnx) = (Neumaier::new(), Neumaier::new());
+        let mut t = Terms::new();
+        self.second.write_words(0, [1f32.to_bits()]);
+        self.weights.write_words(0, [1f32.to_bits()]);
         for (c, chunk) in weights.chunks(CHUNK).enumerate() {
-            let words: Vec<u32> = chunk.iter().map(|x| x.to_bits()).collect();
-            self.input.write_words(0, &words);
-            let inv = chunk.len().div_ceil(PER);
-            let push: Vec<u8> = [chunk.len() as u32, PER as u32, 0, 0].iter().flat_map(|w| w.to_le_bytes()).collect();
-            self.gpu.dispatch(
-                &self.kernel,
-                &[&self.input, &self.partial, &self.bad],
-                &push,
-                inv.div_ceil(64) as u32,
-            )?;
-            for i in 0..inv {
-                if self.bad.word(i) != 0 {
-                    let start = i * PER;
-                    let k = chunk[start..].iter().position(|x| !(*x >= 0.0 && x.is_finite())).unwrap_or(0);
-                    return Err(ReduceError::Invalid { index: c * CHUNK + start + k });
-                }
-                sum.add(f64_at(&self.partial, 2 * i));
-                xlnx.add(f64_at(&self.partial, 2 * i + 1));
+            self.input.write_words(0, chunk.iter().map(|x| x.to_bits()));
+            if self.xlogy_pass(chunk.len(), 1, chunk.len(), &mut t)? {
+                return Err(first_bad(chunk, c * CHUNK).into());
             }
         }
-        let s = sum.value();
+        let s = t.wa.value();
         if !(s > 0.0) {
-            return Err(ReduceError::ZeroMass);
+            return Err(Error::ZeroMass.into());
         }
-        let h = (s.ln() - xlnx.value() / s).max(0.0);
+        let h = (s.ln() - t.xlnx.value() / s).max(0.0);
         Ok(h * base.per_nat())
     }
 }
@@ -185,22 +146,26 @@ fn push(words: &[u32]) -> Vec<u8> {
     words.iter().flat_map(|w| w.to_le_bytes()).collect()
 }
 
-fn words(xs: &[f32]) -> Vec<u32> {
-    xs.iter().map(|x| x.to_bits()).collect()
+fn words(xs: &[f32]) -> impl Iterator<Item = u32> + '_ {
+    xs.iter().map(|x| x.to_bits())
 }
 
-/// The first negative, NaN or infinite value of `xs`, offset by `base`.
-fn first_bad(xs: &[f32], base: usize) -> ReduceError {
-    let k = xs.iter().position(|x| !(*x >= 0.0 && x.is_finite())).unwrap_or(0);
-    ReduceError::Invalid { index: base + k }
-}
-
-fn normalized(sum: f64) -> Result<(), ReduceError> {
-    if sum == 0.0 {
-        return Err(ReduceError::ZeroMass);
+/// The core's error for the first NaN, infinite or negative value of `xs`
+/// (offset by `base`); `ZeroMass` if there is none.
+fn first_bad(xs: &[f32], base: usize) -> Error {
+    match xs.iter().position(|x| !(*x >= 0.0 && x.is_finite())) {
+        Some(k) if xs[k].is_finite() => Error::Negative { index: base + k },
+        Some(k) => Error::NonFinite { index: base + k },
+        None => Error::ZeroMass,
     }
-    if (sum - 1.0).abs() > TOLERANCE {
-        return Err(ReduceError::NotNormalized { sum });
+}
+
+fn normalized(sum: f64) -> Result<(), Error> {
+    if sum == 0.0 {
+        return Err(Error::ZeroMass);
+    }
+    if !((sum - 1.0).abs() <= TOLERANCE) {
+        return Err(Error::NotNormalized { sum });
     }
     Ok(())
 }
@@ -252,21 +217,24 @@ impl Reducer {
     /// `D_KL(p ‖ q)` (Part II eq. (8)); `+∞` when `p > 0 = q` somewhere.
     ///
     /// # Errors
-    /// [`ReduceError::LengthMismatch`], [`ReduceError::Invalid`] (the first bad
-    /// element of `p`, then of `q`), [`ReduceError::NotNormalized`] or
-    /// [`ReduceError::ZeroMass`] for either, device errors.
+    /// [`Error::Empty`], [`Error::LengthMismatch`], [`Error::NonFinite`] or
+    /// [`Error::Negative`] (the first bad element of `p`, then of `q`),
+    /// [`Error::NotNormalized`] or [`Error::ZeroMass`] for either, device errors.
     pub fn kl_divergence(&mut self, p: &[f32], q: &[f32], base: Base) -> Result<f64, ReduceError> {
-        if p.len() != q.len() || p.is_empty() {
-            return Err(ReduceError::LengthMismatch { expected: p.len(), found: q.len() });
+        if p.is_empty() {
+            return Err(Error::Empty.into());
+        }
+        if p.len() != q.len() {
+            return Err(Error::LengthMismatch { expected: p.len(), found: q.len() }.into());
         }
         let mut t = Terms::new();
-        self.weights.write_words(0, &[1f32.to_bits()]);
+        self.weights.write_words(0, [1f32.to_bits()]);
         for (c, (pc, qc)) in p.chunks(CHUNK).zip(q.chunks(CHUNK)).enumerate() {
-            self.input.write_words(0, &words(pc));
-            self.second.write_words(0, &words(qc));
+            self.input.write_words(0, words(pc));
+            self.second.write_words(0, words(qc));
             if self.xlogy_pass(pc.len(), pc.len(), pc.len(), &mut t)? {
                 let p_ok = pc.iter().all(|x| *x >= 0.0 && x.is_finite());
-                return Err(if p_ok { first_bad(qc, c * CHUNK) } else { first_bad(pc, c * CHUNK) });
+                return Err(if p_ok { first_bad(qc, c * CHUNK) } else { first_bad(pc, c * CHUNK) }.into());
             }
         }
         normalized(t.wa.value())?;
@@ -281,10 +249,11 @@ impl Reducer {
     /// the row-major `|X| × cols` matrix `p(y|x)` (Part II eqs. (5)-(7)).
     ///
     /// # Errors
-    /// [`ReduceError::LengthMismatch`] (also when one row exceeds a dispatch),
-    /// [`ReduceError::Invalid`] with the row-major index,
-    /// [`ReduceError::RowNotNormalized`], [`ReduceError::NotNormalized`] for
-    /// the input, device errors.
+    /// [`Error::Empty`], [`Error::LengthMismatch`],
+    /// [`Error::InvalidParameter`] when one row exceeds a dispatch,
+    /// [`Error::NonFinite`] or [`Error::Negative`] with the row-major index,
+    /// [`Error::RowNotNormalized`], [`Error::NotNormalized`] for the input,
+    /// device errors.
     pub fn channel(
         &mut self,
         input: &[f32],
@@ -293,11 +262,17 @@ impl Reducer {
         base: Base,
     ) -> Result<ChannelInformation, ReduceError> {
         let rows = input.len();
-        if rows == 0 || cols == 0 || cols > CHUNK || matrix.len() != rows * cols {
-            return Err(ReduceError::LengthMismatch { expected: rows * cols, found: matrix.len() });
+        if rows == 0 || cols == 0 {
+            return Err(Error::Empty.into());
         }
-        if let Some(k) = input.iter().position(|x| !(*x >= 0.0 && x.is_finite())) {
-            return Err(ReduceError::Invalid { index: k });
+        if cols > CHUNK {
+            return Err(Error::InvalidParameter { name: "cols", value: cols as f64 }.into());
+        }
+        if matrix.len() != rows * cols {
+            return Err(Error::LengthMismatch { expected: rows * cols, found: matrix.len() }.into());
+        }
+        if input.iter().any(|x| !(*x >= 0.0 && x.is_finite())) {
+            return Err(first_bad(input, 0).into());
         }
         normalized(input.iter().map(|&x| f64::from(x)).sum())?;
         let per_chunk = (CHUNK / cols).max(1);
@@ -307,15 +282,15 @@ impl Reducer {
         for c in 0..chunks {
             let (r0, r1) = (c * per_chunk, ((c + 1) * per_chunk).min(rows));
             let m = &matrix[r0 * cols..r1 * cols];
-            self.input.write_words(0, &words(m));
-            self.weights.write_words(0, &words(&input[r0..r1]));
+            self.input.write_words(0, words(m));
+            self.weights.write_words(0, words(&input[r0..r1]));
             if self.axis_pass(r1 - r0, cols, cols, 1, false)? {
-                return Err(first_bad(m, r0 * cols));
+                return Err(first_bad(m, r0 * cols).into());
             }
             for r in 0..r1 - r0 {
                 let s = f64_at(&self.sums, r);
-                if (s - 1.0).abs() > TOLERANCE {
-                    return Err(ReduceError::RowNotNormalized { row: r0 + r, sum: s });
+                if !((s - 1.0).abs() <= TOLERANCE) {
+                    return Err(Error::RowNotNormalized { row: r0 + r, sum: s }.into());
                 }
             }
             self.axis_pass(cols, r1 - r0, 1, cols, true)?;
@@ -326,17 +301,17 @@ impl Reducer {
         let p_y: Vec<f64> = p_y.iter().map(Neumaier::value).collect();
         // Pass 2: Σ p(x) p(y|x) ln(p(y|x)/p(y)) and Σ p(x) p(y|x) ln p(y|x).
         let p_y32: Vec<f32> = p_y.iter().map(|&x| x as f32).collect();
-        self.second.write_words(0, &words(&p_y32));
+        self.second.write_words(0, words(&p_y32));
         let mut t = Terms::new();
         for c in 0..chunks {
             let (r0, r1) = (c * per_chunk, ((c + 1) * per_chunk).min(rows));
             if chunks > 1 {
-                self.input.write_words(0, &words(&matrix[r0 * cols..r1 * cols]));
-                self.weights.write_words(0, &words(&input[r0..r1]));
+                self.input.write_words(0, words(&matrix[r0 * cols..r1 * cols]));
+                self.weights.write_words(0, words(&input[r0..r1]));
             }
             self.xlogy_pass((r1 - r0) * cols, cols, cols, &mut t)?;
         }
-        let h_y = itgfx_core::entropy_of_weights(&p_y, Base::Nats).map_err(|_| ReduceError::ZeroMass)?;
+        let h_y = itgfx_core::entropy_of_weights(&p_y, Base::Nats)?;
         let k = base.per_nat();
         Ok(ChannelInformation {
             mutual_information: t.div.value().max(0.0) * k,

@@ -77,7 +77,7 @@ impl VulkanTracer {
         }
         let upload = |words: &[u32]| -> Result<Buffer, BackendError> {
             let mut b = gpu.buffer(4 * words.len() as u64)?;
-            b.write_words(0, words);
+            b.write_words(0, words.iter().copied());
             Ok(b)
         };
         let (nodes, triangles, prims) = (upload(&node_words)?, upload(&tri_words)?, upload(&prim_words)?);
@@ -127,7 +127,7 @@ impl VulkanTracer {
             words.extend([k, inv(dir.x).to_bits(), inv(dir.y).to_bits(), inv(dir.z).to_bits()]);
             shears.push(dir);
         }
-        st.lines.write_words(0, &words);
+        st.lines.write_words(0, words);
         let push: Vec<u8> = [lines.len() as u32, MAX_HITS as u32, 0, 0].iter().flat_map(|w| w.to_le_bytes()).collect();
         let groups = lines.len().div_ceil(64) as u32;
         let buffers = [&self.nodes, &self.triangles, &self.prims, &st.lines, &st.counts, &st.hits];

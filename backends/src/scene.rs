@@ -356,6 +356,21 @@ fn parse_u32(spec: &str, what: &str, s: &str, max: u32) -> Result<u32, SceneErro
         .ok_or_else(|| SceneError::Spec(format!("{spec}: {what} must be an integer in 1..={max}, got {s:?}")))
 }
 
+/// An optional `A,B` parameter pair of integers in `1..=4096`, or `default`.
+fn parse_pair(
+    spec: &str,
+    part: Option<&str>,
+    names: (&str, &str),
+    default: (u32, u32),
+) -> Result<(u32, u32), SceneError> {
+    let Some(p) = part else { return Ok(default) };
+    let (a, b) = p.split_once(',').ok_or_else(|| {
+        let kind = spec.split(':').next().unwrap_or(spec);
+        SceneError::Spec(format!("{spec}: expected {kind}:{},{}", names.0, names.1))
+    })?;
+    Ok((parse_u32(spec, names.0, a, 4096)?, parse_u32(spec, names.1, b, 4096)?))
+}
+
 /// A built-in scene by name (see [`BUILT_IN`]).
 ///
 /// # Errors
@@ -379,14 +394,7 @@ pub fn built_in(spec: &str) -> Result<Scene, SceneError> {
             s
         }
         "sphere" => {
-            let (b, sct) = match parts.get(1) {
-                None => (8, 16),
-                Some(p) => {
-                    let (a, c) =
-                        p.split_once(',').ok_or_else(|| SceneError::Spec(format!("{spec}: expected sphere:B,S")))?;
-                    (parse_u32(spec, "B", a, 4096)?, parse_u32(spec, "S", c, 4096)?)
-                }
-            };
+            let (b, sct) = parse_pair(spec, parts.get(1).copied(), ("B", "S"), (8, 16))?;
             let cells = SphereCells { radius: 1.0, bands: b, sectors: sct };
             Scene {
                 name: spec.into(),
@@ -402,14 +410,7 @@ pub fn built_in(spec: &str) -> Result<Scene, SceneError> {
             crate::meshes::geosphere(spec, l - 1)
         }
         "torus" => {
-            let (u, v) = match parts.get(1) {
-                None => (48, 24),
-                Some(p) => {
-                    let (a, c) =
-                        p.split_once(',').ok_or_else(|| SceneError::Spec(format!("{spec}: expected torus:U,V")))?;
-                    (parse_u32(spec, "U", a, 4096)?, parse_u32(spec, "V", c, 4096)?)
-                }
-            };
+            let (u, v) = parse_pair(spec, parts.get(1).copied(), ("U", "V"), (48, 24))?;
             if u < 3 || v < 3 {
                 return Err(SceneError::Spec(format!("{spec}: U and V must be at least 3")));
             }

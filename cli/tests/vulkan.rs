@@ -44,6 +44,20 @@ fn missing_vulkan_is_a_clear_error() {
     }
 }
 
+/// The JSON of `args --backend backend --json`, with the backend's name
+/// checked and removed, and the timings removed.
+fn json_on(args: &[&str], backend: &str) -> serde_json::Value {
+    let mut all = args.to_vec();
+    all.extend(["--backend", backend, "--json"]);
+    let out = itgfx(&all, &[]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let mut v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let m = v.as_object_mut().unwrap();
+    assert_eq!(m.remove("backend").unwrap(), backend);
+    m.retain(|k, _| !k.ends_with("seconds"));
+    v
+}
+
 /// The acceptance command (at 2·10^5 lines): the same JSON on both
 /// backends but for the backend's name and the timings.
 #[test]
@@ -51,19 +65,8 @@ fn complexity_matches_the_cpu_backend() {
     if !have_vulkan() {
         return;
     }
-    let run = |backend: &str| {
-        let out = itgfx(
-            &["complexity", "cube-enclosure:10", "--lines", "200000", "--seed", "1", "--backend", backend, "--json"],
-            &[],
-        );
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        let mut v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-        let m = v.as_object_mut().unwrap();
-        assert_eq!(m.remove("backend").unwrap(), backend);
-        m.remove("seconds");
-        v
-    };
-    assert_eq!(run("cpu"), run("vulkan"));
+    let args = ["complexity", "cube-enclosure:10", "--lines", "200000", "--seed", "1"];
+    assert_eq!(json_on(&args, "cpu"), json_on(&args, "vulkan"));
     let out = itgfx(&["devices", "--json"], &[]);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let devices = v["devices"].as_array().unwrap();
@@ -76,18 +79,6 @@ fn viewpoints_match_the_cpu_backend() {
     if !have_vulkan() {
         return;
     }
-    let run = |backend: &str| {
-        let out = itgfx(
-            &["viewpoints", "table-chairs", "--viewpoints", "42", "--resolution", "32", "--backend", backend, "--json"],
-            &[],
-        );
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        let mut v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-        let m = v.as_object_mut().unwrap();
-        assert_eq!(m.remove("backend").unwrap(), backend);
-        m.remove("seconds");
-        m.remove("channel_seconds");
-        v
-    };
-    assert_eq!(run("cpu"), run("vulkan"));
+    let args = ["viewpoints", "table-chairs", "--viewpoints", "42", "--resolution", "32"];
+    assert_eq!(json_on(&args, "cpu"), json_on(&args, "vulkan"));
 }

@@ -107,7 +107,7 @@ pub fn run(args: &Args) -> Result<Report, CliError> {
     let view_saliency = viewpoint_saliency(&an, &saliency);
     let importance = importance_information(&an, &saliency, base).map_err(core_err)?;
     let best_importance = argmin(&importance);
-    let best_n = best_views(&an, capture, max_views as usize, base).map_err(core_err)?;
+    let best_n = best_views(&an, &m, capture, max_views as usize, base).map_err(core_err)?;
     let tour = exploration(&an, &neighbours, m.best, steps as usize, base).map_err(core_err)?;
     let seconds = t0.elapsed().as_secs_f64();
 

@@ -156,12 +156,12 @@ fn adjacency_of_closed_meshes() {
 fn best_views_exploration_and_importance() {
     let (scene, ch, an) = analyse("torus:24,12", 0, 64);
     let m = an.measures(&scene.areas(), Base::Bits).unwrap();
-    let b = best_views(&an, 1.0, 64, Base::Bits).unwrap();
+    let b = best_views(&an, &m, 1.0, 64, Base::Bits).unwrap();
     assert_eq!(b.views[0], m.best);
     assert_eq!(b.views.len(), 12, "all 12 views are needed to capture all of I(V;O)");
     assert!(b.merged_information.windows(2).all(|w| w[1] <= w[0] + 1e-12), "{:?}", b.merged_information);
     assert!((b.captured.last().unwrap() - 1.0).abs() < 1e-9 && b.merged_information.last().unwrap().abs() < 1e-9);
-    let some = best_views(&an, 0.5, 64, Base::Bits).unwrap();
+    let some = best_views(&an, &m, 0.5, 64, Base::Bits).unwrap();
     assert!(*some.captured.last().unwrap() >= 0.5 && some.views.len() < 12);
     let nb = ch.neighbours(5);
     let t = exploration(&an, &nb, m.best, 6, Base::Bits).unwrap();

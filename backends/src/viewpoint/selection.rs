@@ -10,7 +10,7 @@
 use itgfx_core::{Base, Error};
 use rayon::prelude::*;
 
-use super::ViewpointAnalysis;
+use super::{ViewpointAnalysis, ViewpointMeasures};
 
 /// A merged view kept densely over the outputs, with `A = Σ_o m_o ln(m_o/p(o))`
 /// for `m = Σ_{v∈S} p(v) p(O|v)`, so the VMI of adding one more view costs
@@ -85,19 +85,26 @@ pub struct BestViews {
     pub captured: Vec<f64>,
 }
 
-/// Greedy best-n views: start from the minimum-VMI view; add the view that
-/// makes the merged view closest to `p(O)` until the clustering by the
-/// selected views captures `fraction` of `I(V;O)` or `max_views` are chosen.
+/// Greedy best-n views: start from the minimum-VMI view (`measures.best`);
+/// add the view that makes the merged view closest to `p(O)` until the
+/// clustering by the selected views captures `fraction` of `I(V;O)` or
+/// `max_views` are chosen. `measures` are [`ViewpointAnalysis::measures`]
+/// in `base`.
 ///
 /// # Errors
-/// Core errors (none in practice).
-pub fn best_views(an: &ViewpointAnalysis, fraction: f64, max_views: usize, base: Base) -> Result<BestViews, Error> {
+/// [`Error::InvalidParameter`] if the best view sees nothing (measures of
+/// another analysis); core errors.
+pub fn best_views(
+    an: &ViewpointAnalysis,
+    measures: &ViewpointMeasures,
+    fraction: f64,
+    max_views: usize,
+    base: Base,
+) -> Result<BestViews, Error> {
     let n = an.rows();
-    let ch = an.channel()?;
-    let total = ch.measures(&an.p_o, Base::Nats)?.mutual_information;
-    let mut vmi = vec![0.0; n];
-    ch.specific_information_into(&an.p_o, Base::Nats, &mut vmi)?;
-    let first = (0..n).min_by(|&a, &b| vmi[a].total_cmp(&vmi[b]).then(a.cmp(&b))).unwrap_or(0);
+    let total = measures.total_mutual_information / base.per_nat();
+    let first =
+        an.row_of(measures.best).ok_or(Error::InvalidParameter { name: "best", value: measures.best as f64 })?;
     let mut merged = Merged::new(an);
     let mut chosen = vec![false; n];
     let mut nearest = vec![(f64::INFINITY, 0usize); n];

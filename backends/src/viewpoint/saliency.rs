@@ -116,7 +116,8 @@ fn reversed_columns(an: &ViewpointAnalysis) -> (Vec<usize>, Vec<u32>, Vec<f64>) 
 }
 
 /// Mesh saliency `S(o)` of every patch; patches never seen (or with no seen
-/// neighbour) get 0.
+/// neighbour) get 0. `adjacency` is read as undirected (an edge listed at
+/// either end counts at both).
 ///
 /// # Errors
 /// Core errors (none in practice).
@@ -127,25 +128,33 @@ pub fn mesh_saliency(an: &ViewpointAnalysis, adjacency: &[Vec<u32>], base: Base)
     assert_eq!(adjacency.len(), an.patches, "one adjacency list per patch");
     let (starts, rows, vals) = reversed_columns(an);
     let col = |o: usize| (&rows[starts[o]..starts[o + 1]], &vals[starts[o]..starts[o + 1]]);
-    (0..an.patches)
-        .into_par_iter()
-        .map(|o| {
-            let po = an.p_o[o];
-            if po == 0.0 {
-                return Ok(0.0);
-            }
-            let (mut sum, mut k) = (0.0, 0usize);
-            for &n in &adjacency[o] {
-                let pn = an.p_o[n as usize];
-                if pn > 0.0 {
-                    let t = po + pn;
-                    sum += jensen_shannon_sparse((po / t, pn / t), col(o), col(n as usize), base)?;
-                    k += 1;
-                }
-            }
-            Ok(if k == 0 { 0.0 } else { sum / k as f64 })
+    // The divergence is symmetric (swap both weights and columns), so each
+    // edge between seen patches is evaluated once and counted at both ends.
+    let mut edges: Vec<(u32, u32)> = adjacency
+        .iter()
+        .enumerate()
+        .flat_map(|(o, near)| near.iter().map(move |&n| ((o as u32).min(n), (o as u32).max(n))))
+        .filter(|&(a, b)| a != b && an.p_o[a as usize] > 0.0 && an.p_o[b as usize] > 0.0)
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    let js: Vec<f64> = edges
+        .par_iter()
+        .map(|&(a, b)| {
+            let (pa, pb) = (an.p_o[a as usize], an.p_o[b as usize]);
+            let t = pa + pb;
+            jensen_shannon_sparse((pa / t, pb / t), col(a as usize), col(b as usize), base)
         })
-        .collect()
+        .collect::<Result<_, _>>()?;
+    let mut sum = vec![0.0; an.patches];
+    let mut count = vec![0u32; an.patches];
+    for (&(a, b), d) in edges.iter().zip(&js) {
+        for o in [a as usize, b as usize] {
+            sum[o] += d;
+            count[o] += 1;
+        }
+    }
+    Ok(sum.iter().zip(&count).map(|(s, &k)| if k == 0 { 0.0 } else { s / f64::from(k) }).collect())
 }
 
 /// Viewpoint saliency `S(v) = Σ_o p(o|v) S(o)` over all viewpoints (0 for

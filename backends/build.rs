@@ -16,7 +16,7 @@ fn main() {
             .unwrap_or_else(|e| panic!("{src_path}: {}", e.emit_to_string(&src)));
         let options = naga::back::spv::Options {
             lang_version: (1, 3),
-            // The default polyfill doubled kernel cost on lavapipe (VULKAN.md).
+            // The default polyfill doubled kernel cost on lavapipe (docs/VULKAN.md).
             zero_initialize_workgroup_memory: naga::back::spv::ZeroInitializeWorkgroupMemoryMode::None,
             force_loop_bounding: false,
             ..Default::default()

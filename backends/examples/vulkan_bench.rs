@@ -8,9 +8,10 @@ use std::time::Instant;
 
 use itgfx_backends::lines::global_line;
 use itgfx_backends::scene::built_in;
-use itgfx_backends::tracer::{BackendChoice, CrossingBuffer, Prepared, open};
+use itgfx_backends::tracer::{CrossingBuffer, Prepared};
 use itgfx_backends::visibility::SPHERE_SCALE;
 use itgfx_backends::vulkan::reduce::Reducer;
+use itgfx_backends::{BackendChoice, open};
 use rayon::prelude::*;
 
 /// f32 values renormalised in f64 (the core wants sums within 1e-9 of 1).

@@ -10,7 +10,8 @@
 struct Params {
     lines: u32,
     k: u32,
-    pad0: u32,
+    // 0: every crossing (up to k per line); 1: the closest crossing only.
+    mode: u32,
     pad1: u32,
 }
 
@@ -29,7 +30,9 @@ var<immediate> pc: Params;
 @group(0) @binding(3) var<storage, read> lines: array<vec4<u32>>;
 // Crossings found per line; 0xffffffff when the traversal stack overflowed.
 @group(0) @binding(4) var<storage, read_write> counts: array<u32>;
-// Hit j of line i at i * k + j: (num bits, det bits, triangle, 0).
+// Hit j of line i at i * k + j: (num bits, det bits, triangle, 0). In mode 1
+// only j = 0 is written: the crossing with the smallest t = num / det inside
+// [tmin, tmax], ties to the smaller triangle (as the host sorts crossings).
 @group(0) @binding(5) var<storage, read_write> hits: array<vec4<u32>>;
 
 const STACK: u32 = 64u;
@@ -109,6 +112,11 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocatio
     let inv = l2.yzw;
     let tmin = l0.w;
     let tmax = l1.w;
+    let closest = pc.mode == 1u;
+    // Mode 1: the best crossing so far, and the interval it leaves to search.
+    var best = vec4<u32>(0u);
+    var best_t = tmax;
+    var reach = tmax;
     let base = li * STACK;
     var sp = 1u;
     stacks[base] = 0u;
@@ -128,7 +136,7 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocatio
         let near = min(t1, t2);
         let far = max(t1, t2);
         let t_near = max(max(near.x, near.y), max(near.z, tmin));
-        let t_far = min(min(far.x, far.y), min(far.z, tmax));
+        let t_far = min(min(far.x, far.y), min(far.z, reach));
         // Loosened: a box the line grazes is kept (never culls a real hit).
         if t_near <= t_far + 1e-4 * (abs(t_far) + 1.0) {
             let count = lo_u.w;
@@ -145,7 +153,20 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocatio
             } else {
                 for (var p = first; p < first + count; p = p + 1u) {
                     let h = test_triangle(p, org, l1.xyz, ks, tmin, tmax);
-                    if h.w == 1u {
+                    if closest {
+                        if h.w == 1u {
+                            // The exact test the host applies, in the same f32 division.
+                            let t = bitcast<f32>(h.x) / bitcast<f32>(h.y);
+                            if t >= tmin && t <= tmax {
+                                if found == 0u || t < best_t || (t == best_t && h.z < best.z) {
+                                    best = vec4<u32>(h.xyz, 0u);
+                                    best_t = t;
+                                    reach = t;
+                                }
+                                found = 1u;
+                            }
+                        }
+                    } else if h.w == 1u {
                         if found < pc.k {
                             hits[i * pc.k + found] = vec4<u32>(h.xyz, 0u);
                         }
@@ -154,6 +175,9 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocatio
                 }
             }
         }
+    }
+    if closest && found == 1u {
+        hits[i * pc.k] = best;
     }
     if overflow {
         counts[i] = 0xffffffffu;

@@ -4,8 +4,12 @@
 //!
 //! * [`scene`]: patches of triangles; built-in scenes ([`scene::built_in`])
 //!   and Wavefront OBJ ([`obj::load_obj`]), subdivision.
-//! * [`tracer`]: the [`tracer::Tracer`] seam, the CPU backend (rayon +
-//!   obvhs) and the brute-force reference backend.
+//! * [`tracer`]: the [`tracer::Tracer`] seam (every crossing, closest hit,
+//!   occlusion), the CPU backend (rayon + obvhs) and the brute-force
+//!   reference backend.
+//! * [`backend`]: choosing and opening a backend ([`BackendChoice`],
+//!   [`open`], [`BackendError`]).
+//! * [`camera`]: the pinhole camera; [`preview`]: patch-colour previews.
 //! * [`lines`]: seeded counter-based global and local lines.
 //! * [`meshes`]: built-in objects seen from outside (geodesic sphere, torus,
 //!   table with chairs).
@@ -14,12 +18,19 @@
 //! * [`visibility`]: the scene visibility channel of Part III, with
 //!   jackknife standard errors.
 
+#![deny(clippy::undocumented_unsafe_blocks)]
+
+pub mod backend;
+pub mod camera;
 pub mod lines;
 pub mod meshes;
 pub mod obj;
+pub mod preview;
 pub mod scene;
 pub mod solids;
 pub mod tracer;
 pub mod viewpoint;
 pub mod visibility;
 pub mod vulkan;
+
+pub use backend::{BackendChoice, BackendError, open};

@@ -6,8 +6,9 @@ use std::time::Instant;
 
 use itgfx_backends::obj::load_obj;
 use itgfx_backends::scene::{Scene, built_in};
-use itgfx_backends::tracer::{BackendChoice, Prepared, open};
+use itgfx_backends::tracer::Prepared;
 use itgfx_backends::visibility::{LineOptions, VisibilityCounts, count_visibility};
+use itgfx_backends::{BackendChoice, open};
 
 use crate::CliError;
 use crate::args::Args;
@@ -101,7 +102,8 @@ pub fn run(args: &Args) -> Result<(Report, VisibilityCounts, Scene), CliError> {
     if !(1..=1024).contains(&subdivide) {
         return Err(CliError::usage("--subdivide must be in 1..=1024"));
     }
-    let choice = BackendChoice::parse(args.value("backend").unwrap_or("cpu")).map_err(CliError::usage)?;
+    let choice =
+        args.value("backend").unwrap_or("cpu").parse::<BackendChoice>().map_err(|e| CliError::usage(e.to_string()))?;
     let local = args.flag("local");
     let scene = load_scene(&spec, subdivide as u32)?;
     let t0 = Instant::now();

@@ -3,10 +3,11 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use itgfx_backends::tracer::{BackendChoice, Prepared, open};
+use itgfx_backends::tracer::Prepared;
 use itgfx_backends::viewpoint::saliency::{mesh_saliency, patch_adjacency, smooth, viewpoint_saliency};
 use itgfx_backends::viewpoint::selection::{best_views, exploration, importance_information};
 use itgfx_backends::viewpoint::{ViewpointAnalysis, ViewpointChannel, ViewpointWeights, icosphere};
+use itgfx_backends::{BackendChoice, open};
 
 use crate::CliError;
 use crate::args::Args;
@@ -78,7 +79,8 @@ pub fn run(args: &Args) -> Result<Report, CliError> {
     }
     let background = args.flag("background");
     let per_polygon = args.flag("per-polygon");
-    let choice = BackendChoice::parse(args.value("backend").unwrap_or("cpu")).map_err(CliError::usage)?;
+    let choice =
+        args.value("backend").unwrap_or("cpu").parse::<BackendChoice>().map_err(|e| CliError::usage(e.to_string()))?;
     let pictures = Pictures { out: args.value("out").map(PathBuf::from) };
     if let Some(d) = &pictures.out {
         std::fs::create_dir_all(d).map_err(|e| CliError::usage(format!("--out {}: {e}", d.display())))?;

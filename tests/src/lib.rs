@@ -1,8 +1,9 @@
 //! Helpers shared by the cross-crate tests.
 
 use itgfx_backends::scene::{Scene, built_in};
-use itgfx_backends::tracer::{BackendChoice, Prepared, open};
+use itgfx_backends::tracer::Prepared;
 use itgfx_backends::visibility::{Complexity, LineOptions, VisibilityCounts, count_visibility};
+use itgfx_backends::{BackendChoice, open};
 use itgfx_core::Base;
 
 /// Counts the visibility channel of a built-in scene on a backend.

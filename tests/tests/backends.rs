@@ -2,18 +2,11 @@
 //! tracer on the same lines, degenerate scenes first.
 
 use glam::DVec3;
-use itgfx_backends::lines::{Line, global_line};
+use itgfx_backends::lines::{Line, LineRng, global_line};
 use itgfx_backends::scene::{Scene, built_in};
-use itgfx_backends::tracer::{BackendChoice, BackendError, CrossingBuffer, Prepared, open};
+use itgfx_backends::tracer::{CrossingBuffer, Hit, Prepared, Tracer};
 use itgfx_backends::visibility::SPHERE_SCALE;
-
-fn crossings(scene: &Scene, choice: BackendChoice, lines: &[Line]) -> Result<CrossingBuffer, BackendError> {
-    let p = Prepared::new(scene);
-    let t = open(choice, &p)?;
-    let mut out = CrossingBuffer::default();
-    t.trace_all(lines, &mut out)?;
-    Ok(out)
-}
+use itgfx_backends::{BackendChoice, open};
 
 fn lines(n: u64, seed: u64) -> Vec<Line> {
     (0..n).map(|i| global_line(seed, i, SPHERE_SCALE)).collect()
@@ -38,17 +31,61 @@ fn backends() -> Vec<BackendChoice> {
     }
 }
 
-/// Every backend finds exactly the reference's crossings (same patches,
-/// same t to the bit: all use the same watertight test, the BVH only prunes,
-/// and the Vulkan kernel returns the numerator and determinant for the host
-/// to finish as the CPU does).
+/// Rays from points inside the scene's box in random directions, cut short
+/// at a random `tmax`: closest hits that stop early, and occlusion that is
+/// often false.
+fn inner_rays(n: u64, seed: u64) -> Vec<Line> {
+    (0..n)
+        .map(|i| {
+            let r = LineRng::new(seed, i);
+            let o = DVec3::new(r.uniform(0), r.uniform(1), r.uniform(2)) - 0.5;
+            let d = r.sphere_point(3);
+            Line::ray(o, d, 0.0, 0.05 + 2.0 * r.uniform(40))
+        })
+        .collect()
+}
+
+fn queries(t: &dyn Tracer, ls: &[Line]) -> (CrossingBuffer, Vec<Option<Hit>>, Vec<bool>) {
+    let (mut all, mut first, mut any) = (CrossingBuffer::default(), Vec::new(), Vec::new());
+    t.trace_all(ls, &mut all).unwrap();
+    t.closest_hit(ls, &mut first).unwrap();
+    t.occluded(ls, &mut any).unwrap();
+    (all, first, any)
+}
+
+/// Every backend answers all three queries exactly as the reference does
+/// (same patches, same t to the bit: all use the same watertight test, the
+/// BVH only prunes, and the Vulkan kernel returns the numerator and
+/// determinant for the host to finish as the CPU does), and the three
+/// queries agree with each other: the closest hit is the first crossing and
+/// a line is occluded when it crosses anything.
 fn agrees(scene: &Scene, n: u64) {
-    let ls = lines(n, 11);
-    let reference = crossings(scene, BackendChoice::Reference, &ls).unwrap();
-    for choice in backends() {
-        let got = crossings(scene, choice, &ls).unwrap();
-        for i in 0..ls.len() {
-            assert_eq!(got.line(i), reference.line(i), "{} on {choice:?}: line {i} differs", scene.name);
+    let p = Prepared::new(scene);
+    let reference = open(BackendChoice::Reference, &p).unwrap();
+    for ls in [lines(n, 11), inner_rays(n, 12)] {
+        let (r_all, r_first, r_any) = queries(reference.as_ref(), &ls);
+        for (i, l) in ls.iter().enumerate() {
+            let line = r_all.line(i);
+            let first = line.first().map(|c| (c.t, c.patch, c.primitive, c.cos));
+            assert_eq!(r_first[i].map(|h| (h.t, h.patch, h.primitive, h.cos)), first, "{}: line {i}", scene.name);
+            assert_eq!(r_any[i], !line.is_empty(), "{}: line {i}", scene.name);
+            if let (Some(h), None) = (r_first[i], &scene.sphere) {
+                // The barycentric point is the hit point.
+                let v = p.triangles[h.primitive as usize];
+                let [b1, b2] = h.barycentric;
+                let at = v[0] * (1.0 - b1 - b2) + v[1] * b1 + v[2] * b2;
+                let o = glam::Vec3A::from(l.origin) + glam::Vec3A::from(l.direction) * h.t;
+                assert!((at - o).length() < 1e-4, "{}: line {i}: {at} vs {o}", scene.name);
+            }
+        }
+        for choice in backends() {
+            let t = open(choice, &p).unwrap();
+            let (all, first, any) = queries(t.as_ref(), &ls);
+            for i in 0..ls.len() {
+                assert_eq!(all.line(i), r_all.line(i), "{} on {choice:?}: line {i} differs", scene.name);
+            }
+            assert_eq!(first, r_first, "{} on {choice:?}: closest hits differ", scene.name);
+            assert_eq!(any, r_any, "{} on {choice:?}: occlusion differs", scene.name);
         }
     }
 }

@@ -3,7 +3,7 @@
 //! (jackknife over 8 blocks of lines), so a test fails only if the estimate
 //! is more than 3 standard errors from the published figure.
 
-use itgfx_backends::tracer::BackendChoice;
+use itgfx_backends::BackendChoice;
 use itgfx_tests::run;
 
 fn within(got: f64, want: f64, se: f64, what: &str) {

@@ -2,10 +2,11 @@
 
 use glam::DVec3;
 use itgfx_backends::scene::Scene;
-use itgfx_backends::tracer::{BackendChoice, Prepared, open};
+use itgfx_backends::tracer::Prepared;
 use itgfx_backends::viewpoint::saliency::{mesh_saliency, patch_adjacency, viewpoint_saliency};
 use itgfx_backends::viewpoint::selection::{best_views, exploration, importance_information};
 use itgfx_backends::viewpoint::{ViewpointAnalysis, ViewpointChannel, ViewpointWeights, icosphere};
+use itgfx_backends::{BackendChoice, open};
 use itgfx_core::Base;
 
 fn solid_cube() -> Scene {

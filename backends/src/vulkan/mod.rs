@@ -14,11 +14,11 @@ pub mod reduce;
 pub mod tracer;
 
 use std::ffi::CStr;
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
 use ash::vk;
 
-use crate::tracer::BackendError;
+use crate::backend::BackendError;
 
 /// What `itgfx devices` prints for one physical device.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -56,10 +56,12 @@ fn vk_err(what: &str, e: vk::Result) -> BackendError {
 }
 
 fn load_entry() -> Result<ash::Entry, BackendError> {
-    // SAFETY: loading the Vulkan loader runs its initialisers; it is the
-    // documented way to use ash's `loaded` feature.
     let entry = match std::env::var_os("ITGFX_VULKAN_LIBRARY") {
+        // SAFETY: loading a Vulkan loader runs its initialisers; it is the
+        // documented way to use ash's `loaded` feature, and the library named
+        // by ITGFX_VULKAN_LIBRARY is trusted as the system loader is.
         Some(path) => unsafe { ash::Entry::load_from(path) },
+        // SAFETY: as above, for the system's `libvulkan.so.1`.
         None => unsafe { ash::Entry::load() },
     };
     entry.map_err(|e| unavailable(format!("no Vulkan loader ({e}); {FIX}")))
@@ -167,11 +169,30 @@ fn compute_queue(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Option<u32
     fams.iter().position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE)).map(|i| i as u32)
 }
 
-/// An open device with one compute queue; every submission is serialised.
-pub struct Gpu {
+/// The loader, instance and logical device. Every [`Gpu`], [`Buffer`] and
+/// [`Kernel`] holds it by `Arc`, so the device outlives whatever was made
+/// from it, whatever order safe code drops them in.
+struct Device {
     _entry: ash::Entry,
     instance: ash::Instance,
     device: ash::Device,
+}
+
+impl Drop for Device {
+    fn drop(&mut self) {
+        // SAFETY: this is the last handle: every buffer, kernel and command
+        // pool made from the device held this `Arc` and has been dropped.
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            self.device.destroy_device(None);
+            self.instance.destroy_instance(None);
+        }
+    }
+}
+
+/// An open device with one compute queue; every submission is serialised.
+pub struct Gpu {
+    shared: Arc<Device>,
     queue: Mutex<vk::Queue>,
     pool: Mutex<vk::CommandPool>,
     memory: vk::PhysicalDeviceMemoryProperties,
@@ -189,47 +210,51 @@ impl Gpu {
         let instance = create_instance(&entry)?;
         match Self::open_on(entry, &instance) {
             Ok(g) => Ok(g),
-            Err(e) => {
-                // SAFETY: nothing else holds the instance.
+            Err(Failed::BeforeDevice(e)) => {
+                // SAFETY: nothing was created from the instance.
                 unsafe { instance.destroy_instance(None) };
                 Err(e)
             }
+            Err(Failed::AfterDevice(e)) => Err(e),
         }
     }
 
-    fn open_on(entry: ash::Entry, instance: &ash::Instance) -> Result<Self, BackendError> {
-        let pds = physical_devices(instance)?;
+    fn open_on(entry: ash::Entry, instance: &ash::Instance) -> Result<Self, Failed> {
+        let pds = physical_devices(instance).map_err(Failed::BeforeDevice)?;
         let infos: Vec<DeviceInfo> = pds.iter().map(|&pd| describe(instance, pd)).collect();
-        let (i, family) = choose(instance, &pds, &infos)
-            .ok_or_else(|| unavailable(format!("no Vulkan device with 64-bit float shaders and compute; {FIX}")))?;
+        let (i, family) = choose(instance, &pds, &infos).ok_or_else(|| {
+            Failed::BeforeDevice(unavailable(format!("no Vulkan device with 64-bit float shaders and compute; {FIX}")))
+        })?;
         let pd = pds[i];
         let priorities = [1.0f32];
         let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
         let features = vk::PhysicalDeviceFeatures::default().shader_float64(true);
         let info = vk::DeviceCreateInfo::default().queue_create_infos(&queues).enabled_features(&features);
         // SAFETY: valid create info for a device of this instance.
-        let device = unsafe { instance.create_device(pd, &info, None) }.map_err(|e| vk_err("vkCreateDevice", e))?;
+        let device = unsafe { instance.create_device(pd, &info, None) }
+            .map_err(|e| Failed::BeforeDevice(vk_err("vkCreateDevice", e)))?;
         // SAFETY: the family and index exist (created above).
         let queue = unsafe { device.get_device_queue(family, 0) };
         let pool_info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(family)
             .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        // From here on the device is destroyed with its last handle; the
+        // caller destroys the instance only when this function fails before.
+        let shared = Arc::new(Device { _entry: entry, instance: instance.clone(), device });
         // SAFETY: the device is live.
-        let pool = unsafe { device.create_command_pool(&pool_info, None) }.map_err(|e| {
-            unsafe { device.destroy_device(None) };
-            vk_err("vkCreateCommandPool", e)
-        })?;
+        let pool = unsafe { shared.device.create_command_pool(&pool_info, None) }
+            .map_err(|e| vk_err("vkCreateCommandPool", e));
+        let pool = match pool {
+            Ok(p) => p,
+            Err(e) => {
+                // Dropping `shared` destroys the device and the instance.
+                drop(shared);
+                return Err(Failed::AfterDevice(e));
+            }
+        };
         // SAFETY: `pd` comes from this instance.
         let memory = unsafe { instance.get_physical_device_memory_properties(pd) };
-        Ok(Self {
-            _entry: entry,
-            instance: instance.clone(),
-            device,
-            queue: Mutex::new(queue),
-            pool: Mutex::new(pool),
-            memory,
-            info: infos[i].clone(),
-        })
+        Ok(Self { shared, queue: Mutex::new(queue), pool: Mutex::new(pool), memory, info: infos[i].clone() })
     }
 
     /// A host-visible, coherent storage buffer of `bytes`, mapped.
@@ -239,12 +264,15 @@ impl Gpu {
     pub fn buffer(&self, bytes: u64) -> Result<Buffer, BackendError> {
         let bytes = bytes.max(16);
         if bytes > u64::from(self.info.max_storage_buffer_range) {
-            return Err(unavailable(format!(
-                "a {bytes}-byte buffer exceeds this device's storage-buffer limit of {} bytes (at 48 bytes a triangle, about 2.8 million triangles on lavapipe); use --backend cpu",
-                self.info.max_storage_buffer_range
-            )));
+            return Err(BackendError::TooLarge {
+                backend: "vulkan",
+                reason: format!(
+                    "a {bytes}-byte buffer exceeds this device's storage-buffer limit of {} bytes (at 48 bytes a triangle, about 2.8 million triangles on lavapipe); use --backend cpu",
+                    self.info.max_storage_buffer_range
+                ),
+            });
         }
-        let d = &self.device;
+        let d = &self.shared.device;
         let info = vk::BufferCreateInfo::default()
             .size(bytes)
             .usage(vk::BufferUsageFlags::STORAGE_BUFFER)
@@ -273,7 +301,9 @@ impl Gpu {
                 .bind_buffer_memory(buffer, memory, 0)
                 .and_then(|()| d.map_memory(memory, 0, vk::WHOLE_SIZE, vk::MemoryMapFlags::empty()));
             match mapped {
-                Ok(ptr) => Ok(Buffer { device: d.clone(), buffer, memory, ptr: ptr.cast(), bytes: bytes as usize }),
+                Ok(ptr) => {
+                    Ok(Buffer { shared: self.shared.clone(), buffer, memory, ptr: ptr.cast(), bytes: bytes as usize })
+                }
                 Err(e) => {
                     d.destroy_buffer(buffer, None);
                     d.free_memory(memory, None);
@@ -289,7 +319,7 @@ impl Gpu {
     /// # Errors
     /// Pipeline creation failures.
     pub fn kernel(&self, spirv: &[u8], entry: &CStr, bindings: u32, push: u32) -> Result<Kernel, BackendError> {
-        let d = &self.device;
+        let d = &self.shared.device;
         let words: Vec<u32> = spirv.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
         let binding: Vec<vk::DescriptorSetLayoutBinding> = (0..bindings)
             .map(|b| {
@@ -300,17 +330,30 @@ impl Gpu {
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
             })
             .collect();
-        // SAFETY: all create infos are valid; objects are destroyed in `Kernel::drop`.
+        // Filled in step by step: on an early return, dropping `k` destroys
+        // what was made so far (destroying a null handle is a no-op).
+        let mut k = Kernel {
+            shared: self.shared.clone(),
+            module: vk::ShaderModule::null(),
+            set_layout: vk::DescriptorSetLayout::null(),
+            layout: vk::PipelineLayout::null(),
+            pipeline: vk::Pipeline::null(),
+            pool: vk::DescriptorPool::null(),
+            set: vk::DescriptorSet::null(),
+            bindings,
+        };
+        // SAFETY: every create info is valid and refers to live objects made
+        // just before it; each object is owned by `k`, whose drop destroys it.
         unsafe {
-            let module = d
+            k.module = d
                 .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None)
                 .map_err(|e| vk_err("vkCreateShaderModule", e))?;
-            let set_layout = d
+            k.set_layout = d
                 .create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&binding), None)
                 .map_err(|e| vk_err("vkCreateDescriptorSetLayout", e))?;
             let ranges = [vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::COMPUTE).size(push)];
-            let layouts = [set_layout];
-            let layout = d
+            let layouts = [k.set_layout];
+            k.layout = d
                 .create_pipeline_layout(
                     &vk::PipelineLayoutCreateInfo::default().set_layouts(&layouts).push_constant_ranges(&ranges),
                     None,
@@ -318,24 +361,24 @@ impl Gpu {
                 .map_err(|e| vk_err("vkCreatePipelineLayout", e))?;
             let stage = vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::COMPUTE)
-                .module(module)
+                .module(k.module)
                 .name(entry);
-            let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
-            let pipeline = d
+            let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(k.layout)];
+            k.pipeline = d
                 .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
                 .map_err(|(_, e)| vk_err("vkCreateComputePipelines", e))?[0];
             let sizes =
                 [vk::DescriptorPoolSize::default().ty(vk::DescriptorType::STORAGE_BUFFER).descriptor_count(bindings)];
-            let pool = d
+            k.pool = d
                 .create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes), None)
                 .map_err(|e| vk_err("vkCreateDescriptorPool", e))?;
-            let set = d
+            k.set = d
                 .allocate_descriptor_sets(
-                    &vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&layouts),
+                    &vk::DescriptorSetAllocateInfo::default().descriptor_pool(k.pool).set_layouts(&layouts),
                 )
                 .map_err(|e| vk_err("vkAllocateDescriptorSets", e))?[0];
-            Ok(Kernel { device: d.clone(), module, set_layout, layout, pipeline, pool, set, bindings })
         }
+        Ok(k)
     }
 
     /// Records and runs one dispatch of `groups` workgroups and waits for it.
@@ -344,7 +387,11 @@ impl Gpu {
     /// Submission failures.
     pub fn dispatch(&self, k: &Kernel, buffers: &[&Buffer], push: &[u8], groups: u32) -> Result<(), BackendError> {
         assert_eq!(buffers.len() as u32, k.bindings, "one buffer per binding");
-        let d = &self.device;
+        assert!(
+            Arc::ptr_eq(&k.shared, &self.shared) && buffers.iter().all(|b| Arc::ptr_eq(&b.shared, &self.shared)),
+            "kernel and buffers belong to this device"
+        );
+        let d = &self.shared.device;
         let pool = self.pool.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         let queue = self.queue.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         // SAFETY: the pool and queue are held exclusively; every handle is live;
@@ -418,20 +465,28 @@ impl Gpu {
 
 impl Drop for Gpu {
     fn drop(&mut self) {
-        // SAFETY: owners drop buffers and kernels before the `Gpu` (field order).
+        let pool = *self.pool.get_mut().unwrap_or_else(std::sync::PoisonError::into_inner);
+        // SAFETY: every dispatch waited for its fence, so the pool's command
+        // buffers are idle; the device lives on in `shared` until its last
+        // buffer and kernel are dropped too.
         unsafe {
-            let _ = self.device.device_wait_idle();
-            self.device
-                .destroy_command_pool(*self.pool.get_mut().unwrap_or_else(std::sync::PoisonError::into_inner), None);
-            self.device.destroy_device(None);
-            self.instance.destroy_instance(None);
+            let _ = self.shared.device.device_wait_idle();
+            self.shared.device.destroy_command_pool(pool, None);
         }
     }
 }
 
-/// A mapped host-visible storage buffer. Drop it before its [`Gpu`].
+/// Why opening failed, and whether the instance is already destroyed.
+enum Failed {
+    /// Nothing made from the instance yet: the caller destroys it.
+    BeforeDevice(BackendError),
+    /// The device (and with it the instance) was destroyed already.
+    AfterDevice(BackendError),
+}
+
+/// A mapped host-visible storage buffer; it keeps its device alive.
 pub struct Buffer {
-    device: ash::Device,
+    shared: Arc<Device>,
     buffer: vk::Buffer,
     memory: vk::DeviceMemory,
     ptr: *mut u8,
@@ -480,18 +535,20 @@ impl Buffer {
 
 impl Drop for Buffer {
     fn drop(&mut self) {
-        // SAFETY: dispatches wait for completion, so the GPU no longer uses it.
+        let d = &self.shared.device;
+        // SAFETY: dispatches wait for completion, so the GPU no longer uses
+        // it, and the device is alive (held by `shared`).
         unsafe {
-            self.device.unmap_memory(self.memory);
-            self.device.destroy_buffer(self.buffer, None);
-            self.device.free_memory(self.memory, None);
+            d.unmap_memory(self.memory);
+            d.destroy_buffer(self.buffer, None);
+            d.free_memory(self.memory, None);
         }
     }
 }
 
-/// A compute pipeline with its descriptor set. Drop it before its [`Gpu`].
+/// A compute pipeline with its descriptor set; it keeps its device alive.
 pub struct Kernel {
-    device: ash::Device,
+    shared: Arc<Device>,
     module: vk::ShaderModule,
     set_layout: vk::DescriptorSetLayout,
     layout: vk::PipelineLayout,
@@ -503,8 +560,10 @@ pub struct Kernel {
 
 impl Drop for Kernel {
     fn drop(&mut self) {
-        let d = &self.device;
-        // SAFETY: no dispatch is in flight (each waits for its fence).
+        let d = &self.shared.device;
+        // SAFETY: no dispatch is in flight (each waits for its fence), the
+        // device is alive (held by `shared`), and null handles of a kernel
+        // whose creation stopped early are ignored by vkDestroy*.
         unsafe {
             d.destroy_descriptor_pool(self.pool, None);
             d.destroy_pipeline(self.pipeline, None);

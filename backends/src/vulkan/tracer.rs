@@ -1,4 +1,4 @@
-//! [`VulkanTracer`]: every crossing of each line, on a Vulkan device.
+//! [`VulkanTracer`]: the tracing seam on a Vulkan device.
 //!
 //! The kernel (`shaders/trace.wgsl`) walks a BVH2 that obvhs builds on the
 //! host over the same padded triangle boxes as the CPU backend's BVH (a
@@ -12,6 +12,14 @@
 //! with more than [`MAX_HITS`] crossings, or whose traversal overflows the
 //! kernel's 64-entry stack, is retraced by the CPU backend (counted in
 //! [`VulkanTracer::host_retraced`]).
+//!
+//! Closest-hit queries run the same kernel in its mode 1: the device keeps
+//! the crossing with the smallest `t` (ties to the smaller triangle, the
+//! host's order) and shrinks the interval it searches; the host recomputes
+//! that triangle's hit with the CPU's arithmetic (`t`, barycentrics,
+//! normal). Occlusion is a closest-hit query: exact, and the device's early
+//! exit would save little on a GPU where a warp waits for its slowest line.
+//! Design notes: `docs/VULKAN.md`.
 
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -20,9 +28,8 @@ use glam::{Vec3, Vec3A};
 
 use super::{Buffer, Gpu, Kernel};
 use crate::lines::Line;
-use crate::tracer::{
-    BackendError, CpuTracer, Crossing, CrossingBuffer, Prepared, Shear, Tracer, bvh_input, finish, sphere_crossings,
-};
+use crate::tracer::watertight::{Shear, finish, sphere_crossings, sphere_hit, triangle_hit};
+use crate::tracer::{BackendError, CpuTracer, Crossing, CrossingBuffer, Hit, Prepared, Tracer, bvh_input};
 
 /// Raw hits kept per line on the device.
 pub const MAX_HITS: usize = 16;
@@ -111,9 +118,11 @@ impl VulkanTracer {
         self.retraced.load(Ordering::Relaxed)
     }
 
-    fn trace_chunk(&self, st: &mut Staging, lines: &[Line], out: &mut CrossingBuffer) -> Result<(), BackendError> {
+    /// Uploads a chunk of lines and runs the kernel in `mode` (0: every
+    /// crossing, 1: the closest); returns each line's direction.
+    fn dispatch(&self, st: &mut Staging, lines: &[Line], mode: u32) -> Result<Vec<Vec3A>, BackendError> {
         let mut words = Vec::with_capacity(lines.len() * 12);
-        let mut shears = Vec::with_capacity(lines.len());
+        let mut dirs = Vec::with_capacity(lines.len());
         for l in lines {
             let org = Vec3A::from(Vec3::from(l.origin));
             let dir = Vec3A::from(Vec3::from(l.direction));
@@ -125,23 +134,33 @@ impl VulkanTracer {
             // stand-in so that 0 · ∞ never makes a NaN.
             let inv = |d: f32| if d == 0.0 { 1e30 } else { 1.0 / d };
             words.extend([k, inv(dir.x).to_bits(), inv(dir.y).to_bits(), inv(dir.z).to_bits()]);
-            shears.push(dir);
+            dirs.push(dir);
         }
         st.lines.write_words(0, words);
-        let push: Vec<u8> = [lines.len() as u32, MAX_HITS as u32, 0, 0].iter().flat_map(|w| w.to_le_bytes()).collect();
+        let push: Vec<u8> =
+            [lines.len() as u32, MAX_HITS as u32, mode, 0].iter().flat_map(|w| w.to_le_bytes()).collect();
         let groups = lines.len().div_ceil(64) as u32;
         let buffers = [&self.nodes, &self.triangles, &self.prims, &st.lines, &st.counts, &st.hits];
         self.gpu.dispatch(&self.kernel, &buffers, &push, groups)?;
+        Ok(dirs)
+    }
+
+    /// The CPU backend, built on first need.
+    fn fallback(&self) -> &CpuTracer {
+        self.retraced.fetch_add(1, Ordering::Relaxed);
+        self.fallback.get_or_init(|| CpuTracer::new(&self.scene))
+    }
+
+    fn trace_chunk(&self, st: &mut Staging, lines: &[Line], out: &mut CrossingBuffer) -> Result<(), BackendError> {
+        let dirs = self.dispatch(st, lines, 0)?;
         let mut hits = Vec::with_capacity(MAX_HITS);
         for (i, l) in lines.iter().enumerate() {
             let n = st.counts.word(i) as usize;
-            let dir = &shears[i];
+            let dir = &dirs[i];
             if n > MAX_HITS {
                 // Too many crossings for the device's slots, or a stack overflow.
-                self.retraced.fetch_add(1, Ordering::Relaxed);
                 let mut one = CrossingBuffer::default();
-                let cpu = self.fallback.get_or_init(|| CpuTracer::new(&self.scene));
-                cpu.trace_all(std::slice::from_ref(l), &mut one)?;
+                self.fallback().trace_all(std::slice::from_ref(l), &mut one)?;
                 hits.extend_from_slice(one.line(0));
             } else {
                 for j in 0..n {
@@ -157,6 +176,27 @@ impl VulkanTracer {
                 }
             }
             finish(&mut hits, out);
+        }
+        Ok(())
+    }
+
+    fn closest_chunk(&self, st: &mut Staging, lines: &[Line], out: &mut Vec<Option<Hit>>) -> Result<(), BackendError> {
+        self.dispatch(st, lines, 1)?;
+        for (i, l) in lines.iter().enumerate() {
+            let hit = match st.counts.word(i) {
+                0 => None,
+                1 => {
+                    let tri = st.hits.word(4 * i * MAX_HITS + 2);
+                    match triangle_hit(&self.scene, l, tri) {
+                        Some(h) => Some(h),
+                        // The device's division rounded differently: ask the host.
+                        None => self.fallback().closest(l),
+                    }
+                }
+                // The traversal stack overflowed.
+                _ => self.fallback().closest(l),
+            };
+            out.push(hit);
         }
         Ok(())
     }
@@ -184,6 +224,27 @@ impl Tracer for VulkanTracer {
         for chunk in lines.chunks(CHUNK) {
             self.trace_chunk(&mut st, chunk, out)?;
         }
+        Ok(())
+    }
+
+    fn closest_hit(&self, lines: &[Line], out: &mut Vec<Option<Hit>>) -> Result<(), BackendError> {
+        out.clear();
+        if self.scene.triangles.is_empty() {
+            out.extend(lines.iter().map(|l| self.scene.sphere.as_ref().and_then(|s| sphere_hit(s, l))));
+            return Ok(());
+        }
+        let mut st = self.staging.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        for chunk in lines.chunks(CHUNK) {
+            self.closest_chunk(&mut st, chunk, out)?;
+        }
+        Ok(())
+    }
+
+    fn occluded(&self, lines: &[Line], out: &mut Vec<bool>) -> Result<(), BackendError> {
+        let mut hits = Vec::with_capacity(lines.len());
+        self.closest_hit(lines, &mut hits)?;
+        out.clear();
+        out.extend(hits.iter().map(Option::is_some));
         Ok(())
     }
 }

@@ -7,9 +7,8 @@ use std::io::Write;
 use std::path::Path;
 
 use glam::DVec3;
-use itgfx_backends::lines::Line;
 use itgfx_backends::scene::Scene;
-use itgfx_backends::tracer::{CrossingBuffer, Tracer};
+use itgfx_backends::tracer::Tracer;
 use rayon::prelude::*;
 
 use crate::CliError;
@@ -167,17 +166,10 @@ pub fn render_png_from(
     write_png(&render_image(tracer, cols, eye, size, Faces::Front)?, path)
 }
 
-/// Which crossing a pixel shows.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Faces {
-    /// The first crossing facing the camera (enclosures seen from outside).
-    Front,
-    /// The first crossing, either side (objects; open meshes show their inside).
-    Both,
-}
+pub use itgfx_backends::preview::Faces;
 
 /// Renders patches in their colours from `eye` looking at the origin, with
-/// `|cos|` shading.
+/// `|cos|` shading (`itgfx_backends::preview`).
 ///
 /// # Errors
 /// Tracing errors, one line.
@@ -188,45 +180,9 @@ pub fn render_image(
     size: (u32, u32),
     faces: Faces,
 ) -> Result<image::RgbImage, CliError> {
-    let (w, h) = size;
-    let fwd = (-eye).normalize();
-    let up_hint = if fwd.cross(DVec3::Y).length() < 1e-6 { DVec3::Z } else { DVec3::Y };
-    let right = fwd.cross(up_hint).normalize();
-    let up = right.cross(fwd);
-    // Field of view: the unit bounding sphere with a margin.
-    let tan = (1.15 / eye.length()).min(0.9).asin().tan();
-    let mut lines = Vec::with_capacity((w * h) as usize);
-    for y in 0..h {
-        for x in 0..w {
-            let u = (2.0 * (f64::from(x) + 0.5) / f64::from(w) - 1.0) * tan * f64::from(w) / f64::from(h);
-            let v = (1.0 - 2.0 * (f64::from(y) + 0.5) / f64::from(h)) * tan;
-            let d = (fwd + right * u + up * v).normalize();
-            lines.push(Line {
-                origin: eye.as_vec3().to_array(),
-                tmin: 0.0,
-                direction: d.as_vec3().to_array(),
-                tmax: 10.0,
-            });
-        }
-    }
-    let mut buf = CrossingBuffer::default();
-    tracer.trace_all(&lines, &mut buf).map_err(|e| CliError::usage(e.to_string()))?;
-    let mut img = image::RgbImage::new(w, h);
-    for (i, px) in img.pixels_mut().enumerate() {
-        let hit = match faces {
-            Faces::Front => buf.line(i).iter().find(|c| c.cos < 0.0),
-            Faces::Both => buf.line(i).first(),
-        };
-        *px = match hit {
-            Some(c) => {
-                let shade = 0.35 + 0.65 * f64::from(c.cos.abs());
-                let col = cols[c.patch as usize];
-                image::Rgb(col.map(|k| (f64::from(k) * shade).round() as u8))
-            }
-            None => image::Rgb([24, 24, 28]),
-        };
-    }
-    Ok(img)
+    let px = itgfx_backends::preview::render_patches(tracer, cols, eye, size, faces)
+        .map_err(|e| CliError::usage(e.to_string()))?;
+    Ok(image::RgbImage::from_fn(size.0, size.1, |x, y| image::Rgb(px[(y * size.0 + x) as usize])))
 }
 
 /// Writes an image as PNG, atomically.

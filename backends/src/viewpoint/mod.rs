@@ -29,7 +29,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::lines::Line;
-use crate::tracer::{BackendError, CrossingBuffer, Prepared, Tracer};
+use crate::tracer::{BackendError, Prepared, Tracer};
 
 /// Unit directions of a subdivided icosahedron: 12, 42, 162, 642, 2562
 /// points for `level` 0..=4 (see [`crate::meshes::icosphere_mesh`]).
@@ -173,9 +173,9 @@ fn view_row(tracer: &dyn Tracer, dir: DVec3, distance: f64, r: u32) -> Result<Ro
             });
         }
     }
-    let mut buf = CrossingBuffer::default();
-    tracer.trace_all(&lines, &mut buf)?;
-    let mut hits: Vec<u32> = (0..lines.len()).filter_map(|k| buf.line(k).first().map(|c| c.patch)).collect();
+    let mut first = Vec::with_capacity(lines.len());
+    tracer.closest_hit(&lines, &mut first)?;
+    let mut hits: Vec<u32> = first.iter().flatten().map(|h| h.patch).collect();
     let bg = (lines.len() - hits.len()) as f64 * per;
     hits.sort_unstable();
     let (mut patch, mut angle) = (Vec::new(), Vec::new());

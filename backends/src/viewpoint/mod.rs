@@ -16,12 +16,15 @@
 //! * [`analysis`]: viewpoint entropy, VMI, VKL, `I(V;O)`, the heuristic of
 //!   eq. (1), polygonal mutual information, dissimilarity and stability;
 //! * [`saliency`]: polygon adjacency, mesh saliency and viewpoint saliency;
+//! * [`solid_angle`]: the default estimate of `a_o` from exact triangle
+//!   solid angles and visibility sampled where it changes, with standard errors;
 //! * [`selection`]: best-n views, the guided exploration path and
 //!   importance-driven selection.
 
 pub mod analysis;
 pub mod saliency;
 pub mod selection;
+pub mod solid_angle;
 
 pub use analysis::{ViewpointAnalysis, ViewpointMeasures, ViewpointWeights};
 

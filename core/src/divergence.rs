@@ -46,13 +46,27 @@ pub trait FGenerator {
     fn f_at_zero(&self) -> f64;
     /// `lim_{u→∞} f(u)/u` (may be `+∞`).
     fn slope_at_infinity(&self) -> f64;
+    /// `q f(p/q)` for `p, q > 0`. The default forms the ratio; where it
+    /// overflows (`q` subnormal) it uses `p · lim f(u)/u`, and where it
+    /// underflows to 0, `q f(0)`. Generators with a closed form in `p` and
+    /// `q` override this so that no ratio is formed (all of this module's do).
+    fn term(&self, p: f64, q: f64) -> f64 {
+        let u = p / q;
+        if u == f64::INFINITY {
+            p * self.slope_at_infinity()
+        } else if u == 0.0 {
+            q * self.f_at_zero()
+        } else {
+            q * self.f(u)
+        }
+    }
 }
 
 /// `q f(p/q)` with the extension rules of Part III-IV eq. (5).
 #[inline]
 pub fn f_term<G: FGenerator + ?Sized>(g: &G, p: f64, q: f64) -> f64 {
     if q > 0.0 {
-        if p > 0.0 { q * g.f(p / q) } else { q * g.f_at_zero() }
+        if p > 0.0 { g.term(p, q) } else { q * g.f_at_zero() }
     } else if p > 0.0 {
         p * g.slope_at_infinity()
     } else {
@@ -94,6 +108,10 @@ impl FGenerator for KullbackLeibler {
     fn slope_at_infinity(&self) -> f64 {
         f64::INFINITY
     }
+    /// `p ln(p/q)`, with two logarithms where the ratio leaves the doubles.
+    fn term(&self, p: f64, q: f64) -> f64 {
+        kl_term(p, q)
+    }
 }
 
 /// `f(u) = (u − 1)²`: Pearson's chi-square (Part III-IV eq. (8)).
@@ -108,6 +126,11 @@ impl FGenerator for ChiSquare {
     }
     fn slope_at_infinity(&self) -> f64 {
         f64::INFINITY
+    }
+    /// `(p − q)²/q`: `+∞` only where the true value exceeds the doubles.
+    fn term(&self, p: f64, q: f64) -> f64 {
+        let d = p - q;
+        d * (d / q)
     }
 }
 
@@ -125,6 +148,13 @@ impl FGenerator for Hellinger {
     fn slope_at_infinity(&self) -> f64 {
         0.5
     }
+    /// `½(√p − √q)²` directly: bounded by `½(p + q)` whatever `q` is (the
+    /// ratio `p/q` overflowed for subnormal `q` and gave `+∞`).
+    fn term(&self, p: f64, q: f64) -> f64 {
+        // √p − √q = (p − q)/(√p + √q): no cancellation when p ≈ q.
+        let r = (p - q) / (libm::sqrt(p) + libm::sqrt(q));
+        0.5 * r * r
+    }
 }
 
 /// `f(u) = ½|u − 1|`: total variation, equal to Table 1's Vasershtein–Ornstein
@@ -140,6 +170,10 @@ impl FGenerator for TotalVariation {
     }
     fn slope_at_infinity(&self) -> f64 {
         0.5
+    }
+    /// `½|p − q|` directly (bounded; no ratio to overflow).
+    fn term(&self, p: f64, q: f64) -> f64 {
+        0.5 * (p - q).abs()
     }
 }
 
@@ -162,6 +196,17 @@ impl FGenerator for ArithmeticGeometric {
     }
     fn slope_at_infinity(&self) -> f64 {
         f64::INFINITY
+    }
+    /// `q f(p/q)`, or `a (ln a − ½ ln p − ½ ln q)` with `a = (p + q)/2`
+    /// where the ratio leaves the normal doubles (finite for all `p, q > 0`).
+    fn term(&self, p: f64, q: f64) -> f64 {
+        let u = p / q;
+        if (f64::MIN_POSITIVE..=f64::MAX).contains(&u) {
+            q * self.f(u)
+        } else {
+            let a = 0.5 * p + 0.5 * q;
+            a * (ln(a) - 0.5 * (ln(p) + ln(q)))
+        }
     }
 }
 

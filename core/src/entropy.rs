@@ -163,15 +163,19 @@ pub fn renyi_entropy<T: Real>(p: &[T], alpha: f64, base: Base) -> Result<T, Erro
     if alpha == 1.0 {
         return entropy(p, base);
     }
+    let max = p.iter().map(|x| x.to_f64()).fold(0.0, f64::max);
     let nats = if alpha == f64::INFINITY {
-        let max = p.iter().map(|x| x.to_f64()).fold(0.0, f64::max);
         -ln(max / s)
     } else if alpha == 0.0 {
         let support = p.iter().filter(|x| x.to_f64() > 0.0).count();
         ln(support as f64)
     } else {
-        let sa = sum_map(p, |x| if x > 0.0 { libm::pow(x / s, alpha) } else { 0.0 });
-        ln(sa) / (1.0 - alpha)
+        // Factor out p_max: H_α = α/(1−α) ln p_max + 1/(1−α) ln Σ (p_i/p_max)^α.
+        // The sum is ≥ 1 (the largest term is 1), so it never underflows to 0
+        // for large α (Σ p^α did: ln 0 then gave a finite wrong value).
+        let sa = sum_map(p, |x| if x > 0.0 { libm::pow(x / max, alpha) } else { 0.0 });
+        let pmax = max / s;
+        alpha / (1.0 - alpha) * ln(pmax) + ln(sa) / (1.0 - alpha)
     };
     Ok(T::from_f64(if nats < 0.0 { 0.0 } else { nats * base.per_nat() }))
 }
@@ -265,5 +269,22 @@ mod tests {
         assert!((renyi_entropy(&p, 0.0, Base::Bits).unwrap() - 2.0).abs() < 1e-15);
         assert!((renyi_entropy(&p, f64::INFINITY, Base::Bits).unwrap() - 1.0).abs() < 1e-15);
         assert!((tsallis_entropy(&p, 2.0).unwrap() - (1.0 - (0.25 + 0.0625 + 2.0 * 0.015625))).abs() < 1e-15);
+    }
+
+    /// Regression (issue 9): for α = 2000, Σ p^α underflowed to 0 and the
+    /// result was 0.539 bits. By hand, H_α(½, ¼, ¼) = α/(α−1) · 1 bit +
+    /// log₂(1 + 2^(1−α))/(1−α), and the second term is below 2^-1999.
+    #[test]
+    fn renyi_large_alpha_is_stable() {
+        let p = [0.5f64, 0.25, 0.25];
+        for alpha in [2000.0, 1e6, 1e300] {
+            let h = renyi_entropy(&p, alpha, Base::Bits).unwrap();
+            let want = alpha / (alpha - 1.0);
+            assert!((h - want).abs() < 1e-14, "alpha {alpha}: {h} vs {want}");
+            assert!(h >= renyi_entropy(&p, f64::INFINITY, Base::Bits).unwrap());
+        }
+        // Two tied maxima: H_α = 1 bit for every α.
+        let h = renyi_entropy(&[0.5f64, 0.5], 5000.0, Base::Bits).unwrap();
+        assert!((h - 1.0).abs() < 1e-15, "{h}");
     }
 }

@@ -66,6 +66,17 @@ pub enum Error {
         /// Iterations spent.
         iterations: usize,
     },
+    /// A Markov chain in which state `state` cannot reach state 0, so it is
+    /// reducible and has no unique stationary distribution this crate computes.
+    ReducibleChain {
+        /// A state that cannot reach state 0.
+        state: usize,
+    },
+    /// An owned helper (`alloc`) could not allocate `bytes` bytes.
+    OutOfMemory {
+        /// Bytes requested.
+        bytes: usize,
+    },
 }
 
 impl fmt::Display for Error {
@@ -93,6 +104,11 @@ impl fmt::Display for Error {
             Error::NotConverged { iterations } => {
                 write!(f, "did not converge in {iterations} iterations")
             }
+            Error::ReducibleChain { state } => write!(
+                f,
+                "the Markov chain is reducible: state {state} cannot reach state 0, so no unique stationary distribution"
+            ),
+            Error::OutOfMemory { bytes } => write!(f, "cannot allocate {bytes} bytes"),
         }
     }
 }

@@ -64,3 +64,57 @@ pub fn grouping<T: Real>(
     let k = base.per_nat();
     Ok(Grouping { h_in: inner.value() * k, h_out: out.value() * k })
 }
+
+/// [`grouping`] for arbitrary label values: outcomes with equal labels form
+/// a group, whatever the labels are (`0` and `99_999_999` are two groups).
+///
+/// Scratch is sized by the number of outcomes `n`, never by the largest
+/// label: `order` (`n` indices) receives the outcomes sorted by label
+/// (stable), and `masses[..g]` the `g` group masses `q_j` in increasing label
+/// order; `g` is returned beside the decomposition. `core`'s unstable sort of
+/// `(label, index)` keys needs no allocation.
+///
+/// # Errors
+/// As [`crate::Pmf::new`]; [`Error::LengthMismatch`] for `labels`, `order`
+/// or `masses`.
+pub fn grouping_by_label<T: Real>(
+    p: &[T],
+    labels: &[usize],
+    order: &mut [usize],
+    masses: &mut [f64],
+    base: Base,
+) -> Result<(Grouping, usize), Error> {
+    same_len(p.len(), labels.len())?;
+    same_len(p.len(), order.len())?;
+    same_len(p.len(), masses.len())?;
+    let s = mass(p)?;
+    check_normalized::<T>(s)?;
+    order.iter_mut().enumerate().for_each(|(k, o)| *o = k);
+    order.sort_unstable_by_key(|&k| (labels[k], k));
+    masses.iter_mut().for_each(|q| *q = 0.0);
+    // Runs of equal labels in `order` are the groups.
+    let mut out = Neumaier::new();
+    let mut inner = Neumaier::new();
+    let mut g = 0;
+    let mut start = 0;
+    while start < order.len() {
+        let label = labels[order[start]];
+        let end = start + order[start..].iter().take_while(|&&k| labels[k] == label).count();
+        let run = &order[start..end];
+        let mut q = Neumaier::new();
+        run.iter().for_each(|&k| q.add(p[k].to_f64() / s));
+        let q = q.value();
+        masses[g] = q;
+        out.add(-xlnx(q));
+        for &k in run {
+            let x = p[k].to_f64() / s;
+            if x > 0.0 {
+                inner.add(-x * (ln(x) - ln(q)));
+            }
+        }
+        g += 1;
+        start = end;
+    }
+    let k = base.per_nat();
+    Ok((Grouping { h_in: inner.value() * k, h_out: out.value() * k }, g))
+}

@@ -91,7 +91,9 @@ pub use entropy::{
 };
 pub use error::Error;
 pub use fano::{fano_bound, fano_minimum_error, fano_weak_bound};
-pub use grouping::{Grouping, grouping};
+pub use grouping::{Grouping, grouping, grouping_by_label};
+#[cfg(feature = "alloc")]
+pub use markov::stationary_distribution;
 pub use markov::{entropy_rate, excess_entropy_from_blocks, markov_excess_entropy, stationary_distribution_into};
 pub use matrix::MatrixRef;
 pub use pmf::Pmf;

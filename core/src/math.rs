@@ -7,8 +7,9 @@
 //! without branches so that it inlines into the reduction loops. It agrees
 //! with `libm::log` to within 1 ulp on every positive normal and subnormal
 //! `f64` (tested in this module on 10^6 random bit patterns and the edges).
-//! Zero, negatives, infinities and NaN are never passed to it: callers
-//! validate first, and map `0` to `1` before the call where `0 · ln 0 = 0`.
+//! It is total like `libm::log`: `ln 0 = −∞`, `ln +∞ = +∞`, NaN for negative
+//! or NaN input (three selects, still branch-free). Callers that want the
+//! convention `0 · ln 0 = 0` use [`xlnx`], which never forms `0 · (−∞)`.
 
 // The classical constants keep their published digits (more than f64 holds).
 #[allow(clippy::excessive_precision)]
@@ -33,12 +34,13 @@ const SQRT2: f64 = core::f64::consts::SQRT_2;
 /// 2^54, used to lift subnormals into the normal range.
 const TWO54: f64 = 1.801_439_850_948_198_4e16;
 
-/// Natural logarithm of a positive finite `x` (subnormals included).
+/// Natural logarithm of any `x`: the classical polynomial on positive finite
+/// values (subnormals included), `−∞` at `±0`, `+∞` at `+∞`, NaN below zero.
 #[inline(always)]
-pub(crate) fn ln(x: f64) -> f64 {
+pub(crate) fn ln(x0: f64) -> f64 {
     // Lift subnormals by 2^54 and remember to subtract 54 from the exponent.
-    let sub = x < f64::MIN_POSITIVE;
-    let x = if sub { x * TWO54 } else { x };
+    let sub = x0 < f64::MIN_POSITIVE;
+    let x = if sub { x0 * TWO54 } else { x0 };
     let bits = x.to_bits();
     // Exponent as an exact f64 through the 2^52 magic constant (vectorises).
     let e_field = f64::from_bits((bits >> 52) | 0x4330_0000_0000_0000) - 4_503_599_627_370_496.0;
@@ -56,7 +58,12 @@ pub(crate) fn ln(x: f64) -> f64 {
     let t2 = z * (LG1 + w * (LG3 + w * (LG5 + w * LG7)));
     let r = t2 + t1;
     let hfsq = 0.5 * f * f;
-    k * LN2_HI - ((hfsq - (s * (hfsq + r) + k * LN2_LO)) - f)
+    let v = k * LN2_HI - ((hfsq - (s * (hfsq + r) + k * LN2_LO)) - f);
+    // The reduction above reads 0 as 2^-1077 (ln ≈ −746.5) and +∞ as 2^1024:
+    // finite garbage that once leaked into Rényi entropies and I_ij.
+    let v = if x0 == f64::INFINITY { f64::INFINITY } else { v };
+    let v = if x0 == 0.0 { f64::NEG_INFINITY } else { v };
+    if x0 >= 0.0 { v } else { f64::NAN }
 }
 
 /// `x · ln x` with the convention `0 · ln 0 = 0` (Part II eq. (2)); `x ≥ 0` finite.
@@ -120,6 +127,17 @@ mod tests {
             assert!((a - b).abs() <= 2.0 * f64::EPSILON * b.abs().max(1e-300), "{x:e}: {a} vs {b}");
         }
         assert_eq!(ln(1.0), 0.0);
+        assert_eq!(xlnx(0.0), 0.0);
+    }
+
+    /// Regression (issue 9): `ln(0)` was about −746.5 and `ln(+∞)` 709.8.
+    #[test]
+    fn ln_is_total_like_libm() {
+        assert_eq!(ln(0.0), f64::NEG_INFINITY);
+        assert_eq!(ln(-0.0), f64::NEG_INFINITY);
+        assert_eq!(ln(f64::INFINITY), f64::INFINITY);
+        assert!(ln(-1.0).is_nan() && ln(f64::NAN).is_nan() && ln(f64::NEG_INFINITY).is_nan());
+        assert_eq!(ln(5e-324), libm::log(5e-324));
         assert_eq!(xlnx(0.0), 0.0);
     }
 }

@@ -183,6 +183,8 @@ pub fn scene_measures_from_counts<T: Real>(
 /// (Part III eq. (64)) into `out` (row-major `n × n`), and the per-patch
 /// information transfer `I_i = Σ_j I_ij` (eq. (65)) into `per_patch`.
 /// `Σ_i I_i` is `I_S` by eq. (63)/(66) when `F` is reciprocal.
+/// A patch `j` of zero area seen with `F_ij > 0` (not reciprocal) gives
+/// `I_ij = +∞`, the convention `p log(p/0) = +∞` of Part II eq. (8).
 ///
 /// # Errors
 /// As [`scene_measures`], and [`Error::LengthMismatch`] for the outputs.
@@ -256,7 +258,10 @@ impl ContinuousMutualInformation {
         if !(f > 0.0 && f.is_finite()) {
             return false;
         }
-        let l = ln(self.total_area * f);
+        // ln(A_T F) as a sum of logs where the product under- or overflows
+        // (ln of a product that rounded to 0 or ∞ would be ∓∞).
+        let af = self.total_area * f;
+        let l = if (f64::MIN_POSITIVE..=f64::MAX).contains(&af) { ln(af) } else { ln(self.total_area) + ln(f) };
         self.samples += 1;
         self.sum.add(l);
         self.sum_sq.add(l * l);
@@ -416,5 +421,7 @@ pub fn discretisation_error_lines<T: Real>(
         s.add(ln(f));
     }
     let mean_ln = s.value() / point_form_factors.len() as f64;
-    Ok(area_i * f_ij / total_area * (mean_ln - ln(f_ij / area_j)) * base.per_nat())
+    let r = f_ij / area_j;
+    let ln_r = if (f64::MIN_POSITIVE..=f64::MAX).contains(&r) { ln(r) } else { ln(f_ij) - ln(area_j) };
+    Ok(area_i * f_ij / total_area * (mean_ln - ln_r) * base.per_nat())
 }

@@ -35,7 +35,7 @@ fn refused(args: &[&str], what: &str) {
     assert!(err.contains(what), "itgfx {args:?}: {err}");
 }
 
-fn path(p: &PathBuf) -> &str {
+fn path(p: &std::path::Path) -> &str {
     p.to_str().unwrap()
 }
 

@@ -99,7 +99,10 @@ pub fn triangulate(poly: &[DVec3]) -> Result<Triangulated, String> {
             }
         }
     }
-    let convex = (0..n).all(|i| orient(p2[i], p2[(i + 1) % n], p2[(i + 2) % n]) >= -EPS);
+    // The fan from vertex 0 when it has no flat triangle (a vertex on a
+    // straight edge makes one): then ear clipping, which skips flat corners.
+    let convex = (0..n).all(|i| orient(p2[i], p2[(i + 1) % n], p2[(i + 2) % n]) >= -EPS)
+        && (1..n - 1).all(|k| orient(p2[0], p2[k], p2[k + 1]) > EPS);
     let mut triangles = Vec::with_capacity(n - 2);
     if convex {
         for k in 1..n - 1 {
@@ -156,6 +159,19 @@ mod tests {
         assert!((area(&t.triangles) - 2.2).abs() < 1e-12, "{}", area(&t.triangles));
         for tri in &t.triangles {
             assert!((tri[1] - tri[0]).cross(tri[2] - tri[0]).z > 0.0, "winding kept");
+        }
+    }
+
+    #[test]
+    fn vertex_on_a_straight_edge_gives_no_flat_triangle() {
+        let p: Vec<DVec3> = [(0.0, 0.0), (1.0, 0.0), (2.0, 0.0), (2.0, 1.0), (0.0, 1.0)]
+            .iter()
+            .map(|&(x, y)| DVec3::new(x, y, 0.0))
+            .collect();
+        let t = triangulate(&p).unwrap();
+        assert!((area(&t.triangles) - 2.0).abs() < 1e-12);
+        for tri in &t.triangles {
+            assert!((tri[1] - tri[0]).cross(tri[2] - tri[0]).z > 1e-9, "{tri:?}");
         }
     }
 

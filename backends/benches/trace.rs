@@ -27,7 +27,7 @@ fn main() {
     let export = args.iter().position(|a| a == "--export").and_then(|i| args.get(i + 1)).cloned();
     let (name, k) = spec.split_once('@').map_or((spec.as_str(), 1), |(a, b)| (a, b.parse().unwrap_or(1)));
     let scene = if name.ends_with(".obj") { load_obj(Path::new(name)).unwrap() } else { built_in(name).unwrap() };
-    let scene = scene.subdivided(k);
+    let scene = scene.subdivided(k).unwrap();
     let t = Instant::now();
     let prepared = Prepared::new(&scene);
     let tracer = CpuTracer::new(&prepared);

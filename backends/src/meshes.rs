@@ -88,6 +88,10 @@ pub fn torus(name: &str, big: f64, small: f64, around: u32, across: u32) -> Scen
     s
 }
 
+/// Boxes of [`table_with_chairs`]: a top and four legs, and four chairs of
+/// a seat, four legs and a backrest.
+pub const TABLE_CHAIRS_BOXES: u64 = 5 + 4 * 6;
+
 /// A table with four chairs, all boxes facing outwards, each box face split
 /// `n × n`; y is up, the floor is not included.
 #[must_use]
@@ -114,6 +118,7 @@ pub fn table_with_chairs(name: &str, n: u32) -> Scene {
         let (wx, wz) = if ox != 0.0 { (0.02, h) } else { (h, 0.02) };
         boxes.push(("chair back", b(bx - wx, 0.46, bz - wz, bx + wx, 0.95, bz + wz)));
     }
+    debug_assert_eq!(boxes.len() as u64, TABLE_CHAIRS_BOXES);
     for (k, (label, (lo, hi))) in boxes.into_iter().enumerate() {
         s.add_box(&format!("{label} {k}"), lo, hi, n, false, 0);
     }

@@ -3,7 +3,18 @@
 
 use glam::DVec3;
 
-use crate::scene::{Material, Scene};
+use crate::scene::{Material, Scene, SceneError};
+
+/// Most cubes [`cubes_room`] packs in its cluster: a 13 x 13 x 13 lattice
+/// of pitch 0.075 is the largest that stays inside the room.
+pub const MAX_CLUSTERED: u32 = 13 * 13 * 13;
+
+/// Most cubes [`cubes_room`] scatters at random; placements are tried at
+/// most [`MAX_TRIES`] times.
+pub const MAX_RANDOM: u32 = 1000;
+
+/// Random placements tried by [`cubes_room`] before it gives up.
+pub const MAX_TRIES: u64 = 1_000_000;
 
 /// Orders coplanar convex points around their centroid, counter-clockwise
 /// seen from the side `outward` points to.
@@ -180,8 +191,12 @@ pub fn cornell_box() -> Scene {
 /// of side 0.05, one patch per face: scattered at random without overlap,
 /// or packed in a cluster at the centre (Part III Figs. 11, 15, 16).
 /// With side 0.05, 512 cubes give `H_P` = 11.541 bits, as Table 1 prints.
-#[must_use]
-pub fn cubes_room(name: &str, k: u32, clustered: bool, seed: u64) -> Scene {
+///
+/// # Errors
+/// [`SceneError::Geometry`] when `k` cubes do not fit: more than
+/// [`MAX_CLUSTERED`] in the cluster, or not placed at random within
+/// [`MAX_TRIES`] tries.
+pub fn cubes_room(name: &str, k: u32, clustered: bool, seed: u64) -> Result<Scene, SceneError> {
     let side = 0.05;
     let mut s = Scene { name: name.into(), materials: vec![Material::default()], ..Scene::default() };
     s.add_box("room", DVec3::ZERO, DVec3::ONE, 10, true, 0);
@@ -215,7 +230,7 @@ pub fn cubes_room(name: &str, k: u32, clustered: bool, seed: u64) -> Scene {
         };
         let margin = 0.02;
         let mut tries = 0u64;
-        while (placed.len() as u32) < k && tries < 10_000_000 {
+        while (placed.len() as u32) < k && tries < MAX_TRIES {
             tries += 1;
             let lo = DVec3::new(next(), next(), next()) * (1.0 - side - 2.0 * margin) + DVec3::splat(margin);
             if placed.iter().all(|p| (*p - lo).abs().max_element() >= side + 0.01) {
@@ -223,8 +238,14 @@ pub fn cubes_room(name: &str, k: u32, clustered: bool, seed: u64) -> Scene {
             }
         }
     }
+    if placed.len() as u32 != k || (clustered && k > MAX_CLUSTERED) {
+        return Err(SceneError::Geometry(format!(
+            "{name}: only {} of {k} cubes fit without overlap (clustered at most {MAX_CLUSTERED}; random: {MAX_TRIES} tries)",
+            placed.len().min(MAX_CLUSTERED as usize)
+        )));
+    }
     for (i, lo) in placed.iter().enumerate() {
         s.add_box(&format!("cube {i}"), *lo, *lo + DVec3::splat(side), 1, false, 0);
     }
-    s
+    Ok(s)
 }

@@ -25,7 +25,10 @@ pub fn load_scene(spec: &str, subdivide: u32) -> Result<Scene, CliError> {
     } else {
         built_in(spec).map_err(|e| CliError::usage(e.to_string()))?
     };
-    let scene = if subdivide > 1 { scene.subdivided(subdivide) } else { scene };
+    let scene = scene.subdivided(subdivide).map_err(|e| CliError::usage(e.to_string()))?;
+    for w in &scene.warnings {
+        eprintln!("itgfx: warning: {w}");
+    }
     scene.validate().map_err(|e| CliError::usage(e.to_string()))?;
     Ok(scene)
 }

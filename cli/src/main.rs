@@ -49,8 +49,8 @@ fn complexity_help() -> String {
         "itgfx complexity SCENE [OPTIONS] — the scene visibility channel (Part III)\n\n\
          SCENE is an .obj file (one patch per polygon) or a built-in:\n",
     );
-    for (n, d) in itgfx_backends::scene::BUILT_IN {
-        s.push_str(&format!("  {n}\n      {d}\n"));
+    for b in itgfx_backends::scene::BUILT_IN {
+        s.push_str(&format!("  {}\n      {}\n", b.syntax, b.description));
     }
     s.push_str(
         "\nOptions:\n  --lines N        lines to cast (default 1e6; global lines that miss count)\n\

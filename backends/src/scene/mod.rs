@@ -7,8 +7,6 @@
 //! where the patch emits and receives lines. Enclosures face inwards, solid
 //! objects outwards.
 
-use std::fmt;
-
 use glam::DVec3;
 
 /// Surface properties carried through to radiosity and rendering.
@@ -59,6 +57,10 @@ pub struct Scene {
     /// An analytic sphere of this radius at the origin, seen from inside
     /// (then `triangles` is empty and patches are its equal-area cells).
     pub sphere: Option<SphereCells>,
+    /// Named warnings about the input (`"name: file:line: what"`), e.g. a
+    /// non-planar OBJ face or an MTL statement that is not used; callers
+    /// print them. Empty for built-in scenes.
+    pub warnings: Vec<String>,
 }
 
 /// Equal-area cells of a sphere: `bands` slabs of equal height in z
@@ -85,53 +87,11 @@ impl SphereCells {
     }
 }
 
-/// Why a scene could not be made.
-#[derive(Debug, Clone, PartialEq)]
-pub enum SceneError {
-    /// Unknown built-in name or bad parameter.
-    Spec(String),
-    /// The OBJ file could not be read or parsed.
-    Obj {
-        /// File path.
-        path: String,
-        /// What went wrong, with line or face where known.
-        message: String,
-    },
-    /// Geometry that cannot be traced.
-    Geometry(String),
-}
+pub use builtin::{BUILT_IN, BuiltIn, built_in};
+pub use error::{Limits, SceneError};
 
-impl fmt::Display for SceneError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            SceneError::Spec(m) | SceneError::Geometry(m) => f.write_str(m),
-            SceneError::Obj { path, message } => write!(f, "{path}: {message}"),
-        }
-    }
-}
-
-impl std::error::Error for SceneError {}
-
-/// Built-in scene names, for help texts.
-pub const BUILT_IN: &[(&str, &str)] = &[
-    ("cube-enclosure:N", "inside of the unit cube, each face split into N x N squares (Part III Fig. 13)"),
-    (
-        "tetrahedron | cube | octahedron | dodecahedron | icosahedron",
-        "regular solids seen from inside, one patch per face (Table 4)",
-    ),
-    ("sphere[:B,S]", "exact sphere seen from inside, B z-bands x S sectors of equal area (default 8,16)"),
-    (
-        "cornell-box",
-        "closed Cornell box from the published measurements: 5 walls, open front closed, light, two blocks (Fig. 20a)",
-    ),
-    ("geosphere[:L]", "unit geodesic sphere seen from outside, 20*4^(L-1) triangles (default L = 2: 80)"),
-    ("torus[:U,V]", "ring torus (radii 1 and 0.4) seen from outside, U x V quads (default 48,24)"),
-    ("table-chairs[:N]", "a table with four chairs, 25 boxes seen from outside, faces split N x N (default 2)"),
-    (
-        "cubes-room:K[:clustered][:SEED]",
-        "cube enclosure 10x10 per face with K small cubes, random (default) or clustered (Figs. 11, 15, 16)",
-    ),
-];
+mod builtin;
+mod error;
 
 impl Scene {
     /// Total area `A_T`.
@@ -172,6 +132,23 @@ impl Scene {
     /// Starts a scene with one material.
     fn new(name: &str) -> Self {
         Self { name: name.to_string(), materials: vec![Material::default()], ..Self::default() }
+    }
+
+    /// Adds one patch made of the given triangles (already triangulated,
+    /// wound like their polygon); returns its index.
+    pub fn add_triangles(&mut self, name: impl Into<String>, triangles: &[[DVec3; 3]], material: usize) -> u32 {
+        let id = self.patches.len() as u32;
+        let mut area = 0.0;
+        let mut normal = DVec3::ZERO;
+        for t in triangles {
+            let n = (t[1] - t[0]).cross(t[2] - t[0]);
+            area += 0.5 * n.length();
+            normal += n;
+            self.triangles.push(*t);
+            self.triangle_patch.push(id);
+        }
+        self.patches.push(Patch { name: name.into(), area, normal: normal.normalize_or_zero(), material });
+        id
     }
 
     /// Adds a planar convex polygon (fan-triangulated) as one patch; returns its index.
@@ -230,26 +207,49 @@ impl Scene {
     /// Triangle `(a, b, c)` is split into the `k²` triangles of its regular
     /// subdivision; a patch made of two triangles forming a parallelogram is
     /// split into `k × k` parallelogram cells.
-    #[must_use]
-    pub fn subdivided(&self, k: u32) -> Scene {
-        if k <= 1 || self.sphere.is_some() {
-            let mut s = self.clone();
-            if let Some(c) = &mut s.sphere {
-                *c = SphereCells { bands: c.bands * k.max(1), sectors: c.sectors * k.max(1), ..*c };
-                s.patches = sphere_patches(*c);
-            }
-            return s;
+    ///
+    /// The size of the result is computed first and checked against
+    /// [`Limits`] before anything is allocated.
+    ///
+    /// # Errors
+    /// [`SceneError::TooLarge`] when the subdivided scene would pass the limits.
+    pub fn subdivided(&self, k: u32) -> Result<Scene, SceneError> {
+        if k <= 1 {
+            return Ok(self.clone());
         }
-        let mut out =
-            Scene { name: format!("{}/{k}", self.name), materials: self.materials.clone(), ..Scene::default() };
-        // Group triangles by patch.
+        let what = || format!("{} subdivided {k} x {k}", self.name);
+        let k2 = u64::from(k) * u64::from(k);
+        if let Some(c) = self.sphere {
+            let (b, s) = (u64::from(c.bands) * u64::from(k), u64::from(c.sectors) * u64::from(k));
+            Limits::check(&what(), 0, b.saturating_mul(s))?;
+            let mut out = self.clone();
+            let cells = SphereCells { bands: b as u32, sectors: s as u32, ..c };
+            out.sphere = Some(cells);
+            out.patches = sphere_patches(cells);
+            return Ok(out);
+        }
+        // Every triangle becomes k² triangles; a parallelogram patch k²
+        // patches, any other patch k² per triangle. Counted before allocating.
         let mut by_patch: Vec<Vec<usize>> = vec![Vec::new(); self.patches.len()];
         for (t, &p) in self.triangle_patch.iter().enumerate() {
             by_patch[p as usize].push(t);
         }
+        let grids: Vec<Option<(DVec3, DVec3, DVec3)>> = by_patch
+            .iter()
+            .map(|tris| parallelogram(tris.iter().map(|&t| self.triangles[t]).collect::<Vec<_>>().as_slice()))
+            .collect();
+        let patches: u64 = by_patch
+            .iter()
+            .zip(&grids)
+            .map(|(tris, g)| if g.is_some() { k2 } else { (tris.len() as u64).saturating_mul(k2) })
+            .fold(0, u64::saturating_add);
+        let triangles = (self.triangles.len() as u64).saturating_mul(k2);
+        Limits::check(&what(), triangles, patches)?;
+        let mut out =
+            Scene { name: format!("{}/{k}", self.name), materials: self.materials.clone(), ..Scene::default() };
         for (pi, tris) in by_patch.iter().enumerate() {
             let patch = &self.patches[pi];
-            if let Some(q) = parallelogram(tris.iter().map(|&t| self.triangles[t]).collect::<Vec<_>>().as_slice()) {
+            if let Some(q) = grids[pi] {
                 let (c, u, v) = q;
                 out.add_grid(&patch.name, c, u, v, k, k, patch.material);
                 continue;
@@ -280,7 +280,7 @@ impl Scene {
                 }
             }
         }
-        out
+        Ok(out)
     }
 
     /// Checks the scene can be traced: at least one patch, finite
@@ -296,7 +296,8 @@ impl Scene {
             return Ok(());
         }
         let (lo, hi) = self.bounds();
-        let scale = (hi - lo).length().max(f64::MIN_POSITIVE);
+        // Halves first: `hi - lo` of coordinates near ±f64::MAX overflows.
+        let scale = (hi * 0.5 - lo * 0.5).abs().max_element().max(f64::MIN_POSITIVE);
         for (t, tri) in self.triangles.iter().enumerate() {
             if tri.iter().any(|v| !v.is_finite()) {
                 return Err(SceneError::Geometry(format!(
@@ -304,10 +305,13 @@ impl Scene {
                     self.name, self.patches[self.triangle_patch[t] as usize].name
                 )));
             }
-            let area = 0.5 * (tri[1] - tri[0]).cross(tri[2] - tri[0]).length();
-            if !(area > 1e-14 * scale * scale) {
+            // Area relative to the scene's extent squared, computed on
+            // scaled edges so that neither overflows nor underflows.
+            let (e1, e2) = ((tri[1] - tri[0]) / scale, (tri[2] - tri[0]) / scale);
+            let area = 0.5 * e1.cross(e2).length();
+            if !(area > 1e-14) {
                 return Err(SceneError::Geometry(format!(
-                    "{}: triangle {t} (patch {:?}) is degenerate (area {area:e})",
+                    "{}: triangle {t} (patch {:?}) is degenerate (area {area:e} of the extent squared)",
                     self.name, self.patches[self.triangle_patch[t] as usize].name
                 )));
             }
@@ -330,7 +334,7 @@ fn parallelogram(tris: &[[DVec3; 3]]) -> Option<(DVec3, DVec3, DVec3)> {
     ((p0 + u + v - p2).length() <= 1e-12 * (u.length() + v.length())).then_some((p0, u, v))
 }
 
-fn sphere_patches(c: SphereCells) -> Vec<Patch> {
+pub(crate) fn sphere_patches(c: SphereCells) -> Vec<Patch> {
     let area = 4.0 * std::f64::consts::PI * c.radius * c.radius / f64::from(c.bands * c.sectors);
     let mut out = Vec::new();
     for b in 0..c.bands {
@@ -347,102 +351,4 @@ fn sphere_patches(c: SphereCells) -> Vec<Patch> {
         }
     }
     out
-}
-
-fn parse_u32(spec: &str, what: &str, s: &str, max: u32) -> Result<u32, SceneError> {
-    s.parse::<u32>()
-        .ok()
-        .filter(|&v| v >= 1 && v <= max)
-        .ok_or_else(|| SceneError::Spec(format!("{spec}: {what} must be an integer in 1..={max}, got {s:?}")))
-}
-
-/// An optional `A,B` parameter pair of integers in `1..=4096`, or `default`.
-fn parse_pair(
-    spec: &str,
-    part: Option<&str>,
-    names: (&str, &str),
-    default: (u32, u32),
-) -> Result<(u32, u32), SceneError> {
-    let Some(p) = part else { return Ok(default) };
-    let (a, b) = p.split_once(',').ok_or_else(|| {
-        let kind = spec.split(':').next().unwrap_or(spec);
-        SceneError::Spec(format!("{spec}: expected {kind}:{},{}", names.0, names.1))
-    })?;
-    Ok((parse_u32(spec, names.0, a, 4096)?, parse_u32(spec, names.1, b, 4096)?))
-}
-
-/// A built-in scene by name (see [`BUILT_IN`]).
-///
-/// # Errors
-/// [`SceneError::Spec`] for an unknown name or a bad parameter.
-pub fn built_in(spec: &str) -> Result<Scene, SceneError> {
-    let parts: Vec<&str> = spec.split(':').collect();
-    let scene = match parts[0] {
-        "cube-enclosure" => {
-            let n = parse_u32(spec, "N", parts.get(1).copied().unwrap_or("10"), 1000)?;
-            let mut s = Scene::new(spec);
-            s.add_box("cube", DVec3::ZERO, DVec3::ONE, n, true, 0);
-            s
-        }
-        "tetrahedron" | "cube" | "octahedron" | "dodecahedron" | "icosahedron" => {
-            let mut s = Scene::new(spec);
-            for (i, face) in crate::solids::faces(parts[0]).iter().enumerate() {
-                // Seen from inside: reverse the outward winding.
-                let inward: Vec<DVec3> = face.iter().rev().copied().collect();
-                s.add_polygon(format!("face {i}"), &inward, 0);
-            }
-            s
-        }
-        "sphere" => {
-            let (b, sct) = parse_pair(spec, parts.get(1).copied(), ("B", "S"), (8, 16))?;
-            let cells = SphereCells { radius: 1.0, bands: b, sectors: sct };
-            Scene {
-                name: spec.into(),
-                patches: sphere_patches(cells),
-                materials: vec![Material::default()],
-                sphere: Some(cells),
-                ..Scene::default()
-            }
-        }
-        "cornell-box" => crate::solids::cornell_box(),
-        "geosphere" => {
-            let l = parse_u32(spec, "L", parts.get(1).copied().unwrap_or("2"), 9)?;
-            crate::meshes::geosphere(spec, l - 1)
-        }
-        "torus" => {
-            let (u, v) = parse_pair(spec, parts.get(1).copied(), ("U", "V"), (48, 24))?;
-            if u < 3 || v < 3 {
-                return Err(SceneError::Spec(format!("{spec}: U and V must be at least 3")));
-            }
-            crate::meshes::torus(spec, 1.0, 0.4, u, v)
-        }
-        "table-chairs" => {
-            let n = parse_u32(spec, "N", parts.get(1).copied().unwrap_or("2"), 256)?;
-            crate::meshes::table_with_chairs(spec, n)
-        }
-        "cubes-room" => {
-            let k = parse_u32(spec, "K", parts.get(1).copied().unwrap_or("27"), 4096)?;
-            let mut clustered = false;
-            let mut seed = 1u64;
-            for p in &parts[2..] {
-                match *p {
-                    "clustered" => clustered = true,
-                    "random" => clustered = false,
-                    s => {
-                        seed = s.parse().map_err(|_| {
-                            SceneError::Spec(format!("{spec}: expected 'clustered', 'random' or a seed, got {s:?}"))
-                        })?;
-                    }
-                }
-            }
-            crate::solids::cubes_room(spec, k, clustered, seed)
-        }
-        other => {
-            return Err(SceneError::Spec(format!(
-                "unknown scene {other:?}: not a built-in (cube-enclosure:N, tetrahedron, cube, octahedron, dodecahedron, icosahedron, sphere, cornell-box, cubes-room:K, geosphere:L, torus:U,V, table-chairs:N) and no such .obj file"
-            )));
-        }
-    };
-    scene.validate()?;
-    Ok(scene)
 }

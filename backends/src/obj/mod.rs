@@ -1,0 +1,335 @@
+//! Wavefront OBJ scenes: each polygon is one patch, `g`/`o` names prefix
+//! patch names, `usemtl` materials come from the `mtllib` files (see
+//! [`mtl`]).
+//!
+//! The file is read once into memory, with a size limit (a FIFO or a
+//! device is read once, `/dev/zero` is refused at the limit), then parsed
+//! from the buffer in `f64`: coordinates are never cut to `f32` here (the
+//! tracer normalises the scene to the unit sphere before it converts).
+//! A UTF-8 byte-order mark is skipped. Errors name the file and the line.
+//!
+//! Polygons are triangulated in their own plane ([`polygon`]): convex ones
+//! as a fan, concave ones by ear clipping; self-intersecting polygons are
+//! errors. A face farther from planar than [`polygon::PLANAR_TOLERANCE`]
+//! (relative to its size) is triangulated in its best-fit plane and
+//! reported as warning `non-planar-face` in [`Scene::warnings`].
+//! `vt`, `vn`, `vp` and `s` do not change patches and are skipped; `l` and
+//! `p` and any other statement give warning `obj-statement-ignored`.
+
+pub mod mtl;
+pub mod polygon;
+
+use std::collections::HashMap;
+use std::io::Read;
+use std::path::Path;
+
+use glam::DVec3;
+
+use crate::scene::{Limits, Material, Scene, SceneError};
+
+/// Largest OBJ file read, in bytes (1 GiB: about 2^24 triangles of text,
+/// the [`Limits::MAX_TRIANGLES`] cap).
+pub const MAX_OBJ_BYTES: u64 = 1 << 30;
+
+/// Largest MTL file read, in bytes.
+pub const MAX_MTL_BYTES: u64 = 16 << 20;
+
+/// Coordinates whose magnitude passes `2^RESCALE_EXPONENT` (or whose
+/// extent is below `2^-RESCALE_EXPONENT`) are rescaled by a power of two
+/// (exact), so that areas (squares of lengths) stay finite and non-zero in `f64`.
+pub const RESCALE_EXPONENT: i32 = 100;
+
+fn err(path: &str, message: String) -> SceneError {
+    SceneError::Obj { path: path.to_string(), message }
+}
+
+/// Named warnings, the first of each name kept with a count of the rest.
+#[derive(Default)]
+pub struct Warnings {
+    list: Vec<(&'static str, String, usize)>,
+}
+
+impl Warnings {
+    /// Records warning `name`; the message is only made for the first.
+    pub fn add(&mut self, name: &'static str, message: impl FnOnce() -> String) {
+        if let Some(w) = self.list.iter_mut().find(|w| w.0 == name) {
+            w.2 += 1;
+        } else {
+            self.list.push((name, message(), 0));
+        }
+    }
+
+    /// One line per name: `"name: message (and N more)"`.
+    #[must_use]
+    pub fn finish(self) -> Vec<String> {
+        self.list
+            .into_iter()
+            .map(|(n, m, more)| if more > 0 { format!("{n}: {m} (and {more} more)") } else { format!("{n}: {m}") })
+            .collect()
+    }
+}
+
+/// Reads a whole file once, refusing more than `limit` bytes.
+///
+/// # Errors
+/// [`SceneError::Obj`] for unreadable files, directories, and files (or
+/// endless devices and pipes) larger than `limit`.
+pub fn read_limited(path: &Path, limit: u64) -> Result<Vec<u8>, SceneError> {
+    let shown = path.display().to_string();
+    let file = std::fs::File::open(path).map_err(|e| err(&shown, e.to_string()))?;
+    let meta = file.metadata().map_err(|e| err(&shown, e.to_string()))?;
+    if meta.is_dir() {
+        return Err(err(&shown, "is a directory".into()));
+    }
+    if meta.is_file() && meta.len() > limit {
+        return Err(err(&shown, format!("file is {} bytes, over the limit of {limit} bytes", meta.len())));
+    }
+    let mut buf = Vec::new();
+    file.take(limit + 1).read_to_end(&mut buf).map_err(|e| err(&shown, e.to_string()))?;
+    if buf.len() as u64 > limit {
+        return Err(err(
+            &shown,
+            format!("more than {limit} bytes (not a regular file, or still growing); refusing to read on"),
+        ));
+    }
+    Ok(buf)
+}
+
+/// Reads an OBJ file into a scene (one patch per polygon); `mtllib` files
+/// are read relative to the OBJ's directory.
+///
+/// # Errors
+/// [`SceneError::Obj`] with the file and line for unreadable or too large
+/// files, bad numbers, non-finite coordinates, bad indices, degenerate or
+/// self-intersecting polygons, a missing MTL file or material, or no faces;
+/// [`SceneError::TooLarge`] past [`Limits`].
+pub fn load_obj(path: &Path) -> Result<Scene, SceneError> {
+    let bytes = read_limited(path, MAX_OBJ_BYTES)?;
+    let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
+    parse_obj(&path.display().to_string(), &bytes, |name| {
+        let p = dir.join(name);
+        let shown = p.display().to_string();
+        let bytes = read_limited(&p, MAX_MTL_BYTES).map_err(|e| match e {
+            SceneError::Obj { message, .. } => err(&shown, format!("mtllib {name}: {message}")),
+            other => other,
+        })?;
+        Ok((shown, bytes))
+    })
+}
+
+/// One face as read: its line, vertex indices, group and `usemtl`.
+struct Face {
+    line: usize,
+    vertices: Vec<u32>,
+    group: usize,
+    material: Option<(String, usize)>,
+}
+
+fn decode<'a>(path: &str, bytes: &'a [u8]) -> Result<&'a str, SceneError> {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    std::str::from_utf8(bytes).map_err(|e| err(path, format!("not UTF-8 text (byte {})", e.valid_up_to())))
+}
+
+/// Parses OBJ text (`name` for messages); `mtl(lib)` returns the shown path
+/// and bytes of the `mtllib` file `lib`.
+///
+/// # Errors
+/// As [`load_obj`].
+#[allow(clippy::too_many_lines)]
+pub fn parse_obj(
+    name: &str,
+    bytes: &[u8],
+    mut mtl: impl FnMut(&str) -> Result<(String, Vec<u8>), SceneError>,
+) -> Result<Scene, SceneError> {
+    let text = decode(name, bytes)?;
+    let mut warnings = Warnings::default();
+    let mut verts: Vec<DVec3> = Vec::new();
+    let mut faces: Vec<Face> = Vec::new();
+    let mut groups: Vec<String> = vec!["unnamed_object".into()];
+    let mut group = 0usize;
+    let mut material: Option<(String, usize)> = None;
+    let mut materials: Vec<Material> = vec![Material::default()];
+    let mut by_name: HashMap<String, usize> = HashMap::new();
+    let (mut triangles, mut patches) = (0u64, 0u64);
+    for (ln, raw) in text.lines().enumerate() {
+        let line = ln + 1;
+        let mut it = raw.split_whitespace();
+        let Some(key) = it.next() else { continue };
+        match key {
+            "v" => {
+                let c: Vec<&str> = it.collect();
+                if c.len() < 3 {
+                    return Err(err(name, format!("line {line}: vertex needs 3 coordinates, found {}", c.len())));
+                }
+                let mut p = [0.0; 3];
+                for (k, s) in c[..3].iter().enumerate() {
+                    let v: f64 = s
+                        .parse()
+                        .map_err(|_| err(name, format!("line {line}: vertex coordinate {s:?} is not a number")))?;
+                    if !v.is_finite() {
+                        return Err(err(name, format!("line {line}: vertex coordinate {s:?} is not finite")));
+                    }
+                    p[k] = v;
+                }
+                verts.push(DVec3::from_array(p));
+            }
+            "f" => {
+                let n = faces.len() + 1;
+                let idx: Vec<&str> = it.collect();
+                if idx.len() < 3 {
+                    return Err(err(
+                        name,
+                        format!("line {line}: face {n} has {} vertices, needs at least 3", idx.len()),
+                    ));
+                }
+                if idx.len() > polygon::MAX_FACE_VERTICES {
+                    return Err(err(
+                        name,
+                        format!(
+                            "line {line}: face {n} has {} vertices, at most {} are supported",
+                            idx.len(),
+                            polygon::MAX_FACE_VERTICES
+                        ),
+                    ));
+                }
+                triangles += idx.len() as u64 - 2;
+                patches += 1;
+                Limits::check(name, triangles, patches)?;
+                let mut vertices = Vec::with_capacity(idx.len());
+                for s in &idx {
+                    let first = s.split('/').next().unwrap_or("");
+                    let i: i64 = first.parse().map_err(|_| {
+                        err(name, format!("line {line}: face {n}: vertex index {s:?} is not an integer"))
+                    })?;
+                    let count = verts.len() as i64;
+                    let k = if i < 0 { count.saturating_add(i) } else { i - 1 };
+                    if i == 0 || k < 0 || k >= count {
+                        return Err(err(
+                            name,
+                            format!(
+                                "line {line}: face {n}: vertex index {i} is out of range (1..={count} defined so far)"
+                            ),
+                        ));
+                    }
+                    vertices.push(k as u32);
+                }
+                faces.push(Face { line, vertices, group, material: material.clone() });
+            }
+            "g" | "o" => {
+                let g = it.collect::<Vec<_>>().join(" ");
+                groups.push(if g.is_empty() { "unnamed_object".into() } else { g });
+                group = groups.len() - 1;
+            }
+            "usemtl" => {
+                let m = it.collect::<Vec<_>>().join(" ");
+                material = Some((m, line));
+            }
+            "mtllib" => {
+                for lib in it {
+                    let (shown, bytes) = mtl(lib)?;
+                    let t = decode(&shown, &bytes)?;
+                    for m in mtl::parse_mtl(&shown, t, &mut warnings)? {
+                        by_name.insert(m.name.clone(), materials.len());
+                        materials.push(m);
+                    }
+                }
+            }
+            "vt" | "vn" | "vp" | "s" => {}
+            k if k.starts_with('#') => {}
+            k => warnings.add("obj-statement-ignored", || {
+                format!("{name}: line {line}: {k:?} is not read (only v, f, g, o, usemtl, mtllib are)")
+            }),
+        }
+    }
+    if faces.is_empty() {
+        return Err(err(name, "no faces (f lines) found".into()));
+    }
+    let scale = rescale(&verts);
+    if scale != 1.0 {
+        for v in &mut verts {
+            *v *= scale;
+        }
+        warnings.add("rescaled", || {
+            format!("{name}: coordinates multiplied by 2^{} so that areas stay finite in f64", scale.log2())
+        });
+    }
+    let mut scene = Scene { name: name.to_string(), materials, ..Scene::default() };
+    scene.triangles.reserve(triangles as usize);
+    let mut in_group = vec![0usize; groups.len()];
+    for (f, face) in faces.iter().enumerate() {
+        let material = match &face.material {
+            None => 0,
+            Some((m, l)) => *by_name
+                .get(m)
+                .ok_or_else(|| err(name, format!("line {l}: usemtl {m:?}: no such material in the mtllib files")))?,
+        };
+        let poly: Vec<DVec3> = face.vertices.iter().map(|&i| verts[i as usize]).collect();
+        let t =
+            polygon::triangulate(&poly).map_err(|m| err(name, format!("line {}: face {} {m}", face.line, f + 1)))?;
+        if t.deviation > polygon::PLANAR_TOLERANCE {
+            warnings.add("non-planar-face", || {
+                format!(
+                    "{name}: line {}: face {} is {:.2e} of its size off its plane (tolerance {:e}); triangulated in that plane",
+                    face.line,
+                    f + 1,
+                    t.deviation,
+                    polygon::PLANAR_TOLERANCE
+                )
+            });
+        }
+        let g = &mut in_group[face.group];
+        scene.add_triangles(format!("{}/{g}", groups[face.group]), &t.triangles, material);
+        *g += 1;
+    }
+    scene.warnings = warnings.finish();
+    scene.validate()?;
+    Ok(scene)
+}
+
+/// The power of two that brings the coordinates' magnitude (or, for tiny
+/// scenes, their extent) near 1 when it is outside `2^±RESCALE_EXPONENT`;
+/// else 1.
+fn rescale(verts: &[DVec3]) -> f64 {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    for v in verts {
+        lo = lo.min(*v);
+        hi = hi.max(*v);
+    }
+    let magnitude = lo.abs().max(hi.abs()).max_element();
+    let extent = (hi * 0.5 - lo * 0.5).max_element() * 2.0;
+    let limit = 2f64.powi(RESCALE_EXPONENT);
+    let reference = if magnitude > limit {
+        magnitude
+    } else if extent > 0.0 && extent < 1.0 / limit {
+        extent
+    } else {
+        return 1.0;
+    };
+    let e = reference.log2().floor() as i32;
+    // Two factors: 2^±1023 alone is not a normal number.
+    2f64.powi(-e / 2) * 2f64.powi(-(e - e / 2))
+}
+
+/// Writes a scene as OBJ (one `f` per triangle, one group per patch run), so
+/// built-in scenes can be given to other tracers.
+///
+/// # Errors
+/// I/O errors.
+pub fn write_obj(scene: &Scene, out: &mut impl std::io::Write) -> std::io::Result<()> {
+    writeln!(out, "# {} — written by itgfx; {} patches", scene.name, scene.patches.len())?;
+    for t in &scene.triangles {
+        for v in t {
+            writeln!(out, "v {} {} {}", v.x, v.y, v.z)?;
+        }
+    }
+    let mut last = u32::MAX;
+    for (i, &p) in scene.triangle_patch.iter().enumerate() {
+        if p != last {
+            writeln!(out, "g patch{p}")?;
+            last = p;
+        }
+        writeln!(out, "f {} {} {}", 3 * i + 1, 3 * i + 2, 3 * i + 3)?;
+    }
+    Ok(())
+}

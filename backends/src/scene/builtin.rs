@@ -1,0 +1,264 @@
+//! The built-in scene registry: one list ([`BUILT_IN`]) that the parser
+//! [`built_in`] dispatches on and help texts print, so a name, its
+//! parameters and its description cannot drift apart.
+
+use std::ops::RangeInclusive;
+
+use glam::DVec3;
+
+use super::{Limits, Material, Scene, SceneError, SphereCells, sphere_patches};
+
+/// One built-in scene.
+pub struct BuiltIn {
+    /// Name before the first `:`.
+    pub name: &'static str,
+    /// Full syntax with parameters, `[...]` optional (`"sphere[:B,S]"`).
+    pub syntax: &'static str,
+    /// One-line description with parameter ranges and defaults.
+    pub description: &'static str,
+    build: fn(&Args) -> Result<Scene, SceneError>,
+}
+
+/// Every built-in scene, in help order.
+pub const BUILT_IN: &[BuiltIn] = &[
+    BuiltIn {
+        name: "cube-enclosure",
+        syntax: "cube-enclosure[:N]",
+        description: "inside of the unit cube, each face split into N x N squares, N in 1..=1000 (default 10; Part III Fig. 13)",
+        build: cube_enclosure,
+    },
+    BuiltIn {
+        name: "tetrahedron",
+        syntax: "tetrahedron",
+        description: "regular tetrahedron seen from inside, one patch per face (Table 4)",
+        build: solid,
+    },
+    BuiltIn {
+        name: "cube",
+        syntax: "cube",
+        description: "cube seen from inside, one patch per face (Table 4)",
+        build: solid,
+    },
+    BuiltIn {
+        name: "octahedron",
+        syntax: "octahedron",
+        description: "regular octahedron seen from inside, one patch per face (Table 4)",
+        build: solid,
+    },
+    BuiltIn {
+        name: "dodecahedron",
+        syntax: "dodecahedron",
+        description: "regular dodecahedron seen from inside, one patch per face (Table 4)",
+        build: solid,
+    },
+    BuiltIn {
+        name: "icosahedron",
+        syntax: "icosahedron",
+        description: "regular icosahedron seen from inside, one patch per face (Table 4)",
+        build: solid,
+    },
+    BuiltIn {
+        name: "sphere",
+        syntax: "sphere[:B,S]",
+        description: "exact sphere seen from inside, B z-bands x S sectors of equal area, B and S in 1..=4096 (default 8,16)",
+        build: sphere,
+    },
+    BuiltIn {
+        name: "cornell-box",
+        syntax: "cornell-box",
+        description: "closed Cornell box from the published measurements: 5 walls, front closed, light, two blocks (after Fig. 20a)",
+        build: cornell_box,
+    },
+    BuiltIn {
+        name: "geosphere",
+        syntax: "geosphere[:L]",
+        description: "unit geodesic sphere seen from outside, 20*4^(L-1) triangles, L in 1..=9 (default 2: 80)",
+        build: geosphere,
+    },
+    BuiltIn {
+        name: "torus",
+        syntax: "torus[:U,V]",
+        description: "ring torus (radii 1 and 0.4) seen from outside, U x V quads, U and V in 3..=4096 (default 48,24)",
+        build: torus,
+    },
+    BuiltIn {
+        name: "table-chairs",
+        syntax: "table-chairs[:N]",
+        description: "a table with four chairs, 29 boxes seen from outside, faces split N x N, N in 1..=256 (default 2)",
+        build: table_chairs,
+    },
+    BuiltIn {
+        name: "cubes-room",
+        syntax: "cubes-room[:K][:clustered|random][:SEED]",
+        description: "cube enclosure 10x10 per face with K cubes of side 0.05, random (K in 1..=1000, default) or clustered (K in 1..=2197); default K = 27, SEED = 1 (Figs. 11, 15, 16)",
+        build: cubes_room,
+    },
+];
+
+/// A built-in scene by spec, e.g. `"torus:32,16"` (see [`BUILT_IN`]).
+///
+/// Every parameter is checked against its range and the scene's size
+/// against [`Limits`] before anything is built.
+///
+/// # Errors
+/// [`SceneError::UnknownScene`], [`SceneError::BadParameter`],
+/// [`SceneError::ExtraParameters`], [`SceneError::TooLarge`], or
+/// [`SceneError::Geometry`] if the built scene does not validate.
+pub fn built_in(spec: &str) -> Result<Scene, SceneError> {
+    let mut parts = spec.split(':');
+    let name = parts.next().unwrap_or_default();
+    let Some(entry) = BUILT_IN.iter().find(|b| b.name == name) else {
+        let known = BUILT_IN.iter().map(|b| b.syntax).collect::<Vec<_>>().join(", ");
+        return Err(SceneError::UnknownScene { name: name.to_string(), known });
+    };
+    let args = Args { spec, name, syntax: entry.syntax, parts: parts.collect() };
+    let scene = (entry.build)(&args)?;
+    scene.validate()?;
+    Ok(scene)
+}
+
+/// The `:`-separated parameters of one spec.
+struct Args<'a> {
+    spec: &'a str,
+    name: &'a str,
+    syntax: &'static str,
+    parts: Vec<&'a str>,
+}
+
+impl Args<'_> {
+    fn at_most(&self, n: usize) -> Result<(), SceneError> {
+        if self.parts.len() > n {
+            return Err(SceneError::ExtraParameters { spec: self.spec.to_string(), syntax: self.syntax });
+        }
+        Ok(())
+    }
+
+    fn bad(&self, name: &'static str, range: &RangeInclusive<u32>, got: &str) -> SceneError {
+        SceneError::BadParameter {
+            spec: self.spec.to_string(),
+            name,
+            expected: format!("an integer in {}..={}", range.start(), range.end()),
+            got: got.to_string(),
+        }
+    }
+
+    fn int(&self, s: &str, name: &'static str, range: &RangeInclusive<u32>) -> Result<u32, SceneError> {
+        s.parse::<u32>().ok().filter(|v| range.contains(v)).ok_or_else(|| self.bad(name, range, s))
+    }
+
+    /// Parameter `i` (after the name), or `default` when absent.
+    fn one(&self, i: usize, name: &'static str, range: RangeInclusive<u32>, default: u32) -> Result<u32, SceneError> {
+        self.parts.get(i).map_or(Ok(default), |s| self.int(s, name, &range))
+    }
+
+    /// Parameter `i` as `A,B`, or `default` when absent.
+    fn pair(
+        &self,
+        i: usize,
+        names: (&'static str, &'static str),
+        range: RangeInclusive<u32>,
+        default: (u32, u32),
+    ) -> Result<(u32, u32), SceneError> {
+        let Some(p) = self.parts.get(i) else { return Ok(default) };
+        let mut it = p.split(',');
+        let (a, b) = (it.next().unwrap_or_default(), it.next());
+        let Some(b) = b else { return Err(self.bad(names.1, &range, "")) };
+        if it.next().is_some() {
+            return Err(SceneError::ExtraParameters { spec: self.spec.to_string(), syntax: self.syntax });
+        }
+        Ok((self.int(a, names.0, &range)?, self.int(b, names.1, &range)?))
+    }
+
+    fn check(&self, triangles: u64, patches: u64) -> Result<(), SceneError> {
+        Limits::check(self.spec, triangles, patches)
+    }
+}
+
+fn cube_enclosure(a: &Args) -> Result<Scene, SceneError> {
+    a.at_most(1)?;
+    let n = a.one(0, "N", 1..=1000, 10)?;
+    let n2 = u64::from(n) * u64::from(n);
+    a.check(12 * n2, 6 * n2)?;
+    let mut s = Scene::new(a.spec);
+    s.add_box("cube", DVec3::ZERO, DVec3::ONE, n, true, 0);
+    Ok(s)
+}
+
+fn solid(a: &Args) -> Result<Scene, SceneError> {
+    a.at_most(0)?;
+    let mut s = Scene::new(a.spec);
+    for (i, face) in crate::solids::faces(a.name).iter().enumerate() {
+        // Seen from inside: reverse the outward winding.
+        let inward: Vec<DVec3> = face.iter().rev().copied().collect();
+        s.add_polygon(format!("face {i}"), &inward, 0);
+    }
+    Ok(s)
+}
+
+fn sphere(a: &Args) -> Result<Scene, SceneError> {
+    a.at_most(1)?;
+    let (b, sct) = a.pair(0, ("B", "S"), 1..=4096, (8, 16))?;
+    a.check(0, u64::from(b) * u64::from(sct))?;
+    let cells = SphereCells { radius: 1.0, bands: b, sectors: sct };
+    Ok(Scene {
+        name: a.spec.into(),
+        patches: sphere_patches(cells),
+        materials: vec![Material::default()],
+        sphere: Some(cells),
+        ..Scene::default()
+    })
+}
+
+fn cornell_box(a: &Args) -> Result<Scene, SceneError> {
+    a.at_most(0)?;
+    Ok(crate::solids::cornell_box())
+}
+
+fn geosphere(a: &Args) -> Result<Scene, SceneError> {
+    a.at_most(1)?;
+    let l = a.one(0, "L", 1..=9, 2)?;
+    let t = 20 * 4u64.pow(l - 1);
+    a.check(t, t)?;
+    Ok(crate::meshes::geosphere(a.spec, l - 1))
+}
+
+fn torus(a: &Args) -> Result<Scene, SceneError> {
+    a.at_most(1)?;
+    let (u, v) = a.pair(0, ("U", "V"), 3..=4096, (48, 24))?;
+    let q = u64::from(u) * u64::from(v);
+    a.check(2 * q, q)?;
+    Ok(crate::meshes::torus(a.spec, 1.0, 0.4, u, v))
+}
+
+fn table_chairs(a: &Args) -> Result<Scene, SceneError> {
+    a.at_most(1)?;
+    let n = a.one(0, "N", 1..=256, 2)?;
+    let cells = crate::meshes::TABLE_CHAIRS_BOXES * 6 * u64::from(n) * u64::from(n);
+    a.check(2 * cells, cells)?;
+    Ok(crate::meshes::table_with_chairs(a.spec, n))
+}
+
+fn cubes_room(a: &Args) -> Result<Scene, SceneError> {
+    a.at_most(3)?;
+    let mut clustered = None;
+    let mut seed = None;
+    for p in a.parts.iter().skip(1) {
+        match *p {
+            "clustered" | "random" if clustered.is_none() => clustered = Some(*p == "clustered"),
+            s if seed.is_none() && s.parse::<u64>().is_ok() => seed = s.parse().ok(),
+            s => {
+                return Err(SceneError::BadParameter {
+                    spec: a.spec.to_string(),
+                    name: "clustered|random|SEED",
+                    expected: "'clustered' or 'random' and a seed in 0..=2^64-1, each at most once".into(),
+                    got: s.to_string(),
+                });
+            }
+        }
+    }
+    let clustered = clustered.unwrap_or(false);
+    let max = if clustered { crate::solids::MAX_CLUSTERED } else { crate::solids::MAX_RANDOM };
+    let k = a.one(0, "K", 1..=max, 27)?;
+    a.check(12 * (100 + u64::from(k)), 6 * (100 + u64::from(k)))?;
+    crate::solids::cubes_room(a.spec, k, clustered, seed.unwrap_or(1))
+}

@@ -55,6 +55,24 @@ impl SceneFingerprint {
     }
 }
 
+/// A fixed-point sum written as a decimal string: JSON readers that hold
+/// numbers as `f64` would round an integer past `2^53`.
+#[derive(Clone, Copy)]
+struct Fixed(i128);
+
+impl Serialize for Fixed {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(&self.0)
+    }
+}
+
+impl<'de> Deserialize<'de> for Fixed {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let text = <std::borrow::Cow<'de, str>>::deserialize(d)?;
+        text.parse().map(Fixed).map_err(|_| serde::de::Error::custom("expected a fixed-point sum: a decimal integer string"))
+    }
+}
+
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct FileScene {
@@ -79,9 +97,9 @@ struct FileBlock {
     escaped: u64,
     samples: u64,
     /// `Σ ln(A_T F)` in units of `2^-64` nats.
-    log_sum: i128,
+    log_sum: Fixed,
     /// `Σ ln²(A_T F)` in units of `2^-64` nats².
-    log_sq_sum: i128,
+    log_sq_sum: Fixed,
     /// `[from, to, N_ij]`, sorted.
     pairs: Vec<(u32, u32, u64)>,
     /// `[patch, count]`, sorted.
@@ -103,7 +121,7 @@ struct File {
     jackknife: FileJackknife,
     blocks: Vec<FileBlock>,
     /// `[patch, endpoints, Σ ln(A_T F) in units of 2^-64 nats]`, sorted.
-    endpoints: Vec<(u32, u64, i128)>,
+    endpoints: Vec<(u32, u64, Fixed)>,
 }
 
 fn invalid(m: impl Into<String>) -> CountsError {
@@ -278,8 +296,8 @@ impl VisibilityCounts {
                     segments: b.segments,
                     escaped: b.escaped,
                     samples: b.continuous.samples,
-                    log_sum: b.continuous.sum.0,
-                    log_sq_sum: b.continuous.sum_sq.0,
+                    log_sum: Fixed(b.continuous.sum.0),
+                    log_sq_sum: Fixed(b.continuous.sum_sq.0),
                     pairs: b.pairs.iter().map(|p| (p.from, p.to, p.count)).collect(),
                     background: b.background.clone(),
                 })
@@ -290,7 +308,7 @@ impl VisibilityCounts {
                 .zip(&self.endpoint_log)
                 .enumerate()
                 .filter(|(_, (e, _))| **e > 0)
-                .map(|(i, (&e, l))| (i as u32, e, l.0))
+                .map(|(i, (&e, l))| (i as u32, e, Fixed(l.0)))
                 .collect(),
         };
         serde_json::to_writer(&mut *out, &file).map_err(std::io::Error::other)?;
@@ -343,7 +361,7 @@ impl VisibilityCounts {
         check_sparse("endpoints", f.endpoints.iter().map(|e| (e.0, e.1)), |i| (i as usize) < n)?;
         for &(i, e, l) in &f.endpoints {
             endpoints[i as usize] = e;
-            endpoint_log[i as usize] = FixedSum(l);
+            endpoint_log[i as usize] = FixedSum(l.0);
         }
         let blocks = f
             .blocks
@@ -356,8 +374,8 @@ impl VisibilityCounts {
                 background: b.background,
                 continuous: ContinuousSums {
                     samples: b.samples,
-                    sum: FixedSum(b.log_sum),
-                    sum_sq: FixedSum(b.log_sq_sum),
+                    sum: FixedSum(b.log_sum.0),
+                    sum_sq: FixedSum(b.log_sq_sum.0),
                 },
             })
             .collect();
@@ -425,8 +443,10 @@ impl VisibilityCounts {
         let mut ranges: Vec<(u64, u64)> = self.ranges.iter().chain(&other.ranges).copied().collect();
         ranges.sort_unstable();
         for w in ranges.windows(2) {
-            if w[0] == w[1] {
-                return Err(CountsError::Mismatch(format!("lines {} are counted twice", fmt_ranges(w[0]))));
+            // Sorted: w[0] starts first; one inside the other is a repeat.
+            let inner = if w[1].1 <= w[0].1 { Some(w[1]) } else { (w[0].0 == w[1].0).then_some(w[0]) };
+            if let (Some(r), true) = (inner, w[1].0 < w[0].1) {
+                return Err(CountsError::Mismatch(format!("lines {} are counted twice", fmt_ranges(r))));
             }
             if w[1].0 < w[0].1 {
                 return Err(CountsError::Mismatch(format!(

@@ -1,0 +1,491 @@
+//! Casting lines and counting them into per-block pair counts (Part III
+//! §1.4, eqs. (30) and (59)); see the module above for what is counted.
+//!
+//! Block `b` of `B` holds the lines `i ≡ b (mod B)` of the range cast. The
+//! blocks are traced one after another, each with one pair accumulator;
+//! within a block, work is split into chunks of [`CHUNK`] lines traced by
+//! rayon. Every count and sum is exact, so the result is the same for any
+//! thread count and chunking.
+
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+use glam::DVec3;
+use itgfx_core::PairCount;
+use rayon::prelude::*;
+
+use super::{BlockCounts, ContinuousSums, CountsError, FixedSum, LineOptions, MAX_BLOCKS, VisibilityCounts};
+use crate::lines::{Line, LineRng, cosine_direction, global_line, sample_cdf};
+use crate::scene::Scene;
+use crate::tracer::{CrossingBuffer, Prepared, Tracer};
+use super::counts_file::SceneFingerprint;
+
+/// Lines per work unit.
+pub const CHUNK: u64 = 16_384;
+
+/// Radius of the line sphere relative to the scene's half-diagonal: 0.9 for
+/// the unit cube (half-diagonal √3/2), where 59.0% of global lines cross the
+/// cube and Part III Table 6's rows are reproduced with every line counted.
+pub const SPHERE_SCALE: f64 = 0.9 / 0.866_025_403_784_438_6;
+
+/// A tiny multiplicative hasher for `u64` pair keys.
+#[derive(Default)]
+struct KeyHasher(u64);
+impl Hasher for KeyHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0.rotate_left(5) ^ u64::from(b)).wrapping_mul(0x51_7C_C1_B7_27_22_0A_95);
+        }
+    }
+    fn write_u64(&mut self, v: u64) {
+        self.0 = (v ^ (v >> 29)).wrapping_mul(0xBF58_476D_1CE4_E5B9) ^ (v >> 32);
+    }
+}
+type KeyMap = HashMap<u64, u64, BuildHasherDefault<KeyHasher>>;
+
+/// Where a block's pair counts accumulate: a dense `n × n` matrix of `u32`
+/// when it fits in [`DENSE_LIMIT`] entries (chunks arrive as sorted runs, so
+/// the adds sweep it in order), a hash map of the pairs hit otherwise.
+enum Accumulator {
+    Dense { n: usize, counts: Vec<u32>, overflow: KeyMap },
+    Sparse(KeyMap),
+}
+
+/// Largest `n²` counted densely (6000 patches: 144 MB of `u32` per block).
+const DENSE_LIMIT: usize = 36_000_000;
+
+impl Accumulator {
+    fn new(n: usize) -> Self {
+        if n.saturating_mul(n) <= DENSE_LIMIT {
+            Accumulator::Dense { n, counts: vec![0; n * n], overflow: KeyMap::default() }
+        } else {
+            Accumulator::Sparse(KeyMap::default())
+        }
+    }
+
+    fn add(&mut self, runs: &[(u64, u64)]) {
+        match self {
+            Accumulator::Dense { n, counts, overflow } => {
+                for &(k, c) in runs {
+                    let idx = (k >> 32) as usize * *n + (k as u32) as usize;
+                    let (sum, carry) = counts[idx].overflowing_add(c as u32);
+                    if carry || c > u64::from(u32::MAX) {
+                        // Counts past 2^32 for one pair: keep the excess exactly.
+                        *overflow.entry(k).or_insert(0) += c;
+                    } else {
+                        counts[idx] = sum;
+                    }
+                }
+            }
+            Accumulator::Sparse(map) => {
+                for &(k, c) in runs {
+                    *map.entry(k).or_insert(0) += c;
+                }
+            }
+        }
+    }
+
+    fn into_pairs(self) -> Vec<PairCount> {
+        let mut pairs: Vec<PairCount> = match self {
+            Accumulator::Dense { n, counts, overflow } => {
+                let mut v: Vec<PairCount> = counts
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, c)| **c > 0)
+                    .map(|(idx, &c)| PairCount { from: (idx / n) as u32, to: (idx % n) as u32, count: u64::from(c) })
+                    .collect();
+                for (k, c) in overflow {
+                    let (i, j) = ((k >> 32) as u32, k as u32);
+                    match v.binary_search_by_key(&(i, j), |p| (p.from, p.to)) {
+                        Ok(pos) => v[pos].count += c,
+                        Err(pos) => v.insert(pos, PairCount { from: i, to: j, count: c }),
+                    }
+                }
+                v
+            }
+            Accumulator::Sparse(map) => {
+                map.into_iter().map(|(k, c)| PairCount { from: (k >> 32) as u32, to: k as u32, count: c }).collect()
+            }
+        };
+        pairs.sort_unstable();
+        pairs
+    }
+}
+
+/// Per-chunk endpoint sums: dense arrays for up to [`DENSE_ENDPOINTS`]
+/// patches, a list of `(patch, log)` above (a 10^6-patch mesh would make
+/// each chunk allocate 24 MB).
+enum Endpoints {
+    Dense(Vec<FixedSum>, Vec<u64>),
+    List(Vec<(u32, FixedSum)>),
+}
+
+const DENSE_ENDPOINTS: usize = 16_384;
+
+impl Endpoints {
+    fn new(n: usize) -> Self {
+        if n <= DENSE_ENDPOINTS {
+            Endpoints::Dense(vec![FixedSum::default(); n], vec![0; n])
+        } else {
+            Endpoints::List(Vec::new())
+        }
+    }
+
+    #[inline]
+    fn add(&mut self, i: u32, l: FixedSum) {
+        match self {
+            Endpoints::Dense(s, c) => {
+                s[i as usize].0 += l.0;
+                c[i as usize] += 1;
+            }
+            Endpoints::List(v) => v.push((i, l)),
+        }
+    }
+
+    fn add_into(self, sums: &mut [FixedSum], counts: &mut [u64]) -> Option<()> {
+        let mut one = |i: usize, l: FixedSum, c: u64| -> Option<()> {
+            sums[i] = sums[i].checked_add(l)?;
+            counts[i] = counts[i].checked_add(c)?;
+            Some(())
+        };
+        match self {
+            Endpoints::Dense(s, c) => {
+                for (i, (l, c)) in s.into_iter().zip(c).enumerate() {
+                    if c > 0 {
+                        one(i, l, c)?;
+                    }
+                }
+            }
+            Endpoints::List(v) => {
+                for (i, l) in v {
+                    one(i as usize, l, 1)?;
+                }
+            }
+        }
+        Some(())
+    }
+}
+
+struct ChunkResult {
+    keys: Vec<(u64, u64)>,
+    background: Vec<(u32, u64)>,
+    cont: ContinuousSums,
+    /// Segment endpoints: `log(A_T F)` summed per patch.
+    endpoint: Endpoints,
+    segments: u64,
+    escaped: u64,
+}
+
+/// Area sampler for local lines (normalised coordinates).
+struct Sampler {
+    patch_cdf: Vec<f64>,
+    tris: Vec<Vec<u32>>,
+    tri_cdf: Vec<Vec<f64>>,
+}
+
+impl Sampler {
+    fn new(p: &Prepared) -> Self {
+        let mut tris = vec![Vec::new(); p.patches];
+        let mut tri_cdf = vec![Vec::new(); p.patches];
+        let mut area = vec![0.0; p.patches];
+        for (t, v) in p.triangles.iter().enumerate() {
+            let i = p.triangle_patch[t] as usize;
+            let a = 0.5 * f64::from((v[1] - v[0]).cross(v[2] - v[0]).length());
+            area[i] += a;
+            tris[i].push(t as u32);
+            tri_cdf[i].push(area[i]);
+        }
+        if let Some(s) = &p.sphere {
+            area.iter_mut().for_each(|a| *a = 4.0 * std::f64::consts::PI * s.radius * s.radius / p.patches as f64);
+        }
+        let mut acc = 0.0;
+        let patch_cdf = area
+            .iter()
+            .map(|a| {
+                acc += a;
+                acc
+            })
+            .collect();
+        Self { patch_cdf, tris, tri_cdf }
+    }
+
+    /// Local line `index`: (origin patch, point, unit normal, line).
+    fn line(&self, p: &Prepared, seed: u64, index: u64) -> (u32, DVec3, DVec3, Line) {
+        let rng = LineRng::new(seed, index);
+        let uniform = |_: u64, _: u64, k: u32| rng.uniform(k);
+        let total = *self.patch_cdf.last().unwrap_or(&1.0);
+        let i = sample_cdf(&self.patch_cdf, uniform(seed, index, 0) * total);
+        let (x, n) = if let Some(s) = &p.sphere {
+            let (b, sct) = (i as u32 / s.sectors, i as u32 % s.sectors);
+            let z = 1.0 - 2.0 * (f64::from(b) + uniform(seed, index, 1)) / f64::from(s.bands);
+            let phi = std::f64::consts::TAU * (f64::from(sct) + uniform(seed, index, 2)) / f64::from(s.sectors);
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let q = DVec3::new(r * phi.cos(), r * phi.sin(), z);
+            (q * s.radius, -q)
+        } else {
+            let cdf = &self.tri_cdf[i];
+            let t =
+                self.tris[i][sample_cdf(cdf, uniform(seed, index, 1) * cdf.last().copied().unwrap_or(0.0))] as usize;
+            let [a, b, c] = p.triangles[t].map(|v| v.as_dvec3());
+            let (mut u, mut v) = (uniform(seed, index, 2), uniform(seed, index, 3));
+            if u + v > 1.0 {
+                (u, v) = (1.0 - u, 1.0 - v);
+            }
+            (a + (b - a) * u + (c - a) * v, p.normals[t].as_dvec3())
+        };
+        let d = cosine_direction(n, uniform(seed, index, 4), uniform(seed, index, 5));
+        // Start a little behind the surface (obvhs skips crossings nearer
+        // than 1e-4); crossings at t <= BACKOFF are ignored.
+        let o = x - d * BACKOFF;
+        let line = Line { origin: o.as_vec3().to_array(), tmin: 0.0, direction: d.as_vec3().to_array(), tmax: 8.0 };
+        (i as u32, x, n, line)
+    }
+}
+
+const BACKOFF: f64 = 1e-3;
+
+/// Local line `index` of a run with `seed` over a prepared scene: its origin
+/// patch and the line (which starts `1e-3` behind the surface; crossings up
+/// to that distance belong to the origin).
+#[must_use]
+pub fn local_line(prepared: &Prepared, seed: u64, index: u64) -> (u32, Line) {
+    let (p, _, _, l) = Sampler::new(prepared).line(prepared, seed, index);
+    (p, l)
+}
+
+fn key(i: u32, j: u32) -> u64 {
+    (u64::from(i) << 32) | u64::from(j)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn process_chunk(
+    p: &Prepared,
+    tracer: &dyn Tracer,
+    sampler: Option<&Sampler>,
+    opts: &LineOptions,
+    total_area_norm: f64,
+    (first, stride, count): (u64, u64, u64),
+    radius: f64,
+) -> Result<ChunkResult, CountsError> {
+    let mut lines = Vec::with_capacity(count as usize);
+    let mut origins = Vec::new();
+    for i in (0..count).map(|k| first + k * stride) {
+        if let Some(s) = sampler {
+            let (patch, x, n, l) = s.line(p, opts.seed, i);
+            origins.push((patch, x, n));
+            lines.push(l);
+        } else {
+            lines.push(global_line(opts.seed, i, radius));
+        }
+    }
+    let mut buf = CrossingBuffer::default();
+    tracer.trace_all(&lines, &mut buf)?;
+    let mut keys = Vec::new();
+    let mut background = Vec::new();
+    let mut endpoint = Endpoints::new(p.patches);
+    let mut cont = ContinuousSums::default();
+    let mut overflow = false;
+    // One sample of eq. (59) from a point-to-point form factor `f`.
+    let mut sample = |f: f64, ends: &[u32], endpoint: &mut Endpoints| {
+        let l = (total_area_norm * f).ln();
+        if f > 0.0 && l.is_finite() {
+            overflow |= !cont.add(l);
+            let l = FixedSum::of(l);
+            for &e in ends {
+                endpoint.add(e, l);
+            }
+        }
+    };
+    let (mut segments, mut escaped) = (0, 0);
+    for (li, line) in lines.iter().enumerate() {
+        let hits = buf.line(li);
+        if let Some(&(from, _x, n)) = origins.get(li) {
+            // Local line: the nearest crossing past the origin, not on it.
+            let d = DVec3::from(line.direction.map(f64::from));
+            let next = hits.iter().find(|h| f64::from(h.t) > BACKOFF * (1.0 + 1e-4) && h.patch != from);
+            match next {
+                Some(h) if h.cos < 0.0 => {
+                    keys.push(key(from, h.patch));
+                    let r = f64::from(h.t) - BACKOFF;
+                    sample(n.dot(d) * f64::from(-h.cos) / (std::f64::consts::PI * r * r), &[from], &mut endpoint);
+                    segments += 1;
+                }
+                _ => {
+                    background.push((from, 1));
+                    escaped += 1;
+                }
+            }
+            continue;
+        }
+        // Global line. Crossings less than 1e-6 apart that face both ways are
+        // a touch (the line grazes an edge or clips a corner by < 1e-6):
+        // whether it was in free space or not, it still is; drop the cluster.
+        let mut kept = Vec::with_capacity(hits.len());
+        let mut a = 0;
+        while a < hits.len() {
+            let mut b = a + 1;
+            while b < hits.len() && hits[b].t - hits[b - 1].t <= 1e-6 {
+                b += 1;
+            }
+            let forward = hits[a].cos > 0.0;
+            if hits[a..b].iter().all(|h| (h.cos > 0.0) == forward) {
+                kept.push(hits[a]);
+            }
+            a = b;
+        }
+        let hits = &kept[..];
+        // Pair forward-facing crossings with the next backward-facing one.
+        let mut k = 0;
+        while k < hits.len() {
+            let h = hits[k];
+            if h.cos > 0.0 {
+                match hits.get(k + 1) {
+                    Some(g) if g.cos < 0.0 => {
+                        let r = f64::from(g.t - h.t);
+                        let f = f64::from(h.cos) * f64::from(-g.cos) / (std::f64::consts::PI * r * r);
+                        keys.push(key(h.patch, g.patch));
+                        keys.push(key(g.patch, h.patch));
+                        sample(f, &[h.patch, g.patch], &mut endpoint);
+                        segments += 1;
+                        k += 2;
+                        continue;
+                    }
+                    _ => {
+                        background.push((h.patch, 1));
+                        escaped += 1;
+                    }
+                }
+            } else {
+                background.push((h.patch, 1));
+                escaped += 1;
+            }
+            k += 1;
+        }
+    }
+    keys.sort_unstable();
+    let mut runs: Vec<(u64, u64)> = Vec::new();
+    for k in keys {
+        match runs.last_mut() {
+            Some((last, c)) if *last == k => *c += 1,
+            _ => runs.push((k, 1)),
+        }
+    }
+    if overflow {
+        return Err(CountsError::Overflow("the I_S^c sum of a chunk".into()));
+    }
+    Ok(ChunkResult { keys: runs, background, cont, endpoint, segments, escaped })
+}
+
+/// The lines of block `b` of `blocks` in `[start, end)`: the first index
+/// `i ≡ b (mod blocks)` and how many there are (stride `blocks`).
+#[must_use]
+pub fn block_lines(start: u64, end: u64, b: u64, blocks: u64) -> (u64, u64) {
+    let first = start.saturating_add((b + blocks - start % blocks) % blocks);
+    if first >= end { (first, 0) } else { (first, (end - 1 - first) / blocks + 1) }
+}
+
+/// Casts the lines `offset .. offset + lines` through `tracer` and counts
+/// the visibility channel. `progress(lines_done, lines_total)` is called
+/// between waves of chunks.
+///
+/// # Errors
+/// [`CountsError::Invalid`] for no lines, a block count outside
+/// `1..=MAX_BLOCKS` or a line range past `2^64`; backend errors; an
+/// overflowing sum.
+pub fn count_visibility(
+    scene: &Scene,
+    prepared: &Prepared,
+    tracer: &dyn Tracer,
+    opts: &LineOptions,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<VisibilityCounts, CountsError> {
+    if opts.lines == 0 {
+        return Err(CountsError::Invalid("no lines to cast".into()));
+    }
+    if !(1..=MAX_BLOCKS).contains(&opts.blocks) {
+        return Err(CountsError::Invalid(format!("{} jackknife blocks: expected 1..={MAX_BLOCKS}", opts.blocks)));
+    }
+    let Some(end) = opts.offset.checked_add(opts.lines) else {
+        return Err(CountsError::Invalid(format!(
+            "lines {}..{}+{} run past the last line index 2^64-1",
+            opts.offset, opts.offset, opts.lines
+        )));
+    };
+    let start = opts.offset;
+    let n = prepared.patches;
+    let blocks = u64::from(opts.blocks);
+    let total_area_norm = scene.total_area() / (prepared.scale * prepared.scale);
+    let sampler = opts.local.then(|| Sampler::new(prepared));
+    let radius = SPHERE_SCALE;
+    let wave = (rayon::current_num_threads() as u64 * 4).max(4);
+    let overflow = |what: &str| CountsError::Overflow(what.into());
+    let mut out = Vec::new();
+    let mut endpoints = vec![0u64; n];
+    let mut endpoint_log = vec![FixedSum::default(); n];
+    let mut done = 0;
+    for b in 0..blocks {
+        let (first, count) = block_lines(start, end, b, blocks);
+        let mut acc = Accumulator::new(n);
+        let mut background = vec![0u64; n];
+        let mut block = BlockCounts { lines: count, ..BlockCounts::default() };
+        let chunks: Vec<u64> = (0..count).step_by(CHUNK as usize).collect();
+        let run_wave = |w: &[u64]| -> Vec<Result<ChunkResult, CountsError>> {
+            w.par_iter()
+                .map(|&k| {
+                    let span = (first + k * blocks, blocks, CHUNK.min(count - k));
+                    process_chunk(prepared, tracer, sampler.as_ref(), opts, total_area_norm, span, radius)
+                })
+                .collect()
+        };
+        // Merge wave k while wave k+1 traces (exact sums: order-free).
+        let mut merge = |results: Vec<Result<ChunkResult, CountsError>>| -> Result<(), CountsError> {
+            for r in results {
+                let r = r?;
+                acc.add(&r.keys);
+                for (i, c) in r.background {
+                    let x = &mut background[i as usize];
+                    *x = x.checked_add(c).ok_or_else(|| overflow("a background count"))?;
+                }
+                r.endpoint.add_into(&mut endpoint_log, &mut endpoints).ok_or_else(|| overflow("an endpoint sum"))?;
+                block.continuous =
+                    block.continuous.checked_add(&r.cont).ok_or_else(|| overflow("the I_S^c sum of a block"))?;
+                block.segments = block.segments.checked_add(r.segments).ok_or_else(|| overflow("segments"))?;
+                block.escaped = block.escaped.checked_add(r.escaped).ok_or_else(|| overflow("escaped"))?;
+            }
+            Ok(())
+        };
+        let waves: Vec<&[u64]> = chunks.chunks(wave as usize).collect();
+        let mut pending: Option<Vec<Result<ChunkResult, CountsError>>> = None;
+        for w in &waves {
+            let (merged, next) = match pending.take() {
+                Some(prev) => rayon::join(|| merge(prev), || run_wave(w)),
+                None => (Ok(()), run_wave(w)),
+            };
+            merged?;
+            pending = Some(next);
+            done += w.iter().map(|&k| CHUNK.min(count - k)).sum::<u64>();
+            progress(done, opts.lines);
+        }
+        if let Some(prev) = pending {
+            merge(prev)?;
+        }
+        block.pairs = acc.into_pairs();
+        block.background =
+            background.iter().enumerate().filter(|(_, c)| **c > 0).map(|(i, &c)| (i as u32, c)).collect();
+        out.push(block);
+    }
+    let areas = scene.areas();
+    Ok(VisibilityCounts {
+        scene: SceneFingerprint::of(&scene.name, &areas),
+        areas,
+        local: opts.local,
+        seed: opts.seed,
+        ranges: vec![(start, end)],
+        blocks: out,
+        endpoints,
+        endpoint_log,
+    })
+}

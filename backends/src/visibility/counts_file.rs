@@ -1,0 +1,568 @@
+//! The counts file: a run's counts saved as versioned JSON (serde), so that
+//! shards of a run (disjoint line ranges, `--offset`) can be merged and
+//! evaluated later.
+//!
+//! Version 2 holds the format name and version, the scene's fingerprint
+//! (name, patch count, a hash of the patch areas) and the areas, the line
+//! kind, the seed, the line index ranges covered, the jackknife block
+//! assignment (line `i` in block `i mod B`), and per block the line,
+//! segment and background totals, the `I_S^c` sums (fixed point, units of
+//! `2^-64` nats) and the sparse pair and background counts; per patch the
+//! endpoint counts and log sums. Every value is checked on reading: a file
+//! either loads into counts that evaluate to finite numbers, or is refused
+//! with one line. Nothing is allocated from a declared size: what is
+//! allocated is bounded by the length of the text.
+
+use serde::{Deserialize, Serialize};
+
+use super::count::block_lines;
+use super::{BlockCounts, ContinuousSums, CountsError, FixedSum, MAX_BLOCKS, VisibilityCounts};
+use crate::scene::Scene;
+use itgfx_core::PairCount;
+
+/// The `format` field of a counts file.
+pub const FORMAT_NAME: &str = "itgfx-counts";
+/// The version written and read.
+pub const FORMAT_VERSION: u32 = 2;
+/// The block assignment written and read.
+const ASSIGNMENT: &str = "line index mod blocks";
+/// Bound on `|ln(A_T F)|` for any finite positive `A_T F` (`ln(2^-1074)` is
+/// −744.4): the sums of a block are checked against it.
+const LOG_BOUND: f64 = 746.0;
+
+/// What identifies the scene counted.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SceneFingerprint {
+    /// The scene's name.
+    pub name: String,
+    /// Number of patches.
+    pub patches: u64,
+    /// FNV-1a (64 bits) of the patch areas' IEEE bits, little-endian, in order.
+    pub areas_hash: u64,
+}
+
+impl SceneFingerprint {
+    /// The fingerprint of a scene given its name and patch areas.
+    #[must_use]
+    pub fn of(name: &str, areas: &[f64]) -> Self {
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        for a in areas {
+            for b in a.to_bits().to_le_bytes() {
+                h = (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
+            }
+        }
+        Self { name: name.to_string(), patches: areas.len() as u64, areas_hash: h }
+    }
+}
+
+/// A fixed-point sum written as a decimal string: JSON readers that hold
+/// numbers as `f64` would round an integer past `2^53`.
+#[derive(Clone, Copy)]
+struct Fixed(i128);
+
+impl Serialize for Fixed {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(&self.0)
+    }
+}
+
+impl<'de> Deserialize<'de> for Fixed {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let text = <std::borrow::Cow<'de, str>>::deserialize(d)?;
+        text.parse().map(Fixed).map_err(|_| serde::de::Error::custom("expected a fixed-point sum: a decimal integer string"))
+    }
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FileScene {
+    name: String,
+    patches: u64,
+    /// 16 hexadecimal digits.
+    areas_hash: String,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FileJackknife {
+    blocks: u32,
+    assignment: String,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FileBlock {
+    lines: u64,
+    segments: u64,
+    escaped: u64,
+    samples: u64,
+    /// `Σ ln(A_T F)` in units of `2^-64` nats.
+    log_sum: Fixed,
+    /// `Σ ln²(A_T F)` in units of `2^-64` nats².
+    log_sq_sum: Fixed,
+    /// `[from, to, N_ij]`, sorted.
+    pairs: Vec<(u32, u32, u64)>,
+    /// `[patch, count]`, sorted.
+    background: Vec<(u32, u64)>,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct File {
+    format: String,
+    version: u32,
+    scene: FileScene,
+    areas: Vec<f64>,
+    /// `"global"` or `"local"`.
+    lines: String,
+    seed: u64,
+    /// `[start, end)` line indices.
+    ranges: Vec<(u64, u64)>,
+    jackknife: FileJackknife,
+    blocks: Vec<FileBlock>,
+    /// `[patch, endpoints, Σ ln(A_T F) in units of 2^-64 nats]`, sorted.
+    endpoints: Vec<(u32, u64, Fixed)>,
+}
+
+fn invalid(m: impl Into<String>) -> CountsError {
+    CountsError::Invalid(m.into())
+}
+
+fn overflow(m: &str) -> CountsError {
+    CountsError::Overflow(m.into())
+}
+
+/// Sorted, strictly increasing keys below `n`, positive counts.
+fn check_sparse<K: PartialOrd + Copy>(
+    what: &str,
+    items: impl Iterator<Item = (K, u64)>,
+    in_range: impl Fn(K) -> bool,
+) -> Result<u64, CountsError> {
+    let mut prev: Option<K> = None;
+    let mut total = 0u64;
+    for (k, c) in items {
+        if !in_range(k) {
+            return Err(invalid(format!("{what}: a patch index is out of range")));
+        }
+        if prev.is_some_and(|p| p >= k) {
+            return Err(invalid(format!("{what}: entries are not sorted or repeat")));
+        }
+        if c == 0 {
+            return Err(invalid(format!("{what}: a count is zero")));
+        }
+        prev = Some(k);
+        total = total.checked_add(c).ok_or_else(|| overflow(&format!("the sum of {what}")))?;
+    }
+    Ok(total)
+}
+
+fn fmt_ranges(r: (u64, u64)) -> String {
+    format!("{}..{}", r.0, r.1)
+}
+
+impl VisibilityCounts {
+    /// Checks every invariant the evaluation relies on: areas positive and
+    /// finite and matching the fingerprint, sorted disjoint line ranges,
+    /// each block's line count equal to its share of the ranges, sorted
+    /// sparse counts in range, totals consistent (`Σ N_ij` = 2 × segments
+    /// for global lines, = segments for local ones; background = escaped),
+    /// `I_S^c` sums within what finite samples can give, all totals within
+    /// 64 bits.
+    ///
+    /// # Errors
+    /// [`CountsError::Invalid`] or [`CountsError::Overflow`] naming the first violation.
+    pub fn validate(&self) -> Result<(), CountsError> {
+        let n = self.areas.len();
+        if n == 0 || self.scene.patches != n as u64 {
+            return Err(invalid(format!(
+                "the scene has {} patches but {n} areas are listed",
+                self.scene.patches
+            )));
+        }
+        if let Some((i, a)) = self.areas.iter().enumerate().find(|(_, a)| !(a.is_finite() && **a > 0.0)) {
+            return Err(invalid(format!("patch {i} has area {a}: areas must be positive and finite")));
+        }
+        if !self.areas.iter().sum::<f64>().is_finite() {
+            return Err(invalid("the total area is not finite"));
+        }
+        if SceneFingerprint::of(&self.scene.name, &self.areas).areas_hash != self.scene.areas_hash {
+            return Err(invalid("the areas do not match the scene's areas hash"));
+        }
+        let b = self.blocks.len();
+        if !(1..=MAX_BLOCKS as usize).contains(&b) {
+            return Err(invalid(format!("{b} jackknife blocks: expected 1..={MAX_BLOCKS}")));
+        }
+        if self.ranges.is_empty() {
+            return Err(invalid("no line ranges"));
+        }
+        for (k, r) in self.ranges.iter().enumerate() {
+            if r.0 >= r.1 {
+                return Err(invalid(format!("line range {} is empty or reversed", fmt_ranges(*r))));
+            }
+            if let Some(next) = self.ranges.get(k + 1) {
+                if next.0 < r.1 {
+                    return Err(CountsError::Mismatch(format!(
+                        "line ranges {} and {} overlap or are out of order",
+                        fmt_ranges(*r),
+                        fmt_ranges(*next)
+                    )));
+                }
+            }
+        }
+        let per_pair = if self.local { 1 } else { 2 };
+        let mut grand = 0u64;
+        let mut samples = 0u64;
+        let mut sums = ContinuousSums::default();
+        for (k, blk) in self.blocks.iter().enumerate() {
+            let mut lines = 0u64;
+            for r in &self.ranges {
+                lines = lines
+                    .checked_add(block_lines(r.0, r.1, k as u64, b as u64).1)
+                    .ok_or_else(|| overflow("the line count"))?;
+            }
+            if blk.lines != lines {
+                return Err(invalid(format!("block {k} has {} lines, its share of the ranges is {lines}", blk.lines)));
+            }
+            let what = format!("block {k} pairs");
+            let pairs = check_sparse(&what, blk.pairs.iter().map(|p| ((p.from, p.to), p.count)), |(i, j)| {
+                (i as usize) < n && (j as usize) < n
+            })?;
+            let what = format!("block {k} background");
+            let bg = check_sparse(&what, blk.background.iter().copied(), |i| (i as usize) < n)?;
+            if Some(pairs) != blk.segments.checked_mul(per_pair) || bg != blk.escaped {
+                return Err(invalid(format!("block {k}: pair and background counts do not add up to its totals")));
+            }
+            if self.local && blk.segments.checked_add(blk.escaped) != Some(blk.lines) {
+                return Err(invalid(format!("block {k}: local lines reaching a patch and escaping do not add up")));
+            }
+            grand = grand.checked_add(pairs).and_then(|g| g.checked_add(bg)).ok_or_else(|| overflow("the total count"))?;
+            let c = &blk.continuous;
+            let s = c.samples as f64 * (1.0 + 1e-9);
+            let (sum, sq) = (c.sum.to_f64(), c.sum_sq.to_f64());
+            if c.samples > blk.segments || sum.abs() > LOG_BOUND * s || !(sq >= 0.0 && sq <= LOG_BOUND * LOG_BOUND * s) {
+                return Err(invalid(format!("block {k}: the I_S^c sums are out of range")));
+            }
+            samples = samples.checked_add(c.samples).ok_or_else(|| overflow("the sample count"))?;
+            sums = sums.checked_add(c).ok_or_else(|| overflow("the I_S^c sums"))?;
+        }
+        if self.endpoints.len() != n || self.endpoint_log.len() != n {
+            return Err(invalid("endpoint sums are not one per patch"));
+        }
+        let mut ends = 0u64;
+        for (i, (&e, l)) in self.endpoints.iter().zip(&self.endpoint_log).enumerate() {
+            ends = ends.checked_add(e).ok_or_else(|| overflow("the endpoint count"))?;
+            if l.to_f64().abs() > LOG_BOUND * e as f64 * (1.0 + 1e-9) {
+                return Err(invalid(format!("patch {i}: the endpoint log sum is out of range")));
+            }
+        }
+        if Some(ends) != samples.checked_mul(per_pair) {
+            return Err(invalid("endpoint counts do not add up to the I_S^c samples"));
+        }
+        Ok(())
+    }
+
+    /// Checks that these counts are of `scene` (name, patch count, areas).
+    ///
+    /// # Errors
+    /// [`CountsError::Mismatch`] saying what differs.
+    pub fn check_scene(&self, scene: &Scene) -> Result<(), CountsError> {
+        same_scene(&self.scene, &SceneFingerprint::of(&scene.name, &scene.areas()), "the counts are", "the scene")
+    }
+
+    /// Writes the counts as a version-2 counts file (JSON) with the scene
+    /// name `name` in the fingerprint (the name of the scene counted).
+    ///
+    /// # Errors
+    /// I/O errors.
+    pub fn save(&self, name: &str, out: &mut impl std::io::Write) -> std::io::Result<()> {
+        let file = File {
+            format: FORMAT_NAME.into(),
+            version: FORMAT_VERSION,
+            scene: FileScene {
+                name: name.into(),
+                patches: self.scene.patches,
+                areas_hash: format!("{:016x}", self.scene.areas_hash),
+            },
+            areas: self.areas.clone(),
+            lines: if self.local { "local" } else { "global" }.into(),
+            seed: self.seed,
+            ranges: self.ranges.clone(),
+            jackknife: FileJackknife { blocks: self.blocks.len() as u32, assignment: ASSIGNMENT.into() },
+            blocks: self
+                .blocks
+                .iter()
+                .map(|b| FileBlock {
+                    lines: b.lines,
+                    segments: b.segments,
+                    escaped: b.escaped,
+                    samples: b.continuous.samples,
+                    log_sum: Fixed(b.continuous.sum.0),
+                    log_sq_sum: Fixed(b.continuous.sum_sq.0),
+                    pairs: b.pairs.iter().map(|p| (p.from, p.to, p.count)).collect(),
+                    background: b.background.clone(),
+                })
+                .collect(),
+            endpoints: self
+                .endpoints
+                .iter()
+                .zip(&self.endpoint_log)
+                .enumerate()
+                .filter(|(_, (e, _))| **e > 0)
+                .map(|(i, (&e, l))| (i as u32, e, Fixed(l.0)))
+                .collect(),
+        };
+        serde_json::to_writer(&mut *out, &file).map_err(std::io::Error::other)?;
+        writeln!(out)
+    }
+
+    /// Reads a counts file written by [`VisibilityCounts::save`] and checks
+    /// it ([`VisibilityCounts::validate`]); returns the scene name too.
+    ///
+    /// # Errors
+    /// [`CountsError::Format`] for text that is not a version-2 counts file,
+    /// [`CountsError::Invalid`] / [`CountsError::Overflow`] for bad contents.
+    pub fn load(text: &str) -> Result<(String, Self), CountsError> {
+        if text.starts_with("itgfx-counts 1") {
+            return Err(CountsError::Format(
+                "a version 1 counts file: this itgfx reads version 2; count again with --save-counts".into(),
+            ));
+        }
+        let f: File = serde_json::from_str(text)
+            .map_err(|e| CountsError::Format(format!("not an itgfx counts file (version {FORMAT_VERSION}): {e}")))?;
+        if f.format != FORMAT_NAME || f.version != FORMAT_VERSION {
+            return Err(CountsError::Format(format!(
+                "format {:?} version {}: expected {FORMAT_NAME:?} version {FORMAT_VERSION}",
+                f.format, f.version
+            )));
+        }
+        let local = match f.lines.as_str() {
+            "global" => false,
+            "local" => true,
+            other => return Err(invalid(format!("lines {other:?}: expected \"global\" or \"local\""))),
+        };
+        if f.jackknife.assignment != ASSIGNMENT || f.jackknife.blocks as usize != f.blocks.len() {
+            return Err(invalid(format!(
+                "jackknife: expected {} blocks assigned by {ASSIGNMENT:?}, found {} blocks",
+                f.jackknife.blocks,
+                f.blocks.len()
+            )));
+        }
+        let areas_hash = u64::from_str_radix(&f.scene.areas_hash, 16)
+            .ok()
+            .filter(|_| f.scene.areas_hash.len() == 16)
+            .ok_or_else(|| invalid("areas_hash: expected 16 hexadecimal digits"))?;
+        // Every allocation below is at most a constant times the text's length.
+        let n = f.areas.len();
+        if f.scene.patches != n as u64 {
+            return Err(invalid(format!("the scene has {} patches but {n} areas are listed", f.scene.patches)));
+        }
+        let mut endpoints = vec![0u64; n];
+        let mut endpoint_log = vec![FixedSum::default(); n];
+        check_sparse("endpoints", f.endpoints.iter().map(|e| (e.0, e.1)), |i| (i as usize) < n)?;
+        for &(i, e, l) in &f.endpoints {
+            endpoints[i as usize] = e;
+            endpoint_log[i as usize] = FixedSum(l.0);
+        }
+        let blocks = f
+            .blocks
+            .into_iter()
+            .map(|b| BlockCounts {
+                lines: b.lines,
+                segments: b.segments,
+                escaped: b.escaped,
+                pairs: b.pairs.into_iter().map(|(from, to, count)| PairCount { from, to, count }).collect(),
+                background: b.background,
+                continuous: ContinuousSums {
+                    samples: b.samples,
+                    sum: FixedSum(b.log_sum.0),
+                    sum_sq: FixedSum(b.log_sq_sum.0),
+                },
+            })
+            .collect();
+        let counts = Self {
+            scene: SceneFingerprint { name: f.scene.name.clone(), patches: f.scene.patches, areas_hash },
+            areas: f.areas,
+            local,
+            seed: f.seed,
+            ranges: f.ranges,
+            blocks,
+            endpoints,
+            endpoint_log,
+        };
+        counts.validate()?;
+        Ok((f.scene.name, counts))
+    }
+
+    /// Reads and checks a counts file from `path`, refusing before reading
+    /// one whose parsed form would not fit in the memory available (at most
+    /// [`BYTES_PER_FILE_BYTE`] bytes per byte of file, text included).
+    ///
+    /// # Errors
+    /// As [`VisibilityCounts::load`]; I/O errors as [`CountsError::Format`]
+    /// with the path; [`CountsError::TooLarge`].
+    pub fn read(path: &std::path::Path) -> Result<(String, Self), CountsError> {
+        let io = |e: std::io::Error| CountsError::Format(format!("{}: {e}", path.display()));
+        let len = std::fs::metadata(path).map_err(io)?.len();
+        let needed = len.saturating_mul(BYTES_PER_FILE_BYTE);
+        if let Some(available) = available_memory() {
+            if needed > available {
+                return Err(CountsError::TooLarge { needed, available });
+            }
+        }
+        let text = std::fs::read_to_string(path).map_err(io)?;
+        Self::load(&text)
+    }
+
+    /// Adds the counts of another shard of the same run: same scene, seed,
+    /// line kind and block count, line ranges disjoint from these. Integer
+    /// and fixed-point sums are exact, so any merge order gives the same
+    /// counts. On error `self` is unchanged.
+    ///
+    /// # Errors
+    /// [`CountsError::Mismatch`] naming what differs or the ranges that
+    /// overlap; [`CountsError::Overflow`] if a count would pass 64 bits.
+    pub fn merge(&mut self, other: VisibilityCounts) -> Result<(), CountsError> {
+        same_scene(&self.scene, &other.scene, "these counts are", "the others")?;
+        other.validate()?;
+        if other.local != self.local {
+            return Err(CountsError::Mismatch("cannot merge local-line and global-line counts".into()));
+        }
+        if other.seed != self.seed {
+            return Err(CountsError::Mismatch(format!(
+                "the counts are of seed {} and seed {}: shards of one run share a seed",
+                self.seed, other.seed
+            )));
+        }
+        if other.blocks.len() != self.blocks.len() {
+            return Err(CountsError::Mismatch(format!(
+                "the counts have {} and {} jackknife blocks: shards of one run share --blocks",
+                self.blocks.len(),
+                other.blocks.len()
+            )));
+        }
+        let mut ranges: Vec<(u64, u64)> = self.ranges.iter().chain(&other.ranges).copied().collect();
+        ranges.sort_unstable();
+        for w in ranges.windows(2) {
+            // Sorted: w[0] starts first; one inside the other is a repeat.
+            let inner = if w[1].1 <= w[0].1 { Some(w[1]) } else { (w[0].0 == w[1].0).then_some(w[0]) };
+            if let (Some(r), true) = (inner, w[1].0 < w[0].1) {
+                return Err(CountsError::Mismatch(format!("lines {} are counted twice", fmt_ranges(r))));
+            }
+            if w[1].0 < w[0].1 {
+                return Err(CountsError::Mismatch(format!(
+                    "line ranges {} and {} overlap",
+                    fmt_ranges(w[0]),
+                    fmt_ranges(w[1])
+                )));
+            }
+        }
+        let mut joined: Vec<(u64, u64)> = Vec::with_capacity(ranges.len());
+        for r in ranges {
+            match joined.last_mut() {
+                Some(last) if last.1 == r.0 => last.1 = r.1,
+                _ => joined.push(r),
+            }
+        }
+        let add = |a: u64, b: u64, what: &str| a.checked_add(b).ok_or_else(|| overflow(what));
+        let mut blocks = Vec::with_capacity(self.blocks.len());
+        for (a, b) in self.blocks.iter().zip(&other.blocks) {
+            blocks.push(BlockCounts {
+                lines: add(a.lines, b.lines, "a block's line count")?,
+                segments: add(a.segments, b.segments, "a block's segment count")?,
+                escaped: add(a.escaped, b.escaped, "a block's background count")?,
+                pairs: merge_sorted(&a.pairs, &b.pairs, |p| (p.from, p.to), |p| p.count, |p, c| PairCount {
+                    count: c,
+                    ..*p
+                })?,
+                background: merge_sorted(&a.background, &b.background, |p| p.0, |p| p.1, |p, c| (p.0, c))?,
+                continuous: a.continuous.checked_add(&b.continuous).ok_or_else(|| overflow("an I_S^c sum"))?,
+            });
+        }
+        let mut endpoints = self.endpoints.clone();
+        let mut endpoint_log = self.endpoint_log.clone();
+        for i in 0..endpoints.len() {
+            endpoints[i] = add(endpoints[i], other.endpoints[i], "an endpoint count")?;
+            endpoint_log[i] =
+                endpoint_log[i].checked_add(other.endpoint_log[i]).ok_or_else(|| overflow("an endpoint sum"))?;
+        }
+        let merged = Self {
+            scene: self.scene.clone(),
+            areas: self.areas.clone(),
+            local: self.local,
+            seed: self.seed,
+            ranges: joined,
+            blocks,
+            endpoints,
+            endpoint_log,
+        };
+        merged.validate()?;
+        *self = merged;
+        Ok(())
+    }
+}
+
+/// Bytes of memory per byte of counts file that reading may take: the text,
+/// the parsed entries (a pair of at least 8 bytes of text becomes 16 bytes,
+/// twice that while its vector grows) and the per-patch arrays (an area of
+/// at least 2 bytes of text becomes 8 + 24 bytes).
+pub const BYTES_PER_FILE_BYTE: u64 = 24;
+
+/// `MemAvailable` from `/proc/meminfo` (bytes), where there is one.
+fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb.saturating_mul(1024))
+}
+
+fn same_scene(a: &SceneFingerprint, b: &SceneFingerprint, what_a: &str, what_b: &str) -> Result<(), CountsError> {
+    if a.name != b.name {
+        return Err(CountsError::Mismatch(format!("{what_a} of scene {:?}, {what_b} of {:?}", a.name, b.name)));
+    }
+    if a.patches != b.patches {
+        return Err(CountsError::Mismatch(format!(
+            "{what_a} of {} patches, {what_b} of {} patches",
+            a.patches, b.patches
+        )));
+    }
+    if a.areas_hash != b.areas_hash {
+        return Err(CountsError::Mismatch(format!(
+            "{what_a} of scene {:?} with other patch areas than {what_b}",
+            a.name
+        )));
+    }
+    Ok(())
+}
+
+/// Merges two sorted sparse lists, adding the counts of equal keys.
+pub(super) fn merge_sorted<T: Copy, K: Ord>(
+    a: &[T],
+    b: &[T],
+    key: impl Fn(&T) -> K,
+    count: impl Fn(&T) -> u64,
+    with: impl Fn(&T, u64) -> T,
+) -> Result<Vec<T>, CountsError> {
+    let mut out = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        match key(&a[i]).cmp(&key(&b[j])) {
+            std::cmp::Ordering::Less => {
+                out.push(a[i]);
+                i += 1;
+            }
+            std::cmp::Ordering::Greater => {
+                out.push(b[j]);
+                j += 1;
+            }
+            std::cmp::Ordering::Equal => {
+                let c = count(&a[i]).checked_add(count(&b[j])).ok_or_else(|| overflow("a pair count"))?;
+                out.push(with(&a[i], c));
+                i += 1;
+                j += 1;
+            }
+        }
+    }
+    out.extend_from_slice(&a[i..]);
+    out.extend_from_slice(&b[j..]);
+    Ok(out)
+}

@@ -1,0 +1,385 @@
+//! Evaluating counts: the plug-in measures (Part III eqs. (39)–(51)), `I_S^c`
+//! (eq. (59)), the per-patch transfers `I_i` and `I_i^c` (eqs. (65), (68)),
+//! and the delete-one-block jackknife.
+//!
+//! The jackknife needs `I_S` without block `b` for every block. With
+//! `S_i = Σ_j N_ij ln N_ij`, `H_S = Σ_i a_i (ln N_i − S_i / N_i)` (eqs.
+//! (30)–(31) into (39)), so removing block `b` changes only the rows and
+//! pairs it touches: `N_i → N_i − R_bi` and `S_i → S_i − D_bi` with
+//! `D_bi = Σ_j [x ln x]_{N_ij − c_bij}^{N_ij}` over the block's own pairs.
+//! One pass over each block's sparse counts gives every leave-one-out
+//! `H_S`; nothing is re-merged. All inputs are integers taken in a fixed
+//! order, so the result is the same bits for any shard order.
+
+use std::borrow::Cow;
+
+use itgfx_core::sum::Neumaier;
+use itgfx_core::{Base, PairCount, SceneMeasures, scene_measures_from_counts};
+
+use super::counts_file::merge_sorted;
+use super::{BlockCounts, ContinuousSums, VisibilityCounts};
+
+/// What `itgfx complexity` reports.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Complexity {
+    /// Plug-in measures from all lines (Part III eqs. (39)–(51)).
+    pub measures: SceneMeasures,
+    /// Lines cast.
+    pub lines: u64,
+    /// Segments (global) or lines that reached a patch (local).
+    pub segments: u64,
+    /// Crossings counted against the background (0 in a closed scene).
+    pub escaped: u64,
+    /// `I_S^c` (eq. (59)) in the requested base; `None` without samples.
+    pub continuous: Option<f64>,
+    /// Jackknife standard error of `I_S`.
+    pub mutual_information_stderr: Option<f64>,
+    /// Jackknife standard error of `I_S^c`.
+    pub continuous_stderr: Option<f64>,
+    /// Jackknife bias-corrected `I_S`.
+    pub mutual_information_corrected: Option<f64>,
+    /// Per-patch information transfer `I_i` (eq. (65)).
+    pub patch_information: Vec<f64>,
+    /// Per-patch continuous transfer `I_i^c` (eq. (68)) estimated from the endpoints.
+    pub patch_continuous: Vec<f64>,
+}
+
+#[inline]
+fn xlnx(x: u64) -> f64 {
+    if x == 0 {
+        0.0
+    } else {
+        let x = x as f64;
+        x * x.ln()
+    }
+}
+
+/// A block's pairs with its background counts as pairs into column `n`
+/// (the background: a destination without area), sorted.
+fn with_background(b: &BlockCounts, n: usize) -> Cow<'_, [PairCount]> {
+    if b.background.is_empty() {
+        return Cow::Borrowed(&b.pairs);
+    }
+    let bg: Vec<PairCount> =
+        b.background.iter().map(|&(i, c)| PairCount { from: i, to: n as u32, count: c }).collect();
+    Cow::Owned(add_sorted(&b.pairs, &bg))
+}
+
+fn add_sorted(a: &[PairCount], b: &[PairCount]) -> Vec<PairCount> {
+    merge_sorted(a, b, |p| (p.from, p.to), |p| p.count, |p, c| PairCount { count: c, ..*p })
+        .expect("validated counts: totals fit in 64 bits")
+}
+
+/// `N_ij` of all blocks, sorted, background as column `n` (pairwise merge
+/// tree: exact integer sums).
+fn total_pairs(blocks: &[Cow<'_, [PairCount]>]) -> Vec<PairCount> {
+    let mut level: Vec<Vec<PairCount>> = blocks
+        .chunks(2)
+        .map(|w| match w {
+            [a, b] => add_sorted(a, b),
+            [a] => a.to_vec(),
+            _ => Vec::new(),
+        })
+        .collect();
+    while level.len() > 1 {
+        level = level
+            .chunks(2)
+            .map(|w| match w {
+                [a, b] => add_sorted(a, b),
+                [a] => a.clone(),
+                _ => Vec::new(),
+            })
+            .collect();
+    }
+    level.pop().unwrap_or_default()
+}
+
+/// The first index `≥ from` of `totals` whose key is `key` (present by
+/// construction), by galloping then bisection.
+fn find(totals: &[PairCount], from: usize, key: (u32, u32)) -> usize {
+    let k = |p: &PairCount| (p.from, p.to);
+    let mut step = 1;
+    let mut hi = from;
+    while hi < totals.len() && k(&totals[hi]) < key {
+        hi = from + step;
+        step *= 2;
+    }
+    let lo = from + step / 4;
+    let hi = hi.min(totals.len());
+    lo.min(hi) + totals[lo.min(hi)..hi].partition_point(|p| k(p) < key)
+}
+
+/// `a_i (ln N − S / N)`, the row's part of `H_S` (0 for an empty row).
+#[inline]
+fn row_term(a: f64, n: u64, s: f64) -> f64 {
+    if n == 0 { 0.0 } else { a * ((n as f64).ln() - s / n as f64) }
+}
+
+/// `H_S` in nats without each block, in block order, by the running-totals
+/// identity of the module docs. `totals` are the pairs with background of
+/// all blocks, `rows` their row totals `N_i`.
+fn leave_one_out_scene_entropy(
+    a: &[f64],
+    per_block: &[&[PairCount]],
+    totals: &[PairCount],
+    rows: &[u64],
+) -> Vec<f64> {
+    let n = a.len();
+    let mut s = vec![0.0; n];
+    {
+        let mut acc = vec![Neumaier::new(); n];
+        for p in totals {
+            acc[p.from as usize].add(xlnx(p.count));
+        }
+        for (x, y) in s.iter_mut().zip(&acc) {
+            *x = y.value();
+        }
+    }
+    let terms: Vec<f64> = (0..n).map(|i| row_term(a[i], rows[i], s[i])).collect();
+    let mut full = Neumaier::new();
+    terms.iter().for_each(|&t| full.add(t));
+    let full = full.value();
+    let mut r = vec![0u64; n];
+    let mut d = vec![Neumaier::new(); n];
+    let mut touched: Vec<u32> = Vec::new();
+    per_block
+        .iter()
+        .map(|pairs| {
+            let mut pos = 0;
+            for p in pairs.iter() {
+                pos = find(totals, pos, (p.from, p.to));
+                let total = totals[pos].count;
+                let i = p.from as usize;
+                if r[i] == 0 {
+                    touched.push(p.from);
+                }
+                r[i] += p.count;
+                d[i].add(xlnx(total) - xlnx(total - p.count));
+            }
+            let mut h = Neumaier::new();
+            h.add(full);
+            for &i in &touched {
+                let i = i as usize;
+                h.add(-terms[i]);
+                h.add(row_term(a[i], rows[i] - r[i], s[i] - d[i].value()));
+                r[i] = 0;
+                d[i] = Neumaier::new();
+            }
+            touched.clear();
+            h.value().max(0.0)
+        })
+        .collect()
+}
+
+/// Delete-one-block jackknife: (standard error, bias-corrected estimate).
+fn jackknife(full: f64, leave_out: &[f64]) -> (f64, f64) {
+    let b = leave_out.len() as f64;
+    let mean = leave_out.iter().sum::<f64>() / b;
+    let var = (b - 1.0) / b * leave_out.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>();
+    (var.sqrt(), b * full - (b - 1.0) * mean)
+}
+
+impl VisibilityCounts {
+    /// Per-block pairs with background, the total pairs and their row
+    /// totals, areas with the background's zero appended.
+    #[allow(clippy::type_complexity)]
+    fn tables(&self) -> (Vec<Cow<'_, [PairCount]>>, Vec<PairCount>, Vec<u64>, Vec<f64>, SceneMeasures) {
+        let n = self.areas.len();
+        let per_block: Vec<Cow<'_, [PairCount]>> = self.blocks.iter().map(|b| with_background(b, n)).collect();
+        let totals = total_pairs(&per_block);
+        let mut a = self.areas.clone();
+        a.push(0.0);
+        let mut rows = vec![0u64; n + 1];
+        let m = scene_measures_from_counts(&a, &totals, &mut rows, Base::Nats).expect("validated counts");
+        (per_block, totals, rows, a, m)
+    }
+
+    /// `I_S` in `base` without each block that has lines (block order).
+    fn leave_one_out_mutual_information(
+        &self,
+        per_block: &[Cow<'_, [PairCount]>],
+        totals: &[PairCount],
+        rows: &[u64],
+        hp: f64,
+        base: Base,
+    ) -> Vec<f64> {
+        let total: f64 = self.areas.iter().sum();
+        let mut a: Vec<f64> = self.areas.iter().map(|x| x / total).collect();
+        a.push(0.0);
+        let used: Vec<&[PairCount]> =
+            self.blocks.iter().zip(per_block).filter(|(b, _)| b.lines > 0).map(|(_, p)| &p[..]).collect();
+        leave_one_out_scene_entropy(&a, &used, totals, rows).into_iter().map(|hs| (hp - hs) * base.per_nat()).collect()
+    }
+
+    /// Evaluates the measures in `base`.
+    ///
+    /// # Panics
+    /// If the counts break the invariants [`VisibilityCounts::validate`]
+    /// checks (counts from [`super::count_visibility`], `load` and `merge`
+    /// always hold them; only edited public fields can break them).
+    #[must_use]
+    pub fn complexity(&self, base: Base) -> Complexity {
+        let n = self.areas.len();
+        let (per_block, totals, rows, a, nats) = self.tables();
+        let mut measures = scene_measures_from_counts(&a, &totals, &mut vec![0; n + 1], base).expect("validated");
+        measures.patches = n;
+        let k = base.per_nat();
+        let cont = self
+            .blocks
+            .iter()
+            .try_fold(ContinuousSums::default(), |acc, b| acc.checked_add(&b.continuous))
+            .expect("validated: sums fit");
+        let estimate = |c: &ContinuousSums| (c.samples > 0).then(|| c.sum.to_f64() / c.samples as f64 * k);
+        let continuous = estimate(&cont);
+        let used: Vec<&BlockCounts> = self.blocks.iter().filter(|b| b.lines > 0).collect();
+        let (mut se, mut corrected, mut cse) = (None, None, None);
+        if used.len() >= 2 {
+            let mi =
+                self.leave_one_out_mutual_information(&per_block, &totals, &rows, nats.positional_entropy, base);
+            let (s, c) = jackknife(measures.mutual_information, &mi);
+            se = Some(s);
+            corrected = Some(c);
+            let ci: Vec<f64> = used
+                .iter()
+                .filter_map(|b| {
+                    let c = &b.continuous;
+                    let rest = ContinuousSums {
+                        samples: cont.samples - c.samples,
+                        sum: cont.sum.checked_sub(c.sum)?,
+                        sum_sq: cont.sum_sq.checked_sub(c.sum_sq)?,
+                    };
+                    estimate(&rest)
+                })
+                .collect();
+            if let (Some(full), true) = (continuous, ci.len() == used.len()) {
+                cse = Some(jackknife(full, &ci).0);
+            }
+        }
+        // Per-patch I_i (eq. (65)) and I_i^c from the endpoint samples.
+        let total: f64 = self.areas.iter().sum();
+        let mut info = vec![0.0; n];
+        for p in totals.iter().filter(|p| (p.to as usize) < n) {
+            let (i, j) = (p.from as usize, p.to as usize);
+            let (ai, aj) = (self.areas[i] / total, self.areas[j] / total);
+            let f = p.count as f64 / rows[i] as f64;
+            info[i] += ai * f * (f / aj).ln() * k;
+        }
+        let patch_continuous = (0..n)
+            .map(|i| {
+                let e = self.endpoints[i];
+                if e > 0 { self.areas[i] / total * self.endpoint_log[i].to_f64() / e as f64 * k } else { 0.0 }
+            })
+            .collect();
+        Complexity {
+            measures,
+            lines: self.lines(),
+            segments: self.blocks.iter().map(|b| b.segments).sum(),
+            escaped: self.blocks.iter().map(|b| b.escaped).sum(),
+            continuous,
+            mutual_information_stderr: se,
+            continuous_stderr: cse,
+            mutual_information_corrected: corrected,
+            patch_information: info,
+            patch_continuous,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::built_in;
+    use crate::tracer::{BackendChoice, Prepared, open};
+    use crate::visibility::{LineOptions, count_visibility};
+
+    fn counts(spec: &str, lines: u64, local: bool, blocks: u32) -> VisibilityCounts {
+        let scene = built_in(spec).unwrap();
+        let p = Prepared::new(&scene);
+        let t = open(BackendChoice::Cpu, &p).unwrap();
+        let opts = LineOptions { lines, seed: 7, local, blocks, offset: 3 };
+        count_visibility(&scene, &p, t.as_ref(), &opts, &mut |_, _| {}).unwrap()
+    }
+
+    /// The jackknife as it was: each leave-one-out `I_S` from the other
+    /// blocks' pairs concatenated, sorted and evaluated by the core.
+    fn remerged(c: &VisibilityCounts, base: Base) -> Vec<f64> {
+        let n = c.areas.len();
+        let mut a = c.areas.clone();
+        a.push(0.0);
+        let used: Vec<&BlockCounts> = c.blocks.iter().filter(|b| b.lines > 0).collect();
+        (0..used.len())
+            .map(|skip| {
+                let mut pairs: Vec<PairCount> = used
+                    .iter()
+                    .enumerate()
+                    .filter(|(k, _)| *k != skip)
+                    .flat_map(|(_, b)| with_background(b, n).into_owned())
+                    .collect();
+                pairs.sort_unstable_by_key(|p| (p.from, p.to));
+                let mut rows = vec![0; n + 1];
+                scene_measures_from_counts(&a, &pairs, &mut rows, base).unwrap().mutual_information
+            })
+            .collect()
+    }
+
+    /// The running-totals jackknife equals the re-merge to 1e-12 bits per
+    /// leave-one-out value. Not bit for bit: the core takes logarithms with
+    /// its own `ln` (within 1 ulp of libm) and sums the `N_ij ln N_ij` of
+    /// all pairs in one compensated sum, while the running totals subtract
+    /// each block's change from per-row sums; both errors are a few ulp of
+    /// `H_S ≤ 13` bits, far below 1e-12.
+    #[test]
+    fn running_totals_equal_the_remerge() {
+        for (spec, lines, local, blocks) in [
+            ("cube-enclosure:3", 200_000, false, 8),
+            ("cornell-box", 50_000, true, 5),
+            ("tetrahedron", 21, false, 8),
+            ("tetrahedron", 30, true, 3),
+        ] {
+            let c = counts(spec, lines, local, blocks);
+            let (per_block, totals, rows, _, nats) = c.tables();
+            let fast = c.leave_one_out_mutual_information(&per_block, &totals, &rows, nats.positional_entropy, Base::Bits);
+            let slow = remerged(&c, Base::Bits);
+            assert_eq!(fast.len(), slow.len());
+            assert!(fast.len() >= 2, "{spec}");
+            for (f, s) in fast.iter().zip(&slow) {
+                assert!((f - s).abs() <= 1e-12, "{spec}: {f} vs {s}");
+            }
+            let full = c.complexity(Base::Bits);
+            let (se, corrected) = jackknife(full.measures.mutual_information, &slow);
+            let got_se = full.mutual_information_stderr.unwrap();
+            assert!((got_se - se).abs() <= 1e-9 * se.max(1e-12), "{spec}: {got_se} vs {se}");
+            assert!((full.mutual_information_corrected.unwrap() - corrected).abs() <= 1e-10, "{spec}");
+        }
+    }
+
+    /// Blocks are a function of the line index: one run equals its two
+    /// shards merged in either order, bit for bit, and a saved run reloads
+    /// to the same numbers.
+    #[test]
+    fn shards_merge_into_the_run_bit_for_bit() {
+        let scene = built_in("cube-enclosure:2").unwrap();
+        let p = Prepared::new(&scene);
+        let t = open(BackendChoice::Cpu, &p).unwrap();
+        let run = |offset, lines| {
+            let opts = LineOptions { lines, seed: 3, local: false, blocks: 4, offset };
+            count_visibility(&scene, &p, t.as_ref(), &opts, &mut |_, _| {}).unwrap()
+        };
+        let whole = run(5, 30_001);
+        let (a, b, c) = (run(5, 10_007), run(10_012, 9_000), run(19_012, 10_994));
+        let mut abc = a.clone();
+        abc.merge(b.clone()).unwrap();
+        abc.merge(c.clone()).unwrap();
+        let mut cba = c;
+        cba.merge(b).unwrap();
+        cba.merge(a).unwrap();
+        assert_eq!(abc, whole);
+        assert_eq!(cba, whole);
+        let mut text = Vec::new();
+        whole.save(&scene.name, &mut text).unwrap();
+        let (name, back) = VisibilityCounts::load(std::str::from_utf8(&text).unwrap()).unwrap();
+        assert_eq!(name, scene.name);
+        assert_eq!(back, whole);
+        assert_eq!(back.complexity(Base::Bits), whole.complexity(Base::Bits));
+    }
+}

@@ -25,6 +25,8 @@ impl Grouping {
 
 /// Decomposes `H(p)` over the partition `labels` (outcome `k` is in group
 /// `labels[k] < groups`); `scratch` holds the `groups` group masses `q_j`.
+/// Its size follows the largest label: for arbitrary label values use
+/// [`grouping_by_label`], whose scratch follows the number of outcomes.
 ///
 /// `H_in` is computed term by term as `−Σ_k p_k log(p_k / q_{label(k)})`,
 /// not as a difference, so the identity `H = H_in + H_out` is a real check.

@@ -208,7 +208,10 @@ pub fn mutual_information_matrix_into<T: Real>(
         for j in 0..n {
             let fij = f.row(i)[j].to_f64();
             let aj = areas[j].to_f64() / total;
-            let v = if fij > 0.0 && ai > 0.0 { ai * fij * (ln(fij) - ln(aj)) } else { 0.0 };
+            // ln a_j; where A_j/A_T left the normal range (0 included), from
+            // the two logarithms, so a tiny positive area keeps a finite log.
+            let ln_aj = if aj >= f64::MIN_POSITIVE { ln(aj) } else { ln(areas[j].to_f64()) - ln(total) };
+            let v = if fij > 0.0 && ai > 0.0 { ai * fij * (ln(fij) - ln_aj) } else { 0.0 };
             out[i * n + j] = T::from_f64(v * k);
             row.add(v);
         }

@@ -36,6 +36,12 @@ fn information_transfer_to_a_zero_area_patch() {
     assert!(close(per[0], 0.25 * (4.0f64 / 3.0).log2(), 1e-14), "{}", per[0]);
     let i1 = 0.75 * ((1.0 / 3.0) * (4.0f64 / 3.0).log2() + (2.0 / 3.0) * (8.0f64 / 9.0).log2());
     assert!(close(per[1], i1, 1e-14), "{}", per[1]);
+    // a_1 = 1e-300/1e308 underflows to 0, but the log is finite:
+    // I_01 = a_0 · 1 · (ln 1 − ln(1e-300/1e308)) with a_0 = 1 (to 1e-608).
+    let f = [0.0, 1.0, 1.0, 0.0];
+    mutual_information_matrix_into(&[1e308f64, 1e-300], &f, Base::Nats, &mut out, &mut per).unwrap();
+    let want = (1e308f64).ln() - (1e-300f64).ln();
+    assert!(close(per[0], want, 1e-14), "{} vs {want}", per[0]);
 }
 
 /// A_T F(x, y) rounding to 0 took ln 0 = −746.5 (finite garbage); the sample

@@ -169,13 +169,15 @@ pub fn run(name: &str, args: &Args) -> Result<Report, CliError> {
                 return Err(CliError::usage(format!("--matrix must be square, got {}x{}", m.rows, m.cols)));
             }
             let n = m.rows;
-            let mut w = vec![0.0; n];
-            let mut scratch = vec![0.0; n];
-            let iters = core_::stationary_distribution_into(&m.data, n, 1e-14, 10_000_000, &mut w, &mut scratch)
-                .map_err(|e| core_err("matrix", e))?;
+            // GTH elimination works on an n x n copy: refuse what cannot fit.
+            let bytes = 8u64.saturating_mul(n as u64).saturating_mul(n as u64);
+            if bytes > 8 << 30 {
+                return Err(CliError::usage(format!("--matrix: {n} states need {bytes} bytes of scratch; the limit is 8 GiB")));
+            }
+            let w = core_::stationary_distribution(&m.data, n).map_err(|e| core_err("matrix", e))?;
             let h = core_::entropy_rate(&m.data, &w, base).map_err(|e| core_err("matrix", e))?;
             let e = core_::markov_excess_entropy(&m.data, &w, base).map_err(|e| core_err("matrix", e))?;
-            r.count("states", n as u64).count("iterations", iters as u64);
+            r.count("states", n as u64);
             r.reals("stationary_distribution", w).real("entropy_rate", h, unit).real("excess_entropy", e, unit);
         }
         "fano" => {
@@ -215,16 +217,18 @@ pub fn run(name: &str, args: &Args) -> Result<Report, CliError> {
             let labels: Vec<usize> = g
                 .iter()
                 .map(|&x| {
-                    if x >= 0.0 && x.fract() == 0.0 && x < 1e9 {
+                    if x >= 0.0 && x.fract() == 0.0 && x <= 9_007_199_254_740_992.0 {
                         Ok(x as usize)
                     } else {
                         Err(CliError::usage(format!("--groups: label {x} is not a small non-negative integer")))
                     }
                 })
                 .collect::<Result<_, _>>()?;
-            let groups = labels.iter().max().map_or(0, |m| m + 1);
-            let mut q = vec![0.0; groups];
-            let d = core_::grouping(&p, &labels, groups, &mut q, base).map_err(|e| core_err("p, groups", e))?;
+            let mut order = vec![0usize; p.len()];
+            let mut q = vec![0.0; p.len()];
+            let (d, g) = core_::grouping_by_label(&p, &labels, &mut order, &mut q, base)
+                .map_err(|e| core_err("p, groups", e))?;
+            q.truncate(g);
             let h = core_::entropy(&p, base).map_err(|e| core_err("p", e))?;
             r.real("entropy", h, unit).real("h_in", d.h_in, unit).real("h_out", d.h_out, unit);
             r.reals("group_probabilities", q);

@@ -3,8 +3,12 @@
 use itgfx_core as core_;
 use itgfx_core::{Base, Channel};
 
-use crate::args::Args;
+use clap::{Args, Subcommand};
+
+use crate::input::Matrix;
+use crate::options::Common;
 use crate::report::Report;
+use crate::values::{count, finite};
 use crate::{CliError, core_err};
 
 /// The measures `itgfx measure` knows, with a one-line synopsis each.
@@ -32,8 +36,216 @@ pub const MEASURES: &[(&str, &str)] = &[
     ("bottleneck", "--joint M                      agglomerative information bottleneck merges (Slonim-Tishby)"),
 ];
 
-fn probabilities(args: &Args, name: &str, v: Vec<f64>) -> Result<Vec<f64>, CliError> {
-    if args.flag("normalize") {
+/// `itgfx measure NAME`: the measure and its typed options.
+#[derive(Debug, Args)]
+#[command(after_help = "Vectors: inline (0.5,0.25,0.25 or separate words) or a CSV file.\n\
+                        Matrices: a CSV file (one row per line) or inline rows split by ';' (0.9,0.1;0.1,0.9).")]
+pub struct MeasureCommand {
+    /// The measure.
+    #[command(subcommand)]
+    pub measure: Measure,
+}
+
+/// A vector option: inline numbers or a CSV file, read while parsing.
+#[derive(Debug, Clone)]
+pub struct Vector(pub Vec<f64>);
+
+/// A matrix option: a CSV file or inline `;` rows, read while parsing.
+#[derive(Debug, Clone)]
+pub struct MatrixArg(pub Matrix);
+
+fn vector(s: &str) -> Result<Vector, String> {
+    crate::input::vector_arg("value", s).map(Vector).map_err(|e| e.to_string())
+}
+
+fn matrix(s: &str) -> Result<MatrixArg, String> {
+    crate::input::matrix_arg("value", s).map(MatrixArg).map_err(|e| e.to_string())
+}
+
+/// Probabilities as positional words (or one CSV file).
+#[derive(Debug, Args)]
+pub struct Values {
+    /// Probabilities: separate words, one comma list, or a CSV file
+    #[arg(value_name = "P", allow_negative_numbers = true)]
+    pub values: Vec<String>,
+    /// Divide by the sum first
+    #[arg(long)]
+    pub normalize: bool,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub common: Common,
+}
+
+/// Two distributions.
+#[derive(Debug, Args)]
+pub struct Pair {
+    /// The first distribution
+    #[arg(long, value_name = "P", required = true, value_parser = vector)]
+    pub p: Option<Vector>,
+    /// The second distribution
+    #[arg(long, value_name = "Q", required = true, value_parser = vector)]
+    pub q: Option<Vector>,
+    /// Divide each by its sum first
+    #[arg(long)]
+    pub normalize: bool,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub common: Common,
+}
+
+/// One matrix.
+#[derive(Debug, Args)]
+pub struct OneMatrix {
+    /// The matrix
+    #[arg(long, value_name = "M", required = true, value_parser = matrix)]
+    pub matrix: Option<MatrixArg>,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub common: Common,
+}
+
+/// The measures, each with its own options.
+#[derive(Debug, Subcommand)]
+pub enum Measure {
+    /// Shannon entropy H(p) (Part II eq. 2)
+    Entropy(Values),
+    /// Binary entropy H(p, 1-p) (Part II eq. 4) of one probability P
+    Binary(Values),
+    /// Renyi entropy of order A
+    Renyi {
+        /// The order A
+        #[arg(long, value_name = "A", value_parser = finite)]
+        alpha: f64,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        values: Values,
+    },
+    /// Tsallis entropy of index Q
+    Tsallis {
+        /// The index Q
+        #[arg(long, value_name = "Q", value_parser = finite)]
+        q: f64,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        values: Values,
+    },
+    /// H(X), H(Y), H(X,Y), H(X|Y), H(Y|X), I(X;Y) of a joint p(x,y)
+    Joint(OneMatrix),
+    /// Kullback-Leibler divergence (Part II eq. 8)
+    Kl(Pair),
+    /// KL, chi-square, Hellinger, their roots, AG, VO, L1, L2 (Part III-IV)
+    Divergences(Pair),
+    /// Weighted Jensen-Shannon divergence of the rows of M (Part II eq. 17)
+    Js {
+        /// The weights W
+        #[arg(long, value_name = "W", required = true, value_parser = vector)]
+        weights: Option<Vector>,
+        /// The distributions, one per row
+        #[arg(long, value_name = "M", required = true, value_parser = matrix)]
+        dists: Option<MatrixArg>,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        common: Common,
+    },
+    /// Every quantity of the channel X -> Y (Part II, Part V eqs. 5-7)
+    Channel {
+        /// The input distribution p(X)
+        #[arg(long, value_name = "P", required = true, value_parser = vector)]
+        input: Option<Vector>,
+        /// The transition matrix p(Y|X), one row per input
+        #[arg(long, value_name = "M", required = true, value_parser = matrix)]
+        matrix: Option<MatrixArg>,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        common: Common,
+    },
+    /// Stationary distribution, entropy rate, excess entropy (Part II eqs. 13-14)
+    Markov(OneMatrix),
+    /// Smallest error Fano allows; bound at E (Part II eqs. 21-22)
+    Fano {
+        /// H(X|Y)
+        #[arg(long, value_name = "H", value_parser = finite)]
+        h_cond: f64,
+        /// Number of outcomes
+        #[arg(long, value_name = "N", value_parser = count)]
+        n: u64,
+        /// An error probability to bound at
+        #[arg(long, value_name = "E", value_parser = finite)]
+        pe: Option<f64>,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        common: Common,
+    },
+    /// Huffman expected length vs entropy (Part II eqs. 24-25)
+    Huffman {
+        /// Code blocks of K symbols too (1..=64)
+        #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=64))]
+        block: Option<u32>,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        values: Values,
+    },
+    /// H = H_in + H_out over a partition (Part IV eq. 24)
+    Grouping {
+        /// The distribution
+        #[arg(long, value_name = "P", required = true, value_parser = vector)]
+        p: Option<Vector>,
+        /// A group label per outcome (non-negative integers, any values)
+        #[arg(long, value_name = "LABELS", required = true, value_parser = vector)]
+        groups: Option<Vector>,
+        /// Divide by the sum first
+        #[arg(long)]
+        normalize: bool,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        common: Common,
+    },
+    /// H_P, H_S, H_J, I_S and MI matrix of a form-factor matrix (Part III)
+    Scene {
+        /// Patch areas
+        #[arg(long, value_name = "A", required = true, value_parser = vector)]
+        areas: Option<Vector>,
+        /// Form factors, one row per patch
+        #[arg(long, value_name = "F", required = true, value_parser = matrix)]
+        matrix: Option<MatrixArg>,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        common: Common,
+    },
+    /// Agglomerative information bottleneck merges (Slonim-Tishby)
+    Bottleneck {
+        /// The joint distribution p(x,y)
+        #[arg(long, value_name = "M", required = true, value_parser = matrix)]
+        joint: Option<MatrixArg>,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        common: Common,
+    },
+}
+
+impl Measure {
+    /// The options every measure has.
+    #[must_use]
+    pub fn common(&self) -> Common {
+        match self {
+            Measure::Entropy(v) | Measure::Binary(v) => v.common,
+            Measure::Renyi { values, .. } | Measure::Tsallis { values, .. } | Measure::Huffman { values, .. } => {
+                values.common
+            }
+            Measure::Joint(m) | Measure::Markov(m) => m.common,
+            Measure::Kl(p) | Measure::Divergences(p) => p.common,
+            Measure::Js { common, .. }
+            | Measure::Channel { common, .. }
+            | Measure::Fano { common, .. }
+            | Measure::Grouping { common, .. }
+            | Measure::Scene { common, .. }
+            | Measure::Bottleneck { common, .. } => *common,
+        }
+    }
+}
+
+fn probabilities(normalize: bool, name: &str, v: Vec<f64>) -> Result<Vec<f64>, CliError> {
+    if normalize {
         let s: f64 = v.iter().sum();
         if !(s > 0.0 && s.is_finite()) {
             // Let the core name the offending element.
@@ -46,46 +258,73 @@ fn probabilities(args: &Args, name: &str, v: Vec<f64>) -> Result<Vec<f64>, CliEr
     }
 }
 
-fn positional_vector(args: &Args) -> Result<Vec<f64>, CliError> {
-    if args.positionals.is_empty() {
+fn positional_vector(words: &[String]) -> Result<Vec<f64>, CliError> {
+    if words.is_empty() {
         return Err(CliError::usage("give the probabilities as arguments, e.g. 0.5 0.25 0.25, or a CSV file"));
     }
-    let joined = args.positionals.join(" ");
-    if args.positionals.len() == 1 {
+    let joined = words.join(" ");
+    if words.len() == 1 {
         crate::input::vector_arg("values", &joined).map_err(CliError::input)
     } else {
         crate::input::parse_vector_text("values", &joined).map_err(CliError::input)
     }
 }
 
+fn given<T>(v: &Option<T>, flag: &str) -> Result<T, CliError>
+where
+    T: Clone,
+{
+    v.clone().ok_or_else(|| CliError::usage(format!("missing {flag}")))
+}
+
+/// Grouping labels as compact indices `0..k` in increasing label order, with
+/// the distinct labels: memory follows the number of outcomes, never the
+/// largest label.
+///
+/// # Errors
+/// A usage error for a label that is not a non-negative integer.
+pub fn compact_labels(g: &[f64]) -> Result<(Vec<usize>, Vec<u64>), CliError> {
+    let mut raw = Vec::with_capacity(g.len());
+    for &x in g {
+        if !(x >= 0.0 && x.fract() == 0.0 && x <= 9_007_199_254_740_992.0) {
+            return Err(CliError::usage(format!("--groups: label {x} is not a non-negative integer")));
+        }
+        raw.push(x as u64);
+    }
+    let mut distinct = raw.clone();
+    distinct.sort_unstable();
+    distinct.dedup();
+    let labels = raw.iter().map(|l| distinct.binary_search(l).unwrap_or(0)).collect();
+    Ok((labels, distinct))
+}
+
 /// Runs one measure.
 ///
 /// # Errors
 /// Usage, input and core errors, each one line.
-pub fn run(name: &str, args: &Args) -> Result<Report, CliError> {
-    let base = args.base()?;
+pub fn run(m: &Measure) -> Result<Report, CliError> {
+    let base = m.common().base;
     let unit = Some(base.unit());
     let mut r = Report::new();
-    match name {
-        "entropy" => {
-            let p = probabilities(args, "p", positional_vector(args)?)?;
+    match m {
+        Measure::Entropy(v) => {
+            let p = probabilities(v.normalize, "p", positional_vector(&v.values)?)?;
             let h = core_::entropy(&p, base).map_err(|e| core_err("p", e))?;
             let max = base.log(p.len() as f64);
             r.count("outcomes", p.len() as u64).real("entropy", h, unit).real("max_entropy", max, unit);
             r.real("normalized_entropy", if max > 0.0 { h / max } else { 0.0 }, None);
         }
-        "binary" => {
-            let v = positional_vector(args)?;
+        Measure::Binary(v) => {
+            let v = positional_vector(&v.values)?;
             if v.len() != 1 {
                 return Err(CliError::usage("binary takes one probability p"));
             }
             r.real("binary_entropy", core_::binary_entropy(v[0], base).map_err(|e| core_err("p", e))?, unit);
         }
-        "renyi" | "tsallis" => {
-            let key = if name == "renyi" { "alpha" } else { "q" };
-            let a = args.number(key)?.ok_or_else(|| CliError::usage(format!("missing --{key}")))?;
-            let p = probabilities(args, "p", positional_vector(args)?)?;
-            if name == "renyi" {
+        Measure::Renyi { alpha: a, values } | Measure::Tsallis { q: a, values } => {
+            let a = *a;
+            let p = probabilities(values.normalize, "p", positional_vector(&values.values)?)?;
+            if matches!(m, Measure::Renyi { .. }) {
                 r.real("alpha", a, None).real(
                     "renyi_entropy",
                     core_::renyi_entropy(&p, a, base).map_err(|e| core_err("p", e))?,
@@ -99,19 +338,19 @@ pub fn run(name: &str, args: &Args) -> Result<Report, CliError> {
                 );
             }
         }
-        "joint" => {
-            let m = args.matrix("matrix")?.ok_or_else(|| CliError::usage("missing --matrix"))?;
+        Measure::Joint(x) => {
+            let m = given(&x.matrix, "--matrix")?.0;
             let e = core_::joint_entropies(&m.data, m.rows, m.cols, base).map_err(|e| core_err("matrix", e))?;
             r.count("rows", m.rows as u64).count("cols", m.cols as u64);
             r.real("h_x", e.h_x, unit).real("h_y", e.h_y, unit).real("h_xy", e.h_xy, unit);
             r.real("h_x_given_y", e.h_x_given_y, unit).real("h_y_given_x", e.h_y_given_x, unit);
             r.real("mutual_information", e.mutual_information, unit);
         }
-        "kl" | "divergences" => {
-            let p = args.vector("p")?.ok_or_else(|| CliError::usage("missing --p"))?;
-            let q = args.vector("q")?.ok_or_else(|| CliError::usage("missing --q"))?;
-            let (p, q) = (probabilities(args, "p", p)?, probabilities(args, "q", q)?);
-            if name == "kl" {
+        Measure::Kl(x) | Measure::Divergences(x) => {
+            let p = given(&x.p, "--p")?.0;
+            let q = given(&x.q, "--q")?.0;
+            let (p, q) = (probabilities(x.normalize, "p", p)?, probabilities(x.normalize, "q", q)?);
+            if matches!(m, Measure::Kl(_)) {
                 r.real("kl", core_::kl_divergence(&p, &q, base).map_err(|e| core_err("p, q", e))?, unit);
             } else {
                 let d = core_::divergences(&p, &q, base).map_err(|e| core_err("p, q", e))?;
@@ -123,9 +362,9 @@ pub fn run(name: &str, args: &Args) -> Result<Report, CliError> {
                 r.real("l1", d.l1, None).real("l2", d.l2, None);
             }
         }
-        "js" => {
-            let w = args.vector("weights")?.ok_or_else(|| CliError::usage("missing --weights"))?;
-            let d = args.matrix("dists")?.ok_or_else(|| CliError::usage("missing --dists"))?;
+        Measure::Js { weights, dists, .. } => {
+            let w = given(weights, "--weights")?.0;
+            let d = given(dists, "--dists")?.0;
             if d.rows != w.len() {
                 return Err(CliError::usage(format!(
                     "--dists has {} rows but --weights has {} values",
@@ -136,9 +375,9 @@ pub fn run(name: &str, args: &Args) -> Result<Report, CliError> {
             let js = core_::jensen_shannon(&w, &d.data, d.cols, base).map_err(|e| core_err("weights, dists", e))?;
             r.count("distributions", d.rows as u64).count("outcomes", d.cols as u64).real("jensen_shannon", js, unit);
         }
-        "channel" => {
-            let p = args.vector("input")?.ok_or_else(|| CliError::usage("missing --input"))?;
-            let m = args.matrix("matrix")?.ok_or_else(|| CliError::usage("missing --matrix"))?;
+        Measure::Channel { input, matrix, .. } => {
+            let p = given(input, "--input")?.0;
+            let m = given(matrix, "--matrix")?.0;
             if m.rows != p.len() {
                 return Err(CliError::usage(format!(
                     "--matrix has {} rows but --input has {} values",
@@ -163,8 +402,8 @@ pub fn run(name: &str, args: &Args) -> Result<Report, CliError> {
             r.reals("output_distribution", py).reals("input_specific_information", ix);
             r.reals("output_specific_information", iy).reals("reversed_channel", rev);
         }
-        "markov" => {
-            let m = args.matrix("matrix")?.ok_or_else(|| CliError::usage("missing --matrix"))?;
+        Measure::Markov(x) => {
+            let m = given(&x.matrix, "--matrix")?.0;
             if m.rows != m.cols {
                 return Err(CliError::usage(format!("--matrix must be square, got {}x{}", m.rows, m.cols)));
             }
@@ -178,60 +417,45 @@ pub fn run(name: &str, args: &Args) -> Result<Report, CliError> {
             r.count("states", n as u64).count("iterations", iters as u64);
             r.reals("stationary_distribution", w).real("entropy_rate", h, unit).real("excess_entropy", e, unit);
         }
-        "fano" => {
-            let h = args.number("h-cond")?.ok_or_else(|| CliError::usage("missing --h-cond (H(X|Y))"))?;
-            let n = args.integer("n")?.ok_or_else(|| CliError::usage("missing --n (number of outcomes)"))? as usize;
+        Measure::Fano { h_cond, n, pe, .. } => {
+            let h = *h_cond;
+            let n = usize::try_from(*n).map_err(|_| CliError::usage("--n: too large"))?;
             let min = core_::fano_minimum_error(h, n, base).map_err(|e| core_err("fano", e))?;
             r.real("h_cond", h, unit).count("n", n as u64).real("minimum_error_probability", min, None);
             if base == Base::Bits && n >= 2 {
                 r.real("weak_bound", core_::fano_weak_bound(h, n).map_err(|e| core_err("fano", e))?, None);
             }
-            if let Some(pe) = args.number("pe")? {
+            if let Some(pe) = *pe {
                 let b = core_::fano_bound(pe, n, base).map_err(|e| core_err("pe", e))?;
                 r.real("pe", pe, None)
                     .real("fano_bound", b, unit)
                     .text("consistent", if b >= h { "yes" } else { "no" });
             }
         }
-        "huffman" => {
-            let p = probabilities(args, "p", positional_vector(args)?)?;
+        Measure::Huffman { block, values } => {
+            let p = probabilities(values.normalize, "p", positional_vector(&values.values)?)?;
             let mut s = vec![0.0; p.len()];
             let l = core_::huffman_expected_length(&p, &mut s).map_err(|e| core_err("p", e))?;
             let h = core_::entropy(&p, Base::Bits).map_err(|e| core_err("p", e))?;
             r.real("entropy", h, Some("bits")).real("expected_length", l, Some("bits/symbol"));
             r.real("redundancy", l - h, Some("bits/symbol"));
-            if let Some(k) = args.integer("block")? {
-                let k = u32::try_from(k).map_err(|_| CliError::usage("--block: too large"))?;
+            if let Some(k) = *block {
                 let lk = core_::huffman_block_length(&p, k).map_err(|e| core_err("block", e))?;
                 r.count("block", u64::from(k)).real("block_length_per_symbol", lk, Some("bits/symbol"));
             }
         }
-        "grouping" => {
-            let p = args.vector("p")?.ok_or_else(|| CliError::usage("missing --p"))?;
-            let g = args
-                .vector("groups")?
-                .ok_or_else(|| CliError::usage("missing --groups (a group label per outcome)"))?;
-            let p = probabilities(args, "p", p)?;
-            let labels: Vec<usize> = g
-                .iter()
-                .map(|&x| {
-                    if x >= 0.0 && x.fract() == 0.0 && x < 1e9 {
-                        Ok(x as usize)
-                    } else {
-                        Err(CliError::usage(format!("--groups: label {x} is not a small non-negative integer")))
-                    }
-                })
-                .collect::<Result<_, _>>()?;
-            let groups = labels.iter().max().map_or(0, |m| m + 1);
-            let mut q = vec![0.0; groups];
-            let d = core_::grouping(&p, &labels, groups, &mut q, base).map_err(|e| core_err("p, groups", e))?;
+        Measure::Grouping { p, groups, normalize, .. } => {
+            let p = probabilities(*normalize, "p", given(p, "--p")?.0)?;
+            let (labels, distinct) = compact_labels(&given(groups, "--groups")?.0)?;
+            let mut q = vec![0.0; distinct.len()];
+            let d = core_::grouping(&p, &labels, distinct.len(), &mut q, base).map_err(|e| core_err("p, groups", e))?;
             let h = core_::entropy(&p, base).map_err(|e| core_err("p", e))?;
             r.real("entropy", h, unit).real("h_in", d.h_in, unit).real("h_out", d.h_out, unit);
-            r.reals("group_probabilities", q);
+            r.reals("group_probabilities", q).counts("group_labels", distinct);
         }
-        "scene" => {
-            let a = args.vector("areas")?.ok_or_else(|| CliError::usage("missing --areas"))?;
-            let f = args.matrix("matrix")?.ok_or_else(|| CliError::usage("missing --matrix (form factors)"))?;
+        Measure::Scene { areas, matrix, .. } => {
+            let a = given(areas, "--areas")?.0;
+            let f = given(matrix, "--matrix")?.0;
             if f.rows != a.len() || f.cols != a.len() {
                 return Err(CliError::usage(format!(
                     "--matrix is {}x{} but there are {} areas",
@@ -256,8 +480,8 @@ pub fn run(name: &str, args: &Args) -> Result<Report, CliError> {
             );
             r.reals("I_i", per).reals("I_ij", mi);
         }
-        "bottleneck" => {
-            let m = args.matrix("joint")?.ok_or_else(|| CliError::usage("missing --joint"))?;
+        Measure::Bottleneck { joint, .. } => {
+            let m = given(joint, "--joint")?.0;
             let b = core_::agglomerative_bottleneck(&m.data, m.rows, m.cols, base).map_err(|e| core_err("joint", e))?;
             r.real("initial_information", b.initial_information, unit);
             let steps = b
@@ -272,25 +496,6 @@ pub fn run(name: &str, args: &Args) -> Result<Report, CliError> {
                 .collect();
             r.records("merges", steps);
         }
-        other => {
-            return Err(CliError::usage(format!("unknown measure {other:?}; `itgfx measure --help` lists them")));
-        }
     }
-    args.finish()?;
     Ok(r)
-}
-
-/// Help text for `itgfx measure`.
-#[must_use]
-pub fn help() -> String {
-    let mut s = String::from(
-        "itgfx measure NAME [OPTIONS] — evaluate an information measure\n\n\
-         Vectors: inline (0.5,0.25,0.25 or separate words) or a CSV file.\n\
-         Matrices: a CSV file (one row per line) or inline rows split by ';' (0.9,0.1;0.1,0.9).\n\
-         Common options: --base 2|e|10 (default 2), --json (one object, infinities as \"inf\").\n\nMeasures:\n",
-    );
-    for (n, d) in MEASURES {
-        s.push_str(&format!("  {n:<12} {d}\n"));
-    }
-    s
 }

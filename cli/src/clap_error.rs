@@ -30,12 +30,13 @@ pub fn message(e: &clap::Error, measure: bool) -> String {
     let arg = get(ContextKind::InvalidArg).unwrap_or_default();
     let value = get(ContextKind::InvalidValue).unwrap_or_default();
     let mut m = match e.kind() {
-        ErrorKind::InvalidSubcommand if measure => {
-            format!("unknown measure {value:?}; `itgfx measure --help` lists them")
-        }
         ErrorKind::InvalidSubcommand => {
             let v = get(ContextKind::InvalidSubcommand).unwrap_or_default();
-            format!("unknown command {v:?}; try `itgfx --help`")
+            if measure {
+                format!("unknown measure {v:?}; `itgfx measure --help` lists them")
+            } else {
+                format!("unknown command {v:?}; try `itgfx --help`")
+            }
         }
         ErrorKind::UnknownArgument => format!("unknown option {arg}"),
         ErrorKind::ValueValidation => {
@@ -62,11 +63,6 @@ pub fn message(e: &clap::Error, measure: bool) -> String {
             first.strip_prefix("error: ").unwrap_or(&first).to_string()
         }
     };
-    if e.kind() == ErrorKind::InvalidSubcommand && measure {
-        // `value` is empty for subcommands: name the word clap saw.
-        let v = get(ContextKind::InvalidSubcommand).unwrap_or_default();
-        m = format!("unknown measure {v:?}; `itgfx measure --help` lists them");
-    }
     for k in [ContextKind::SuggestedSubcommand, ContextKind::SuggestedArg, ContextKind::SuggestedValue] {
         if let Some(s) = get(k) {
             let _ = write!(m, "; did you mean {s}?");

@@ -499,3 +499,25 @@ pub fn run(m: &Measure) -> Result<Report, CliError> {
     }
     Ok(r)
 }
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    use super::MEASURES;
+    use crate::options::Cli;
+
+    #[test]
+    fn the_measure_list_is_the_parser_list() {
+        let cmd = Cli::command();
+        let m = cmd.find_subcommand("measure").unwrap();
+        let parsed: Vec<&str> = m.get_subcommands().map(clap::Command::get_name).collect();
+        let listed: Vec<&str> = MEASURES.iter().map(|(n, _)| *n).collect();
+        assert_eq!(parsed, listed);
+    }
+
+    #[test]
+    fn options_are_consistent() {
+        Cli::command().debug_assert();
+    }
+}

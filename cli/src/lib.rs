@@ -7,6 +7,7 @@ pub mod devices;
 pub mod export;
 pub mod input;
 pub mod measure;
+pub mod measure_options;
 pub mod options;
 pub mod output;
 pub mod progress;

@@ -131,7 +131,7 @@ pub struct ViewpointsOptions {
     /// R x R rays per viewpoint over the cone around the object; small polygons need more
     #[arg(long, value_name = "R", default_value = "128", value_parser = resolution, help_heading = "Channel")]
     pub resolution: u32,
-    /// Viewpoint distance in bounding-sphere radii (1.05..=100: f32 tracing stays exact enough)
+    /// Viewpoint distance in bounding-sphere radii (1.05..=1000: f32 tracing stays exact enough)
     #[arg(long, value_name = "D", default_value = "3", value_parser = distance, help_heading = "Channel")]
     pub distance: f64,
     /// p(V) uniform instead of the projected area

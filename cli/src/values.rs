@@ -107,20 +107,23 @@ pub fn resolution(s: &str) -> Result<u32, String> {
     ranged(s, 4, 4096).map(|v| v as u32).map_err(|e| format!("{e} (rays per viewpoint = resolution²)"))
 }
 
-/// `--distance` in bounding-sphere radii: `1.05..=100`. Below, the viewpoint
-/// would touch the bounding sphere; above, the f32 ray origins of the tracer
-/// (relative precision 6e-8, so an absolute error of `6e-8 D` radii, and the
-/// cone of view narrows as `1/D`) start to move hits between small polygons:
-/// at `D = 1e6` the error is 0.06 radii and the best view changes.
+/// `--distance` in bounding-sphere radii: `1.05..=1000`. Below, the
+/// viewpoint would touch the bounding sphere. Above, the f32 ray origins of
+/// the tracer (relative precision 6e-8, an absolute error of `6e-8 D` radii
+/// while the cone of view narrows as `1/D`) move hits between polygons.
+/// Measured on the Stanford bunny (42 views, resolution 128): I(V;O) is
+/// 3.7397, 3.7354, 3.7360 bits at D = 100, 1e3, 1e4 (perspective converging,
+/// best view 0), drifts to 3.7464 at 1e5 and jumps to 4.3976 at 1e6 where the
+/// best view changes (0 -> 12): 1000 keeps a factor 100 from the drift.
 ///
 /// # Errors
 /// A reason.
 pub fn distance(s: &str) -> Result<f64, String> {
     let d = real(s)?;
-    if (1.05..=100.0).contains(&d) {
+    if (1.05..=1000.0).contains(&d) {
         Ok(d)
     } else {
-        Err("must be in 1.05..=100 bounding-sphere radii (f32 tracing loses precision farther away)".into())
+        Err("must be in 1.05..=1000 bounding-sphere radii (f32 tracing loses precision farther away)".into())
     }
 }
 

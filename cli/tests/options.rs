@@ -59,7 +59,7 @@ fn values_are_range_checked() {
         (&["complexity", "cube", "--color-by", "red"][..], &["--color-by", "delta"][..]),
         (&["viewpoints", "cube", "--subdivide", "2000"][..], &["--subdivide", "1..=64"][..]),
         (&["viewpoints", "cube", "--viewpoints", "50"][..], &["--viewpoints", "2562"][..]),
-        (&["viewpoints", "cube", "--distance", "1e6"][..], &["--distance", "1.05..=100"][..]),
+        (&["viewpoints", "cube", "--distance", "1e6"][..], &["--distance", "1.05..=1000"][..]),
         (&["viewpoints", "cube", "--distance", "nan"][..], &["--distance"][..]),
         (&["viewpoints", "cube", "--capture", "0"][..], &["--capture", "(0, 1]"][..]),
         (&["viewpoints", "cube", "--capture", "1.5"][..], &["--capture"][..]),

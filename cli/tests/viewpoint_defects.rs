@@ -66,3 +66,18 @@ fn degenerate_but_valid_meshes_work() {
         }
     }
 }
+
+#[test]
+fn far_viewpoints_still_picture_the_mesh() {
+    // Before: rays of the pictures stopped at 10 units, so a camera at
+    // --distance 500 rendered only background.
+    let d = std::env::temp_dir().join(format!("itgfx-vpd-far-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let png = d.join("best.png");
+    let args = ["viewpoints", "cube", "--viewpoints", "12", "--resolution", "16", "--distance", "500", "--best-image"];
+    let out = itgfx(&[&args[..], &[png.to_str().unwrap()]].concat());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let img = image::open(&png).unwrap().to_rgb8();
+    let object = img.pixels().filter(|p| p.0 != [24, 24, 28]).count();
+    assert!(object > img.pixels().count() / 10, "the cube fills part of the picture: {object} pixels");
+}

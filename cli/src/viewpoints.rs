@@ -51,17 +51,25 @@ pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
     let level = viewpoint_level(o.viewpoints);
     let (resolution, distance, capture, max_views, steps, rounds) =
         (o.resolution, o.distance, o.capture, o.best_n, o.explore, o.smooth);
+    let mut created = None;
     if let Some(d) = &o.out {
         if std::fs::metadata(d).is_ok_and(|m| !m.is_dir()) {
             return Err(CliError::usage(format!("--out {d:?}: not a directory")));
         }
-        std::fs::create_dir_all(d).map_err(|e| CliError::usage(format!("--out {d:?}: {e}")))?;
+        if !d.exists() {
+            std::fs::create_dir_all(d).map_err(|e| CliError::usage(format!("--out {d:?}: {e}")))?;
+            created = Some(d);
+        }
     }
     let outputs = pictures(o);
-    for (flag, _, p) in &outputs {
-        if let Some(p) = p {
-            crate::output::check(flag, p)?;
+    let checked =
+        outputs.iter().try_for_each(|(flag, _, p)| p.as_ref().map_or(Ok(()), |p| crate::output::check(flag, p)));
+    if let Err(e) = checked {
+        // Leave nothing behind: the directory made for --out goes again (only if still empty).
+        if let Some(d) = created {
+            let _ = std::fs::remove_dir(d);
         }
+        return Err(e);
     }
     let path = |flag: &str| outputs.iter().find(|x| x.0 == flag).and_then(|x| x.2.clone());
     let weights = if o.uniform_input { ViewpointWeights::Uniform } else { ViewpointWeights::ProjectedArea };

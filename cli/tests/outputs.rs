@@ -115,3 +115,12 @@ fn an_empty_path_is_refused() {
         assert!(err.contains("empty path"), "{args:?}: {err}");
     }
 }
+
+#[test]
+fn a_refused_run_leaves_no_out_directory() {
+    let d = dir("outdir");
+    let out_dir = d.join("pictures");
+    let out = itgfx(&["viewpoints", "cube", "--out", s(&out_dir), "--best-image", "nodir/b.png"]);
+    one_line_exit_2(&out);
+    assert!(!out_dir.exists(), "the --out directory made for the run is removed again");
+}

@@ -34,9 +34,11 @@ pub fn render_patches(
 ) -> Result<Vec<[u8; 3]>, BackendError> {
     let (w, h) = size;
     let cam = Camera::framing_unit_sphere(eye);
+    // Past the far side of the unit sphere from any distance.
+    let reach = eye.length() + 2.0;
     let mut lines: Vec<Line> = (0..h)
         .flat_map(|y| (0..w).map(move |x| (x, y)))
-        .map(|(x, y)| cam.ray(f64::from(x) + 0.5, f64::from(y) + 0.5, w, h, 10.0))
+        .map(|(x, y)| cam.ray(f64::from(x) + 0.5, f64::from(y) + 0.5, w, h, reach))
         .collect();
     let mut hits: Vec<Option<Hit>> = Vec::new();
     tracer.closest_hit(&lines, &mut hits)?;

@@ -1,9 +1,8 @@
 //! Pictures of per-patch values: PLY meshes with vertex colours and PNG
 //! renders through the tracing seam. Every file is written atomically
 //! (a temporary file in the same directory, then a rename), so a failed or
-//! interrupted run never leaves a half-written file behind.
+//! interrupted run never leaves a half-written file behind (see [`crate::output`]).
 
-use std::io::Write;
 use std::path::Path;
 
 use glam::DVec3;
@@ -12,27 +11,6 @@ use itgfx_backends::tracer::Tracer;
 use rayon::prelude::*;
 
 use crate::CliError;
-
-/// Writes `bytes` to `path` atomically.
-///
-/// # Errors
-/// A one-line error naming the path.
-pub fn atomic_write(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = path.file_name().ok_or_else(|| CliError::usage(format!("{}: not a file path", path.display())))?;
-    let tmp = dir.join(format!(".{}.tmp{}", name.to_string_lossy(), std::process::id()));
-    let fail = |e: std::io::Error| CliError::usage(format!("{}: {e}", path.display()));
-    let res = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if res.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    res.map_err(fail)
-}
 
 /// Viridis colour map at `x ∈ [0, 1]` (8 control points, linear between).
 #[must_use]
@@ -137,7 +115,7 @@ pub fn write_ply_with(scene: &Scene, values: &[f64], cols: &[[u8; 3]], path: &Pa
     for i in 0..tris.len() {
         s.push_str(&format!("3 {} {} {}\n", 3 * i, 3 * i + 1, 3 * i + 2));
     }
-    atomic_write(path, s.as_bytes())
+    crate::output::write(path, s.as_bytes())
 }
 
 /// Renders the scene with every patch in its value's colour, from a camera
@@ -192,8 +170,8 @@ pub fn render_image(
 pub fn write_png(img: &image::RgbImage, path: &Path) -> Result<(), CliError> {
     let mut bytes = Vec::new();
     img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
-        .map_err(|e| CliError::usage(format!("{}: {e}", path.display())))?;
-    atomic_write(path, &bytes)
+        .map_err(|e| CliError::usage(format!("{path:?}: {e}")))?;
+    crate::output::write(path, &bytes)
 }
 
 /// Images side by side in rows of `per_row`, on a dark background.

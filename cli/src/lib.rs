@@ -1,13 +1,19 @@
-//! Library side of the `itgfx` command line: argument and CSV parsing,
+//! Library side of the `itgfx` command line: typed options and CSV parsing,
 //! reports, and the commands themselves (the binary is a thin `main`).
 
-pub mod args;
+pub mod clap_error;
 pub mod complexity;
 pub mod devices;
 pub mod export;
 pub mod input;
 pub mod measure;
+pub mod measure_options;
+pub mod options;
+pub mod output;
+pub mod progress;
 pub mod report;
+pub mod scene;
+pub mod values;
 pub mod viewpoints;
 
 use std::fmt;

@@ -3,7 +3,7 @@
 use itgfx_core as core_;
 use itgfx_core::{Base, Channel};
 
-use crate::args::Args;
+pub use crate::measure_options::{Measure, MeasureCommand};
 use crate::report::Report;
 use crate::{CliError, core_err};
 
@@ -32,8 +32,8 @@ pub const MEASURES: &[(&str, &str)] = &[
     ("bottleneck", "--joint M                      agglomerative information bottleneck merges (Slonim-Tishby)"),
 ];
 
-fn probabilities(args: &Args, name: &str, v: Vec<f64>) -> Result<Vec<f64>, CliError> {
-    if args.flag("normalize") {
+fn probabilities(normalize: bool, name: &str, v: Vec<f64>) -> Result<Vec<f64>, CliError> {
+    if normalize {
         let s: f64 = v.iter().sum();
         if !(s > 0.0 && s.is_finite()) {
             // Let the core name the offending element.
@@ -46,46 +46,73 @@ fn probabilities(args: &Args, name: &str, v: Vec<f64>) -> Result<Vec<f64>, CliEr
     }
 }
 
-fn positional_vector(args: &Args) -> Result<Vec<f64>, CliError> {
-    if args.positionals.is_empty() {
+fn positional_vector(words: &[String]) -> Result<Vec<f64>, CliError> {
+    if words.is_empty() {
         return Err(CliError::usage("give the probabilities as arguments, e.g. 0.5 0.25 0.25, or a CSV file"));
     }
-    let joined = args.positionals.join(" ");
-    if args.positionals.len() == 1 {
+    let joined = words.join(" ");
+    if words.len() == 1 {
         crate::input::vector_arg("values", &joined).map_err(CliError::input)
     } else {
         crate::input::parse_vector_text("values", &joined).map_err(CliError::input)
     }
 }
 
+fn given<T>(v: &Option<T>, flag: &str) -> Result<T, CliError>
+where
+    T: Clone,
+{
+    v.clone().ok_or_else(|| CliError::usage(format!("missing {flag}")))
+}
+
+/// Grouping labels as compact indices `0..k` in increasing label order, with
+/// the distinct labels: memory follows the number of outcomes, never the
+/// largest label.
+///
+/// # Errors
+/// A usage error for a label that is not a non-negative integer.
+pub fn compact_labels(g: &[f64]) -> Result<(Vec<usize>, Vec<u64>), CliError> {
+    let mut raw = Vec::with_capacity(g.len());
+    for &x in g {
+        if !(x >= 0.0 && x.fract() == 0.0 && x <= 9_007_199_254_740_992.0) {
+            return Err(CliError::usage(format!("--groups: label {x} is not a non-negative integer")));
+        }
+        raw.push(x as u64);
+    }
+    let mut distinct = raw.clone();
+    distinct.sort_unstable();
+    distinct.dedup();
+    let labels = raw.iter().map(|l| distinct.binary_search(l).unwrap_or(0)).collect();
+    Ok((labels, distinct))
+}
+
 /// Runs one measure.
 ///
 /// # Errors
 /// Usage, input and core errors, each one line.
-pub fn run(name: &str, args: &Args) -> Result<Report, CliError> {
-    let base = args.base()?;
+pub fn run(m: &Measure) -> Result<Report, CliError> {
+    let base = m.common().base;
     let unit = Some(base.unit());
     let mut r = Report::new();
-    match name {
-        "entropy" => {
-            let p = probabilities(args, "p", positional_vector(args)?)?;
+    match m {
+        Measure::Entropy(v) => {
+            let p = probabilities(v.normalize, "p", positional_vector(&v.values)?)?;
             let h = core_::entropy(&p, base).map_err(|e| core_err("p", e))?;
             let max = base.log(p.len() as f64);
             r.count("outcomes", p.len() as u64).real("entropy", h, unit).real("max_entropy", max, unit);
             r.real("normalized_entropy", if max > 0.0 { h / max } else { 0.0 }, None);
         }
-        "binary" => {
-            let v = positional_vector(args)?;
+        Measure::Binary(v) => {
+            let v = positional_vector(&v.values)?;
             if v.len() != 1 {
                 return Err(CliError::usage("binary takes one probability p"));
             }
             r.real("binary_entropy", core_::binary_entropy(v[0], base).map_err(|e| core_err("p", e))?, unit);
         }
-        "renyi" | "tsallis" => {
-            let key = if name == "renyi" { "alpha" } else { "q" };
-            let a = args.number(key)?.ok_or_else(|| CliError::usage(format!("missing --{key}")))?;
-            let p = probabilities(args, "p", positional_vector(args)?)?;
-            if name == "renyi" {
+        Measure::Renyi { alpha: a, values } | Measure::Tsallis { q: a, values } => {
+            let a = *a;
+            let p = probabilities(values.normalize, "p", positional_vector(&values.values)?)?;
+            if matches!(m, Measure::Renyi { .. }) {
                 r.real("alpha", a, None).real(
                     "renyi_entropy",
                     core_::renyi_entropy(&p, a, base).map_err(|e| core_err("p", e))?,
@@ -99,19 +126,19 @@ pub fn run(name: &str, args: &Args) -> Result<Report, CliError> {
                 );
             }
         }
-        "joint" => {
-            let m = args.matrix("matrix")?.ok_or_else(|| CliError::usage("missing --matrix"))?;
+        Measure::Joint(x) => {
+            let m = given(&x.matrix, "--matrix")?.0;
             let e = core_::joint_entropies(&m.data, m.rows, m.cols, base).map_err(|e| core_err("matrix", e))?;
             r.count("rows", m.rows as u64).count("cols", m.cols as u64);
             r.real("h_x", e.h_x, unit).real("h_y", e.h_y, unit).real("h_xy", e.h_xy, unit);
             r.real("h_x_given_y", e.h_x_given_y, unit).real("h_y_given_x", e.h_y_given_x, unit);
             r.real("mutual_information", e.mutual_information, unit);
         }
-        "kl" | "divergences" => {
-            let p = args.vector("p")?.ok_or_else(|| CliError::usage("missing --p"))?;
-            let q = args.vector("q")?.ok_or_else(|| CliError::usage("missing --q"))?;
-            let (p, q) = (probabilities(args, "p", p)?, probabilities(args, "q", q)?);
-            if name == "kl" {
+        Measure::Kl(x) | Measure::Divergences(x) => {
+            let p = given(&x.p, "--p")?.0;
+            let q = given(&x.q, "--q")?.0;
+            let (p, q) = (probabilities(x.normalize, "p", p)?, probabilities(x.normalize, "q", q)?);
+            if matches!(m, Measure::Kl(_)) {
                 r.real("kl", core_::kl_divergence(&p, &q, base).map_err(|e| core_err("p, q", e))?, unit);
             } else {
                 let d = core_::divergences(&p, &q, base).map_err(|e| core_err("p, q", e))?;
@@ -123,9 +150,9 @@ pub fn run(name: &str, args: &Args) -> Result<Report, CliError> {
                 r.real("l1", d.l1, None).real("l2", d.l2, None);
             }
         }
-        "js" => {
-            let w = args.vector("weights")?.ok_or_else(|| CliError::usage("missing --weights"))?;
-            let d = args.matrix("dists")?.ok_or_else(|| CliError::usage("missing --dists"))?;
+        Measure::Js { weights, dists, .. } => {
+            let w = given(weights, "--weights")?.0;
+            let d = given(dists, "--dists")?.0;
             if d.rows != w.len() {
                 return Err(CliError::usage(format!(
                     "--dists has {} rows but --weights has {} values",
@@ -136,9 +163,9 @@ pub fn run(name: &str, args: &Args) -> Result<Report, CliError> {
             let js = core_::jensen_shannon(&w, &d.data, d.cols, base).map_err(|e| core_err("weights, dists", e))?;
             r.count("distributions", d.rows as u64).count("outcomes", d.cols as u64).real("jensen_shannon", js, unit);
         }
-        "channel" => {
-            let p = args.vector("input")?.ok_or_else(|| CliError::usage("missing --input"))?;
-            let m = args.matrix("matrix")?.ok_or_else(|| CliError::usage("missing --matrix"))?;
+        Measure::Channel { input, matrix, .. } => {
+            let p = given(input, "--input")?.0;
+            let m = given(matrix, "--matrix")?.0;
             if m.rows != p.len() {
                 return Err(CliError::usage(format!(
                     "--matrix has {} rows but --input has {} values",
@@ -163,8 +190,8 @@ pub fn run(name: &str, args: &Args) -> Result<Report, CliError> {
             r.reals("output_distribution", py).reals("input_specific_information", ix);
             r.reals("output_specific_information", iy).reals("reversed_channel", rev);
         }
-        "markov" => {
-            let m = args.matrix("matrix")?.ok_or_else(|| CliError::usage("missing --matrix"))?;
+        Measure::Markov(x) => {
+            let m = given(&x.matrix, "--matrix")?.0;
             if m.rows != m.cols {
                 return Err(CliError::usage(format!("--matrix must be square, got {}x{}", m.rows, m.cols)));
             }
@@ -180,62 +207,45 @@ pub fn run(name: &str, args: &Args) -> Result<Report, CliError> {
             r.count("states", n as u64);
             r.reals("stationary_distribution", w).real("entropy_rate", h, unit).real("excess_entropy", e, unit);
         }
-        "fano" => {
-            let h = args.number("h-cond")?.ok_or_else(|| CliError::usage("missing --h-cond (H(X|Y))"))?;
-            let n = args.integer("n")?.ok_or_else(|| CliError::usage("missing --n (number of outcomes)"))? as usize;
+        Measure::Fano { h_cond, n, pe, .. } => {
+            let h = *h_cond;
+            let n = usize::try_from(*n).map_err(|_| CliError::usage("--n: too large"))?;
             let min = core_::fano_minimum_error(h, n, base).map_err(|e| core_err("fano", e))?;
             r.real("h_cond", h, unit).count("n", n as u64).real("minimum_error_probability", min, None);
             if base == Base::Bits && n >= 2 {
                 r.real("weak_bound", core_::fano_weak_bound(h, n).map_err(|e| core_err("fano", e))?, None);
             }
-            if let Some(pe) = args.number("pe")? {
+            if let Some(pe) = *pe {
                 let b = core_::fano_bound(pe, n, base).map_err(|e| core_err("pe", e))?;
                 r.real("pe", pe, None)
                     .real("fano_bound", b, unit)
                     .text("consistent", if b >= h { "yes" } else { "no" });
             }
         }
-        "huffman" => {
-            let p = probabilities(args, "p", positional_vector(args)?)?;
+        Measure::Huffman { block, values } => {
+            let p = probabilities(values.normalize, "p", positional_vector(&values.values)?)?;
             let mut s = vec![0.0; p.len()];
             let l = core_::huffman_expected_length(&p, &mut s).map_err(|e| core_err("p", e))?;
             let h = core_::entropy(&p, Base::Bits).map_err(|e| core_err("p", e))?;
             r.real("entropy", h, Some("bits")).real("expected_length", l, Some("bits/symbol"));
             r.real("redundancy", l - h, Some("bits/symbol"));
-            if let Some(k) = args.integer("block")? {
-                let k = u32::try_from(k).map_err(|_| CliError::usage("--block: too large"))?;
+            if let Some(k) = *block {
                 let lk = core_::huffman_block_length(&p, k).map_err(|e| core_err("block", e))?;
                 r.count("block", u64::from(k)).real("block_length_per_symbol", lk, Some("bits/symbol"));
             }
         }
-        "grouping" => {
-            let p = args.vector("p")?.ok_or_else(|| CliError::usage("missing --p"))?;
-            let g = args
-                .vector("groups")?
-                .ok_or_else(|| CliError::usage("missing --groups (a group label per outcome)"))?;
-            let p = probabilities(args, "p", p)?;
-            let labels: Vec<usize> = g
-                .iter()
-                .map(|&x| {
-                    if x >= 0.0 && x.fract() == 0.0 && x <= 9_007_199_254_740_992.0 {
-                        Ok(x as usize)
-                    } else {
-                        Err(CliError::usage(format!("--groups: label {x} is not a small non-negative integer")))
-                    }
-                })
-                .collect::<Result<_, _>>()?;
-            let mut order = vec![0usize; p.len()];
-            let mut q = vec![0.0; p.len()];
-            let (d, g) = core_::grouping_by_label(&p, &labels, &mut order, &mut q, base)
-                .map_err(|e| core_err("p, groups", e))?;
-            q.truncate(g);
+        Measure::Grouping { p, groups, normalize, .. } => {
+            let p = probabilities(*normalize, "p", given(p, "--p")?.0)?;
+            let (labels, distinct) = compact_labels(&given(groups, "--groups")?.0)?;
+            let mut q = vec![0.0; distinct.len()];
+            let d = core_::grouping(&p, &labels, distinct.len(), &mut q, base).map_err(|e| core_err("p, groups", e))?;
             let h = core_::entropy(&p, base).map_err(|e| core_err("p", e))?;
             r.real("entropy", h, unit).real("h_in", d.h_in, unit).real("h_out", d.h_out, unit);
-            r.reals("group_probabilities", q);
+            r.reals("group_probabilities", q).counts("group_labels", distinct);
         }
-        "scene" => {
-            let a = args.vector("areas")?.ok_or_else(|| CliError::usage("missing --areas"))?;
-            let f = args.matrix("matrix")?.ok_or_else(|| CliError::usage("missing --matrix (form factors)"))?;
+        Measure::Scene { areas, matrix, .. } => {
+            let a = given(areas, "--areas")?.0;
+            let f = given(matrix, "--matrix")?.0;
             if f.rows != a.len() || f.cols != a.len() {
                 return Err(CliError::usage(format!(
                     "--matrix is {}x{} but there are {} areas",
@@ -260,8 +270,8 @@ pub fn run(name: &str, args: &Args) -> Result<Report, CliError> {
             );
             r.reals("I_i", per).reals("I_ij", mi);
         }
-        "bottleneck" => {
-            let m = args.matrix("joint")?.ok_or_else(|| CliError::usage("missing --joint"))?;
+        Measure::Bottleneck { joint, .. } => {
+            let m = given(joint, "--joint")?.0;
             let b = core_::agglomerative_bottleneck(&m.data, m.rows, m.cols, base).map_err(|e| core_err("joint", e))?;
             r.real("initial_information", b.initial_information, unit);
             let steps = b
@@ -276,25 +286,28 @@ pub fn run(name: &str, args: &Args) -> Result<Report, CliError> {
                 .collect();
             r.records("merges", steps);
         }
-        other => {
-            return Err(CliError::usage(format!("unknown measure {other:?}; `itgfx measure --help` lists them")));
-        }
     }
-    args.finish()?;
     Ok(r)
 }
 
-/// Help text for `itgfx measure`.
-#[must_use]
-pub fn help() -> String {
-    let mut s = String::from(
-        "itgfx measure NAME [OPTIONS] — evaluate an information measure\n\n\
-         Vectors: inline (0.5,0.25,0.25 or separate words) or a CSV file.\n\
-         Matrices: a CSV file (one row per line) or inline rows split by ';' (0.9,0.1;0.1,0.9).\n\
-         Common options: --base 2|e|10 (default 2), --json (one object, infinities as \"inf\").\n\nMeasures:\n",
-    );
-    for (n, d) in MEASURES {
-        s.push_str(&format!("  {n:<12} {d}\n"));
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    use super::MEASURES;
+    use crate::options::Cli;
+
+    #[test]
+    fn the_measure_list_is_the_parser_list() {
+        let cmd = Cli::command();
+        let m = cmd.find_subcommand("measure").unwrap();
+        let parsed: Vec<&str> = m.get_subcommands().map(clap::Command::get_name).collect();
+        let listed: Vec<&str> = MEASURES.iter().map(|(n, _)| *n).collect();
+        assert_eq!(parsed, listed);
     }
-    s
+
+    #[test]
+    fn options_are_consistent() {
+        Cli::command().debug_assert();
+    }
 }

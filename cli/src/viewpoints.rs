@@ -3,27 +3,37 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use itgfx_backends::open;
 use itgfx_backends::tracer::Prepared;
 use itgfx_backends::viewpoint::saliency::{mesh_saliency, patch_adjacency, smooth, viewpoint_saliency};
 use itgfx_backends::viewpoint::selection::{best_views, exploration, importance_information};
 use itgfx_backends::viewpoint::{ViewpointAnalysis, ViewpointChannel, ViewpointWeights, icosphere};
-use itgfx_backends::{BackendChoice, open};
 
 use crate::CliError;
-use crate::args::Args;
-use crate::complexity::{Progress, load_scene};
 use crate::export::{Faces, colours, montage, percentile_range, render_image, sphere_image, write_ply_with, write_png};
+use crate::options::ViewpointsOptions;
+use crate::progress::Progress;
 use crate::report::Report;
+use crate::scene::load_scene;
+use crate::values::viewpoint_level;
 
 /// Where each picture goes: explicit paths, or standard names under `--out`.
-struct Pictures {
-    out: Option<PathBuf>,
-}
-
-impl Pictures {
-    fn path(&self, args: &Args, flag: &str, name: &str) -> Option<PathBuf> {
-        args.value(flag).map(PathBuf::from).or_else(|| self.out.as_ref().map(|d| d.join(name)))
-    }
+fn pictures(o: &ViewpointsOptions) -> Vec<(&'static str, &'static str, Option<PathBuf>)> {
+    let list = [
+        ("--best-image", "best.png", &o.best_image),
+        ("--worst-image", "worst.png", &o.worst_image),
+        ("--best-n-image", "best-n.png", &o.best_n_image),
+        ("--importance-image", "best-importance.png", &o.importance_image),
+        ("--sphere-image", "sphere.png", &o.sphere_image),
+        ("--ao-image", "ao.png", &o.ao_image),
+        ("--saliency-image", "saliency.png", &o.saliency_image),
+        ("--info-image", "info.png", &o.info_image),
+        ("--export-ply", "ao.ply", &o.export_ply),
+        ("--saliency-ply", "saliency.ply", &o.saliency_ply),
+    ];
+    list.into_iter()
+        .map(|(flag, name, p)| (flag, name, p.clone().or_else(|| o.out.as_ref().map(|d| d.join(name)))))
+        .collect()
 }
 
 fn core_err(e: itgfx_core::Error) -> CliError {
@@ -35,63 +45,43 @@ fn core_err(e: itgfx_core::Error) -> CliError {
 /// # Errors
 /// Usage, scene and backend errors.
 #[allow(clippy::too_many_lines)]
-pub fn run(args: &Args) -> Result<Report, CliError> {
-    let spec = args.single_positional("mesh", "give a mesh: an .obj file or a built-in scene name")?;
-    let base = args.base()?;
+pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
+    let spec = o.mesh.clone().ok_or_else(|| CliError::usage("give a mesh: an .obj file or a built-in scene name"))?;
+    let base = o.common.base;
     let unit = Some(base.unit());
-    let count = args.integer("viewpoints")?.unwrap_or(42);
-    let level = match count {
-        12 => 0,
-        42 => 1,
-        162 => 2,
-        642 => 3,
-        2562 => 4,
-        other => {
-            return Err(CliError::usage(format!(
-                "--viewpoints must be 12, 42, 162, 642 or 2562 (a subdivided icosahedron), got {other}"
-            )));
+    let level = viewpoint_level(o.viewpoints);
+    let (resolution, distance, capture, max_views, steps, rounds) =
+        (o.resolution, o.distance, o.capture, o.best_n, o.explore, o.smooth);
+    let mut created = None;
+    if let Some(d) = &o.out {
+        if std::fs::metadata(d).is_ok_and(|m| !m.is_dir()) {
+            return Err(CliError::usage(format!("--out {d:?}: not a directory")));
         }
-    };
-    let resolution = args.integer("resolution")?.unwrap_or(128);
-    if !(4..=4096).contains(&resolution) {
-        return Err(CliError::usage("--resolution must be in 4..=4096 (rays per viewpoint = resolution²)"));
+        if !d.exists() {
+            std::fs::create_dir_all(d).map_err(|e| CliError::usage(format!("--out {d:?}: {e}")))?;
+            created = Some(d);
+        }
     }
-    let distance = args.number("distance")?.unwrap_or(3.0);
-    if !(distance > 1.0 && distance.is_finite()) {
-        return Err(CliError::usage("--distance must be above 1 (in bounding-sphere radii)"));
+    let outputs = pictures(o);
+    let checked =
+        outputs.iter().try_for_each(|(flag, _, p)| p.as_ref().map_or(Ok(()), |p| crate::output::check(flag, p)));
+    if let Err(e) = checked {
+        // Leave nothing behind: the directory made for --out goes again (only if still empty).
+        if let Some(d) = created {
+            let _ = std::fs::remove_dir(d);
+        }
+        return Err(e);
     }
-    let capture = args.number("capture")?.unwrap_or(0.9);
-    if !(capture > 0.0 && capture <= 1.0) {
-        return Err(CliError::usage("--capture must be in (0, 1]: the fraction of I(V;O) the best-n views keep"));
-    }
-    let max_views = args.integer("best-n")?.unwrap_or(6);
-    if !(1..=64).contains(&max_views) {
-        return Err(CliError::usage("--best-n must be in 1..=64"));
-    }
-    let steps = args.integer("explore")?.unwrap_or(12);
-    if steps > 10_000 {
-        return Err(CliError::usage("--explore must be at most 10000 steps"));
-    }
-    let weights = if args.flag("uniform-input") { ViewpointWeights::Uniform } else { ViewpointWeights::ProjectedArea };
-    let rounds = args.integer("smooth")?.unwrap_or(2);
-    if rounds > 100 {
-        return Err(CliError::usage("--smooth must be at most 100 rounds"));
-    }
-    let background = args.flag("background");
-    let per_polygon = args.flag("per-polygon");
-    let choice =
-        args.value("backend").unwrap_or("cpu").parse::<BackendChoice>().map_err(|e| CliError::usage(e.to_string()))?;
-    let pictures = Pictures { out: args.value("out").map(PathBuf::from) };
-    if let Some(d) = &pictures.out {
-        std::fs::create_dir_all(d).map_err(|e| CliError::usage(format!("--out {}: {e}", d.display())))?;
-    }
-    let scene = load_scene(&spec, args.integer("subdivide")?.unwrap_or(1) as u32)?;
+    let path = |flag: &str| outputs.iter().find(|x| x.0 == flag).and_then(|x| x.2.clone());
+    let weights = if o.uniform_input { ViewpointWeights::Uniform } else { ViewpointWeights::ProjectedArea };
+    let (background, per_polygon) = (o.background, o.per_polygon);
+    let scene = load_scene(&spec, o.subdivide)?;
     let t0 = Instant::now();
     let prepared = Prepared::new(&scene);
-    let tracer = open(choice, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
+    let tracer = open(o.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
     let dirs = icosphere(level);
     let mut progress = Progress::new();
-    let ch = ViewpointChannel::build(&prepared, tracer.as_ref(), &dirs, distance, resolution as u32, &mut |d, t| {
+    let ch = ViewpointChannel::build(&prepared, tracer.as_ref(), &dirs, distance, resolution, &mut |d, t| {
         progress.update(d, t);
     })
     .map_err(|e| CliError::usage(e.to_string()))?;
@@ -109,8 +99,8 @@ pub fn run(args: &Args) -> Result<Report, CliError> {
     let view_saliency = viewpoint_saliency(&an, &saliency);
     let importance = importance_information(&an, &saliency, base).map_err(core_err)?;
     let best_importance = argmin(&importance);
-    let best_n = best_views(&an, &m, capture, max_views as usize, base).map_err(core_err)?;
-    let tour = exploration(&an, &neighbours, m.best, steps as usize, base).map_err(core_err)?;
+    let best_n = best_views(&an, &m, capture, max_views, base).map_err(core_err)?;
+    let tour = exploration(&an, &neighbours, m.best, steps, base).map_err(core_err)?;
     let seconds = t0.elapsed().as_secs_f64();
 
     let mut r = Report::new();
@@ -162,40 +152,40 @@ pub fn run(args: &Args) -> Result<Report, CliError> {
     // I(o;V); polygons seen from few viewpoints (occluded) carry the most.
     // Pictures show the fields averaged over neighbours `--smooth` times.
     let patches = scene.patches.len();
-    let shown_info = smooth(&poly_info[..patches], &adjacency, rounds as u32);
-    let shown_saliency = smooth(&saliency, &adjacency, rounds as u32);
+    let shown_info = smooth(&poly_info[..patches], &adjacency, rounds);
+    let shown_saliency = smooth(&saliency, &adjacency, rounds);
     let ao = grey_levels(&shown_info);
-    if let Some(p) = pictures.path(args, "best-image", "best.png") {
+    if let Some(p) = path("--best-image") {
         save(&shot(&grey, m.best, size)?, &p, &mut written)?;
     }
-    if let Some(p) = pictures.path(args, "worst-image", "worst.png") {
+    if let Some(p) = path("--worst-image") {
         save(&shot(&grey, m.worst, size)?, &p, &mut written)?;
     }
-    if let Some(p) = pictures.path(args, "best-n-image", "best-n.png") {
+    if let Some(p) = path("--best-n-image") {
         let imgs = best_n.views.iter().map(|&v| shot(&grey, v, (320, 240))).collect::<Result<Vec<_>, _>>()?;
         save(&montage(&imgs, 3), &p, &mut written)?;
     }
-    if let Some(p) = pictures.path(args, "importance-image", "best-importance.png") {
+    if let Some(p) = path("--importance-image") {
         save(&shot(&colours(&shown_saliency), best_importance, size)?, &p, &mut written)?;
     }
-    if let Some(p) = pictures.path(args, "sphere-image", "sphere.png") {
+    if let Some(p) = path("--sphere-image") {
         let vmi: Vec<f64> = m.mutual_information.iter().map(|&x| if x.is_finite() { x } else { f64::NAN }).collect();
         save(&sphere_image(&dirs, &[&vmi, &m.entropy], dirs[m.best], 160), &p, &mut written)?;
     }
-    if let Some(p) = pictures.path(args, "ao-image", "ao.png") {
+    if let Some(p) = path("--ao-image") {
         save(&shot(&ao, m.best, size)?, &p, &mut written)?;
     }
-    if let Some(p) = pictures.path(args, "saliency-image", "saliency.png") {
+    if let Some(p) = path("--saliency-image") {
         save(&shot(&colours(&shown_saliency), m.best, size)?, &p, &mut written)?;
     }
-    if let Some(p) = pictures.path(args, "info-image", "info.png") {
+    if let Some(p) = path("--info-image") {
         save(&shot(&colours(&shown_info), m.best, size)?, &p, &mut written)?;
     }
-    if let Some(p) = pictures.path(args, "export-ply", "ao.ply") {
+    if let Some(p) = path("--export-ply") {
         write_ply_with(&scene, &shown_info, &ao, &p)?;
         written.push(p);
     }
-    if let Some(p) = pictures.path(args, "saliency-ply", "saliency.ply") {
+    if let Some(p) = path("--saliency-ply") {
         write_ply_with(&scene, &shown_saliency, &colours(&shown_saliency), &p)?;
         written.push(p);
     }

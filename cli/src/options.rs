@@ -1,0 +1,203 @@
+//! The typed command line: one options struct per command, parsed and
+//! range-checked by clap before any scene is loaded, traced or written.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+use itgfx_backends::BackendChoice;
+use itgfx_core::Base;
+
+use crate::measure::MeasureCommand;
+use crate::values::{
+    backend, base, best_n, blocks, capture, count, distance, explore, lines, out_path, resolution, smooth, subdivide,
+    threads, viewpoint_count, vp_subdivide,
+};
+
+/// `itgfx`: information theory for computer graphics.
+#[derive(Debug, Parser)]
+#[command(
+    name = "itgfx",
+    version,
+    about = "itgfx — information theory for computer graphics",
+    after_help = "Every command accepts --json (one JSON object on stdout) and --base 2|e|10.\n\
+                  Errors are one line on stderr and exit code 2.",
+    arg_required_else_help = true
+)]
+pub struct Cli {
+    /// The command.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Scene visibility channel: H_P, H_S, I_S, I_S^c (Part III)
+    Complexity(ComplexityOptions),
+    /// Evaluate an information measure
+    #[command(arg_required_else_help = true, subcommand_value_name = "NAME", subcommand_help_heading = "Measures")]
+    Measure(MeasureCommand),
+    /// Viewpoint channel V -> O: VE, VMI, best views (Part V)
+    Viewpoints(ViewpointsOptions),
+    /// Vulkan devices found, and the one --backend vulkan uses
+    Devices(Common),
+}
+
+/// Options every command has.
+#[derive(Debug, Clone, Copy, Args)]
+pub struct Common {
+    /// One JSON object on stdout (infinities as "inf")
+    #[arg(long)]
+    pub json: bool,
+    /// Logarithm base: 2 (bits), e (nats) or 10 (hartleys)
+    #[arg(long, value_name = "2|e|10", default_value = "2", value_parser = base)]
+    pub base: Base,
+}
+
+/// The built-in scenes, one per line with its description (the registry of backends).
+#[must_use]
+pub fn scene_list() -> String {
+    let mut s = String::from("SCENE is an .obj file (one patch per polygon) or a built-in:\n");
+    for b in itgfx_backends::scene::BUILT_IN {
+        s.push_str(&format!("  {}\n      {}\n", b.syntax, b.description));
+    }
+    s
+}
+
+/// `itgfx complexity SCENE`.
+#[derive(Debug, Args)]
+#[command(after_help = scene_list())]
+pub struct ComplexityOptions {
+    /// A built-in scene name (e.g. cube-enclosure:10) or an .obj file
+    #[arg(value_name = "SCENE")]
+    pub scene: Option<String>,
+    /// Lines to cast (global lines that miss count); 1e7-style counts accepted
+    #[arg(long, value_name = "N", default_value = "1e6", value_parser = lines)]
+    pub lines: u64,
+    /// Seed; same seed, same numbers, any thread count
+    #[arg(long, value_name = "S", default_value = "1", value_parser = count)]
+    pub seed: u64,
+    /// Local lines from the patches instead of global lines
+    #[arg(long)]
+    pub local: bool,
+    /// Split every patch into K x K cells
+    #[arg(long, value_name = "K", default_value = "1", value_parser = subdivide)]
+    pub subdivide: u32,
+    /// Jackknife blocks for standard errors (1 = none)
+    #[arg(long, value_name = "B", default_value = "8", value_parser = blocks)]
+    pub blocks: u32,
+    /// Tracing backend: cpu, reference or vulkan
+    #[arg(long, value_name = "cpu|reference|vulkan", default_value = "cpu", value_parser = backend)]
+    pub backend: BackendChoice,
+    /// Mesh coloured by information per unit area, as PLY
+    #[arg(long, value_name = "F", value_parser = out_path)]
+    pub export_ply: Option<PathBuf>,
+    /// The same, rendered from a default camera, as PNG
+    #[arg(long, value_name = "F.png", value_parser = out_path)]
+    pub image: Option<PathBuf>,
+    /// Colour by information per unit area, or by I_i^c - I_i (delta)
+    #[arg(long, value_name = "information|delta", default_value = "information",
+          value_parser = ["information", "delta"])]
+    pub color_by: String,
+    /// First line index (shards of one run: same seed, disjoint ranges)
+    #[arg(long, value_name = "K", default_value = "0", value_parser = count)]
+    pub offset: u64,
+    /// Write the counts to F
+    #[arg(long, value_name = "F", value_parser = out_path)]
+    pub save_counts: Option<PathBuf>,
+    /// Evaluate saved shards together instead of tracing: F1,F2,...
+    #[arg(long, value_name = "F1,F2,...", value_delimiter = ',', conflicts_with_all = ["lines", "offset", "local"])]
+    pub merge: Vec<PathBuf>,
+    /// Worker threads (default: all cores)
+    #[arg(long, value_name = "T", value_parser = threads)]
+    pub threads: Option<usize>,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub common: Common,
+}
+
+/// `itgfx viewpoints MESH`.
+#[derive(Debug, Args)]
+#[command(after_help = "MESH is an .obj file or a built-in (see itgfx complexity --help). \
+                        The first surface a ray meets is what it sees.\n\
+                        Pictures are PNG renders and PLY with vertex colours.")]
+pub struct ViewpointsOptions {
+    /// An .obj file or a built-in scene name
+    #[arg(value_name = "MESH")]
+    pub mesh: Option<String>,
+    /// Points of a subdivided icosahedron: 12, 42, 162, 642 or 2562
+    #[arg(long, value_name = "N", default_value = "42", value_parser = viewpoint_count, help_heading = "Channel")]
+    pub viewpoints: u32,
+    /// R x R rays per viewpoint over the cone around the object; small polygons need more
+    #[arg(long, value_name = "R", default_value = "128", value_parser = resolution, help_heading = "Channel")]
+    pub resolution: u32,
+    /// Viewpoint distance in bounding-sphere radii (1.05..=1000: f32 tracing stays exact enough)
+    #[arg(long, value_name = "D", default_value = "3", value_parser = distance, help_heading = "Channel")]
+    pub distance: f64,
+    /// p(V) uniform instead of the projected area
+    #[arg(long, help_heading = "Channel")]
+    pub uniform_input: bool,
+    /// Count the background as an extra polygon
+    #[arg(long, help_heading = "Channel")]
+    pub background: bool,
+    /// Split every polygon into K x K cells (1..=64)
+    #[arg(long, value_name = "K", default_value = "1", value_parser = vp_subdivide, help_heading = "Channel")]
+    pub subdivide: u32,
+    /// Tracing backend: cpu, reference or vulkan
+    #[arg(long, value_name = "cpu|reference|vulkan", default_value = "cpu", value_parser = backend)]
+    pub backend: BackendChoice,
+    /// Worker threads (default: all cores)
+    #[arg(long, value_name = "T", value_parser = threads)]
+    pub threads: Option<usize>,
+    /// At most N best views, greedy
+    #[arg(long, value_name = "N", default_value = "6", value_parser = best_n, help_heading = "Selection")]
+    pub best_n: usize,
+    /// Stop once the views capture F of I(V;O), F in (0, 1]
+    #[arg(long, value_name = "F", default_value = "0.9", value_parser = capture, help_heading = "Selection")]
+    pub capture: f64,
+    /// Steps of the guided exploration path from the best view
+    #[arg(long, value_name = "S", default_value = "12", value_parser = explore, help_heading = "Selection")]
+    pub explore: usize,
+    /// Every picture below under its default name in DIR
+    #[arg(long, value_name = "DIR", value_parser = out_path, help_heading = "Pictures")]
+    pub out: Option<PathBuf>,
+    /// The best view (best.png)
+    #[arg(long, value_name = "F", value_parser = out_path, help_heading = "Pictures")]
+    pub best_image: Option<PathBuf>,
+    /// The worst view (worst.png)
+    #[arg(long, value_name = "F", value_parser = out_path, help_heading = "Pictures")]
+    pub worst_image: Option<PathBuf>,
+    /// The best-n views side by side (best-n.png)
+    #[arg(long, value_name = "F", value_parser = out_path, help_heading = "Pictures")]
+    pub best_n_image: Option<PathBuf>,
+    /// Saliency from the best importance-driven view (best-importance.png)
+    #[arg(long, value_name = "F", value_parser = out_path, help_heading = "Pictures")]
+    pub importance_image: Option<PathBuf>,
+    /// The viewpoint sphere coloured by VMI (top) and VE (bottom), best view red (sphere.png)
+    #[arg(long, value_name = "F", value_parser = out_path, help_heading = "Pictures")]
+    pub sphere_image: Option<PathBuf>,
+    /// Mesh saliency from the best view (saliency.png)
+    #[arg(long, value_name = "F", value_parser = out_path, help_heading = "Pictures")]
+    pub saliency_image: Option<PathBuf>,
+    /// Information-theoretic ambient occlusion from the best view (ao.png)
+    #[arg(long, value_name = "F", value_parser = out_path, help_heading = "Pictures")]
+    pub ao_image: Option<PathBuf>,
+    /// I(o;V) per polygon from the best view (info.png)
+    #[arg(long, value_name = "F", value_parser = out_path, help_heading = "Pictures")]
+    pub info_image: Option<PathBuf>,
+    /// Ambient occlusion as PLY (ao.ply)
+    #[arg(long, value_name = "F", value_parser = out_path, help_heading = "Pictures")]
+    pub export_ply: Option<PathBuf>,
+    /// Mesh saliency as PLY (saliency.ply)
+    #[arg(long, value_name = "F", value_parser = out_path, help_heading = "Pictures")]
+    pub saliency_ply: Option<PathBuf>,
+    /// Pictures average each polygon with its neighbours K times; JSON values are never smoothed
+    #[arg(long, value_name = "K", default_value = "2", value_parser = smooth, help_heading = "Pictures")]
+    pub smooth: u32,
+    /// I(o;V), saliency and p(o) per polygon in the output
+    #[arg(long)]
+    pub per_polygon: bool,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub common: Common,
+}

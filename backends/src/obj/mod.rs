@@ -31,7 +31,7 @@ use crate::scene::{Limits, Material, Scene, SceneError};
 /// the [`Limits::MAX_TRIANGLES`] cap).
 pub const MAX_OBJ_BYTES: u64 = 1 << 30;
 
-/// Largest MTL file read, in bytes.
+/// Largest MTL file read, and most MTL bytes of one OBJ, in bytes.
 pub const MAX_MTL_BYTES: u64 = 16 << 20;
 
 /// Coordinates whose magnitude passes `2^RESCALE_EXPONENT` (or whose
@@ -117,12 +117,18 @@ pub fn load_obj(path: &Path) -> Result<Scene, SceneError> {
     })
 }
 
-/// One face as read: its line, vertex indices, group and `usemtl`.
+/// Most vertices read: three per triangle of the [`Limits::MAX_TRIANGLES`]
+/// cap (a triangle soup such as [`write_obj`] writes).
+pub const MAX_VERTICES: u64 = 3 * Limits::MAX_TRIANGLES;
+
+/// One face as read: its line, its vertex indices (`indices[start..start + len]`),
+/// group and `usemtl` (index into the names used).
 struct Face {
     line: usize,
-    vertices: Vec<u32>,
+    start: usize,
+    len: usize,
     group: usize,
-    material: Option<(String, usize)>,
+    material: Option<usize>,
 }
 
 fn decode<'a>(path: &str, bytes: &'a [u8]) -> Result<&'a str, SceneError> {
@@ -145,9 +151,14 @@ pub fn parse_obj(
     let mut warnings = Warnings::default();
     let mut verts: Vec<DVec3> = Vec::new();
     let mut faces: Vec<Face> = Vec::new();
+    let mut indices: Vec<u32> = Vec::new();
     let mut groups: Vec<String> = vec!["unnamed_object".into()];
     let mut group = 0usize;
-    let mut material: Option<(String, usize)> = None;
+    // `usemtl` names with the line of their first use.
+    let mut used: Vec<(String, usize)> = Vec::new();
+    let mut used_index: HashMap<String, usize> = HashMap::new();
+    let mut material: Option<usize> = None;
+    let mut mtl_bytes = 0u64;
     let mut materials: Vec<Material> = vec![Material::default()];
     let mut by_name: HashMap<String, usize> = HashMap::new();
     let (mut triangles, mut patches) = (0u64, 0u64);
@@ -170,6 +181,12 @@ pub fn parse_obj(
                         return Err(err(name, format!("line {line}: vertex coordinate {s:?} is not finite")));
                     }
                     p[k] = v;
+                }
+                if verts.len() as u64 >= MAX_VERTICES {
+                    return Err(err(
+                        name,
+                        format!("line {line}: more than {MAX_VERTICES} vertices (3 per triangle of the limit)"),
+                    ));
                 }
                 verts.push(DVec3::from_array(p));
             }
@@ -195,7 +212,7 @@ pub fn parse_obj(
                 triangles += idx.len() as u64 - 2;
                 patches += 1;
                 Limits::check(name, triangles, patches)?;
-                let mut vertices = Vec::with_capacity(idx.len());
+                let start = indices.len();
                 for s in &idx {
                     let first = s.split('/').next().unwrap_or("");
                     let i: i64 = first.parse().map_err(|_| {
@@ -211,9 +228,9 @@ pub fn parse_obj(
                             ),
                         ));
                     }
-                    vertices.push(k as u32);
+                    indices.push(k as u32);
                 }
-                faces.push(Face { line, vertices, group, material: material.clone() });
+                faces.push(Face { line, start, len: idx.len(), group, material });
             }
             "g" | "o" => {
                 let g = it.collect::<Vec<_>>().join(" ");
@@ -222,11 +239,21 @@ pub fn parse_obj(
             }
             "usemtl" => {
                 let m = it.collect::<Vec<_>>().join(" ");
-                material = Some((m, line));
+                material = Some(*used_index.entry(m).or_insert_with_key(|m| {
+                    used.push((m.clone(), line));
+                    used.len() - 1
+                }));
             }
             "mtllib" => {
                 for lib in it {
                     let (shown, bytes) = mtl(lib)?;
+                    mtl_bytes += bytes.len() as u64;
+                    if mtl_bytes > MAX_MTL_BYTES {
+                        return Err(err(
+                            name,
+                            format!("line {line}: mtllib files together pass {MAX_MTL_BYTES} bytes"),
+                        ));
+                    }
                     let t = decode(&shown, &bytes)?;
                     for m in mtl::parse_mtl(&shown, t, &mut warnings)? {
                         by_name.insert(m.name.clone(), materials.len());
@@ -257,13 +284,13 @@ pub fn parse_obj(
     scene.triangles.reserve(triangles as usize);
     let mut in_group = vec![0usize; groups.len()];
     for (f, face) in faces.iter().enumerate() {
-        let material = match &face.material {
+        let material = match face.material.map(|u| &used[u]) {
             None => 0,
             Some((m, l)) => *by_name
                 .get(m)
                 .ok_or_else(|| err(name, format!("line {l}: usemtl {m:?}: no such material in the mtllib files")))?,
         };
-        let poly: Vec<DVec3> = face.vertices.iter().map(|&i| verts[i as usize]).collect();
+        let poly: Vec<DVec3> = indices[face.start..face.start + face.len].iter().map(|&i| verts[i as usize]).collect();
         let t =
             polygon::triangulate(&poly).map_err(|m| err(name, format!("line {}: face {} {m}", face.line, f + 1)))?;
         if t.deviation > polygon::PLANAR_TOLERANCE {

@@ -93,6 +93,10 @@ fn huge_and_tiny_tetrahedra_load_with_the_same_area_ratios() {
         assert_eq!(p.triangles, Prepared::new(&unit).triangles, "{scale:e}");
     }
     assert!(obj(&tetra(1e300, 0.0)).unwrap().warnings[0].starts_with("rescaled:"));
+    // Subnormal sizes, and tiny sizes far from the origin, neither overflow nor panic.
+    assert!(obj(&tetra(1e-310, 0.0)).is_ok());
+    let e = obj(&tetra(1e-300, 1e10)).unwrap_err().to_string();
+    assert!(e.contains("degenerate"), "{e}");
     // Too far out for f64 to tell the vertices apart: a clear error.
     let e = obj(&tetra(1.0, 1e300)).unwrap_err().to_string();
     assert!(e.contains("degenerate"), "{e}");

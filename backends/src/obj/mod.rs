@@ -271,13 +271,13 @@ pub fn parse_obj(
     if faces.is_empty() {
         return Err(err(name, "no faces (f lines) found".into()));
     }
-    let scale = rescale(&verts);
-    if scale != 1.0 {
+    let k = rescale_exponent(&verts);
+    if k != 0 {
         for v in &mut verts {
-            *v *= scale;
+            *v = scale_by(*v, k);
         }
         warnings.add("rescaled", || {
-            format!("{name}: coordinates multiplied by 2^{} so that areas stay finite in f64", scale.log2())
+            format!("{name}: coordinates multiplied by 2^{k} so that areas stay finite and non-zero in f64")
         });
     }
     let mut scene = Scene { name: name.to_string(), materials, ..Scene::default() };
@@ -313,10 +313,11 @@ pub fn parse_obj(
     Ok(scene)
 }
 
-/// The power of two that brings the coordinates' magnitude (or, for tiny
-/// scenes, their extent) near 1 when it is outside `2^±RESCALE_EXPONENT`;
-/// else 1.
-fn rescale(verts: &[DVec3]) -> f64 {
+/// The exponent `k` such that multiplying by `2^k` brings the coordinates'
+/// magnitude near 1 when it is above `2^RESCALE_EXPONENT`, or, for tiny
+/// scenes, their extent near 1 when it is below `2^-RESCALE_EXPONENT` (but
+/// never the magnitude above `2^RESCALE_EXPONENT`); else 0.
+fn rescale_exponent(verts: &[DVec3]) -> i32 {
     let mut lo = DVec3::splat(f64::INFINITY);
     let mut hi = DVec3::splat(f64::NEG_INFINITY);
     for v in verts {
@@ -325,17 +326,19 @@ fn rescale(verts: &[DVec3]) -> f64 {
     }
     let magnitude = lo.abs().max(hi.abs()).max_element();
     let extent = (hi * 0.5 - lo * 0.5).max_element() * 2.0;
-    let limit = 2f64.powi(RESCALE_EXPONENT);
-    let reference = if magnitude > limit {
-        magnitude
-    } else if extent > 0.0 && extent < 1.0 / limit {
-        extent
+    let e = |x: f64| x.log2().floor() as i32;
+    if magnitude > 2f64.powi(RESCALE_EXPONENT) {
+        -e(magnitude)
+    } else if extent > 0.0 && extent < 2f64.powi(-RESCALE_EXPONENT) {
+        (-e(extent)).min(RESCALE_EXPONENT - e(magnitude))
     } else {
-        return 1.0;
-    };
-    let e = reference.log2().floor() as i32;
-    // Two factors: 2^±1023 alone is not a normal number.
-    2f64.powi(-e / 2) * 2f64.powi(-(e - e / 2))
+        0
+    }
+}
+
+/// `v · 2^k` in two exact steps (`2^k` alone may not be a normal number).
+fn scale_by(v: DVec3, k: i32) -> DVec3 {
+    v * 2f64.powi(k / 2) * 2f64.powi(k - k / 2)
 }
 
 /// Writes a scene as OBJ (one `f` per triangle, one group per patch run), so

@@ -271,7 +271,8 @@ pub fn parse_obj(
     if faces.is_empty() {
         return Err(err(name, "no faces (f lines) found".into()));
     }
-    let k = rescale_exponent(&verts);
+    // From the vertices faces use: unused ones do not count for the scene's size.
+    let k = rescale_exponent(indices.iter().map(|&i| verts[i as usize]));
     if k != 0 {
         for v in &mut verts {
             *v = scale_by(*v, k);
@@ -317,12 +318,12 @@ pub fn parse_obj(
 /// magnitude near 1 when it is above `2^RESCALE_EXPONENT`, or, for tiny
 /// scenes, their extent near 1 when it is below `2^-RESCALE_EXPONENT` (but
 /// never the magnitude above `2^RESCALE_EXPONENT`); else 0.
-fn rescale_exponent(verts: &[DVec3]) -> i32 {
+fn rescale_exponent(used: impl Iterator<Item = DVec3>) -> i32 {
     let mut lo = DVec3::splat(f64::INFINITY);
     let mut hi = DVec3::splat(f64::NEG_INFINITY);
-    for v in verts {
-        lo = lo.min(*v);
-        hi = hi.max(*v);
+    for v in used {
+        lo = lo.min(v);
+        hi = hi.max(v);
     }
     let magnitude = lo.abs().max(hi.abs()).max_element();
     let extent = (hi * 0.5 - lo * 0.5).max_element() * 2.0;

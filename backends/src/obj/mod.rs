@@ -31,7 +31,7 @@ use crate::scene::{Limits, Material, Scene, SceneError};
 /// the [`Limits::MAX_TRIANGLES`] cap).
 pub const MAX_OBJ_BYTES: u64 = 1 << 30;
 
-/// Largest MTL file read, in bytes.
+/// Largest MTL file read, and most MTL bytes of one OBJ, in bytes.
 pub const MAX_MTL_BYTES: u64 = 16 << 20;
 
 /// Coordinates whose magnitude passes `2^RESCALE_EXPONENT` (or whose
@@ -117,12 +117,18 @@ pub fn load_obj(path: &Path) -> Result<Scene, SceneError> {
     })
 }
 
-/// One face as read: its line, vertex indices, group and `usemtl`.
+/// Most vertices read: three per triangle of the [`Limits::MAX_TRIANGLES`]
+/// cap (a triangle soup such as [`write_obj`] writes).
+pub const MAX_VERTICES: u64 = 3 * Limits::MAX_TRIANGLES;
+
+/// One face as read: its line, its vertex indices (`indices[start..start + len]`),
+/// group and `usemtl` (index into the names used).
 struct Face {
     line: usize,
-    vertices: Vec<u32>,
+    start: usize,
+    len: usize,
     group: usize,
-    material: Option<(String, usize)>,
+    material: Option<usize>,
 }
 
 fn decode<'a>(path: &str, bytes: &'a [u8]) -> Result<&'a str, SceneError> {
@@ -145,9 +151,14 @@ pub fn parse_obj(
     let mut warnings = Warnings::default();
     let mut verts: Vec<DVec3> = Vec::new();
     let mut faces: Vec<Face> = Vec::new();
+    let mut indices: Vec<u32> = Vec::new();
     let mut groups: Vec<String> = vec!["unnamed_object".into()];
     let mut group = 0usize;
-    let mut material: Option<(String, usize)> = None;
+    // `usemtl` names with the line of their first use.
+    let mut used: Vec<(String, usize)> = Vec::new();
+    let mut used_index: HashMap<String, usize> = HashMap::new();
+    let mut material: Option<usize> = None;
+    let mut mtl_bytes = 0u64;
     let mut materials: Vec<Material> = vec![Material::default()];
     let mut by_name: HashMap<String, usize> = HashMap::new();
     let (mut triangles, mut patches) = (0u64, 0u64);
@@ -170,6 +181,12 @@ pub fn parse_obj(
                         return Err(err(name, format!("line {line}: vertex coordinate {s:?} is not finite")));
                     }
                     p[k] = v;
+                }
+                if verts.len() as u64 >= MAX_VERTICES {
+                    return Err(err(
+                        name,
+                        format!("line {line}: more than {MAX_VERTICES} vertices (3 per triangle of the limit)"),
+                    ));
                 }
                 verts.push(DVec3::from_array(p));
             }
@@ -195,7 +212,7 @@ pub fn parse_obj(
                 triangles += idx.len() as u64 - 2;
                 patches += 1;
                 Limits::check(name, triangles, patches)?;
-                let mut vertices = Vec::with_capacity(idx.len());
+                let start = indices.len();
                 for s in &idx {
                     let first = s.split('/').next().unwrap_or("");
                     let i: i64 = first.parse().map_err(|_| {
@@ -211,9 +228,9 @@ pub fn parse_obj(
                             ),
                         ));
                     }
-                    vertices.push(k as u32);
+                    indices.push(k as u32);
                 }
-                faces.push(Face { line, vertices, group, material: material.clone() });
+                faces.push(Face { line, start, len: idx.len(), group, material });
             }
             "g" | "o" => {
                 let g = it.collect::<Vec<_>>().join(" ");
@@ -222,11 +239,21 @@ pub fn parse_obj(
             }
             "usemtl" => {
                 let m = it.collect::<Vec<_>>().join(" ");
-                material = Some((m, line));
+                material = Some(*used_index.entry(m).or_insert_with_key(|m| {
+                    used.push((m.clone(), line));
+                    used.len() - 1
+                }));
             }
             "mtllib" => {
                 for lib in it {
                     let (shown, bytes) = mtl(lib)?;
+                    mtl_bytes += bytes.len() as u64;
+                    if mtl_bytes > MAX_MTL_BYTES {
+                        return Err(err(
+                            name,
+                            format!("line {line}: mtllib files together pass {MAX_MTL_BYTES} bytes"),
+                        ));
+                    }
                     let t = decode(&shown, &bytes)?;
                     for m in mtl::parse_mtl(&shown, t, &mut warnings)? {
                         by_name.insert(m.name.clone(), materials.len());
@@ -244,26 +271,27 @@ pub fn parse_obj(
     if faces.is_empty() {
         return Err(err(name, "no faces (f lines) found".into()));
     }
-    let scale = rescale(&verts);
-    if scale != 1.0 {
+    // From the vertices faces use: unused ones do not count for the scene's size.
+    let k = rescale_exponent(indices.iter().map(|&i| verts[i as usize]));
+    if k != 0 {
         for v in &mut verts {
-            *v *= scale;
+            *v = scale_by(*v, k);
         }
         warnings.add("rescaled", || {
-            format!("{name}: coordinates multiplied by 2^{} so that areas stay finite in f64", scale.log2())
+            format!("{name}: coordinates multiplied by 2^{k} so that areas stay finite and non-zero in f64")
         });
     }
     let mut scene = Scene { name: name.to_string(), materials, ..Scene::default() };
     scene.triangles.reserve(triangles as usize);
     let mut in_group = vec![0usize; groups.len()];
     for (f, face) in faces.iter().enumerate() {
-        let material = match &face.material {
+        let material = match face.material.map(|u| &used[u]) {
             None => 0,
             Some((m, l)) => *by_name
                 .get(m)
                 .ok_or_else(|| err(name, format!("line {l}: usemtl {m:?}: no such material in the mtllib files")))?,
         };
-        let poly: Vec<DVec3> = face.vertices.iter().map(|&i| verts[i as usize]).collect();
+        let poly: Vec<DVec3> = indices[face.start..face.start + face.len].iter().map(|&i| verts[i as usize]).collect();
         let t =
             polygon::triangulate(&poly).map_err(|m| err(name, format!("line {}: face {} {m}", face.line, f + 1)))?;
         if t.deviation > polygon::PLANAR_TOLERANCE {
@@ -286,29 +314,32 @@ pub fn parse_obj(
     Ok(scene)
 }
 
-/// The power of two that brings the coordinates' magnitude (or, for tiny
-/// scenes, their extent) near 1 when it is outside `2^±RESCALE_EXPONENT`;
-/// else 1.
-fn rescale(verts: &[DVec3]) -> f64 {
+/// The exponent `k` such that multiplying by `2^k` brings the coordinates'
+/// magnitude near 1 when it is above `2^RESCALE_EXPONENT`, or, for tiny
+/// scenes, their extent near 1 when it is below `2^-RESCALE_EXPONENT` (but
+/// never the magnitude above `2^RESCALE_EXPONENT`); else 0.
+fn rescale_exponent(used: impl Iterator<Item = DVec3>) -> i32 {
     let mut lo = DVec3::splat(f64::INFINITY);
     let mut hi = DVec3::splat(f64::NEG_INFINITY);
-    for v in verts {
-        lo = lo.min(*v);
-        hi = hi.max(*v);
+    for v in used {
+        lo = lo.min(v);
+        hi = hi.max(v);
     }
     let magnitude = lo.abs().max(hi.abs()).max_element();
     let extent = (hi * 0.5 - lo * 0.5).max_element() * 2.0;
-    let limit = 2f64.powi(RESCALE_EXPONENT);
-    let reference = if magnitude > limit {
-        magnitude
-    } else if extent > 0.0 && extent < 1.0 / limit {
-        extent
+    let e = |x: f64| x.log2().floor() as i32;
+    if magnitude > 2f64.powi(RESCALE_EXPONENT) {
+        -e(magnitude)
+    } else if extent > 0.0 && extent < 2f64.powi(-RESCALE_EXPONENT) {
+        (-e(extent)).min(RESCALE_EXPONENT - e(magnitude))
     } else {
-        return 1.0;
-    };
-    let e = reference.log2().floor() as i32;
-    // Two factors: 2^±1023 alone is not a normal number.
-    2f64.powi(-e / 2) * 2f64.powi(-(e - e / 2))
+        0
+    }
+}
+
+/// `v · 2^k` in two exact steps (`2^k` alone may not be a normal number).
+fn scale_by(v: DVec3, k: i32) -> DVec3 {
+    v * 2f64.powi(k / 2) * 2f64.powi(k - k / 2)
 }
 
 /// Writes a scene as OBJ (one `f` per triangle, one group per patch run), so

@@ -316,6 +316,12 @@ impl Scene {
                 )));
             }
         }
+        if let Some((i, p)) = self.patches.iter().enumerate().find(|(_, p)| !(p.area.is_finite() && p.area > 0.0)) {
+            return Err(SceneError::Geometry(format!(
+                "{}: patch {i} ({:?}) has area {:e}, not a positive finite number in f64",
+                self.name, p.name, p.area
+            )));
+        }
         Ok(())
     }
 }

@@ -69,7 +69,9 @@ impl Serialize for Fixed {
 impl<'de> Deserialize<'de> for Fixed {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let text = <std::borrow::Cow<'de, str>>::deserialize(d)?;
-        text.parse().map(Fixed).map_err(|_| serde::de::Error::custom("expected a fixed-point sum: a decimal integer string"))
+        text.parse()
+            .map(Fixed)
+            .map_err(|_| serde::de::Error::custom("expected a fixed-point sum: a decimal integer string"))
     }
 }
 
@@ -174,10 +176,7 @@ impl VisibilityCounts {
     pub fn validate(&self) -> Result<(), CountsError> {
         let n = self.areas.len();
         if n == 0 || self.scene.patches != n as u64 {
-            return Err(invalid(format!(
-                "the scene has {} patches but {n} areas are listed",
-                self.scene.patches
-            )));
+            return Err(invalid(format!("the scene has {} patches but {n} areas are listed", self.scene.patches)));
         }
         if let Some((i, a)) = self.areas.iter().enumerate().find(|(_, a)| !(a.is_finite() && **a > 0.0)) {
             return Err(invalid(format!("patch {i} has area {a}: areas must be positive and finite")));
@@ -235,11 +234,13 @@ impl VisibilityCounts {
             if self.local && blk.segments.checked_add(blk.escaped) != Some(blk.lines) {
                 return Err(invalid(format!("block {k}: local lines reaching a patch and escaping do not add up")));
             }
-            grand = grand.checked_add(pairs).and_then(|g| g.checked_add(bg)).ok_or_else(|| overflow("the total count"))?;
+            grand =
+                grand.checked_add(pairs).and_then(|g| g.checked_add(bg)).ok_or_else(|| overflow("the total count"))?;
             let c = &blk.continuous;
             let s = c.samples as f64 * (1.0 + 1e-9);
             let (sum, sq) = (c.sum.to_f64(), c.sum_sq.to_f64());
-            if c.samples > blk.segments || sum.abs() > LOG_BOUND * s || !(sq >= 0.0 && sq <= LOG_BOUND * LOG_BOUND * s) {
+            if c.samples > blk.segments || sum.abs() > LOG_BOUND * s || !(sq >= 0.0 && sq <= LOG_BOUND * LOG_BOUND * s)
+            {
                 return Err(invalid(format!("block {k}: the I_S^c sums are out of range")));
             }
             samples = samples.checked_add(c.samples).ok_or_else(|| overflow("the sample count"))?;
@@ -470,10 +471,13 @@ impl VisibilityCounts {
                 lines: add(a.lines, b.lines, "a block's line count")?,
                 segments: add(a.segments, b.segments, "a block's segment count")?,
                 escaped: add(a.escaped, b.escaped, "a block's background count")?,
-                pairs: merge_sorted(&a.pairs, &b.pairs, |p| (p.from, p.to), |p| p.count, |p, c| PairCount {
-                    count: c,
-                    ..*p
-                })?,
+                pairs: merge_sorted(
+                    &a.pairs,
+                    &b.pairs,
+                    |p| (p.from, p.to),
+                    |p| p.count,
+                    |p, c| PairCount { count: c, ..*p },
+                )?,
                 background: merge_sorted(&a.background, &b.background, |p| p.0, |p| p.1, |p, c| (p.0, c))?,
                 continuous: a.continuous.checked_add(&b.continuous).ok_or_else(|| overflow("an I_S^c sum"))?,
             });

@@ -570,3 +570,59 @@ pub(super) fn merge_sorted<T: Copy, K: Ord>(
     out.extend_from_slice(&b[j..]);
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A hand-made run of one local line per block over two patches.
+    fn tiny(name: &str, start: u64) -> VisibilityCounts {
+        let areas = vec![1.0, 0.5];
+        let block = BlockCounts {
+            lines: 1,
+            segments: 1,
+            escaped: 0,
+            pairs: vec![PairCount { from: 0, to: 1, count: 1 }],
+            background: Vec::new(),
+            continuous: ContinuousSums { samples: 1, sum: FixedSum::of(0.5), sum_sq: FixedSum::of(0.25) },
+        };
+        VisibilityCounts {
+            scene: SceneFingerprint::of(name, &areas),
+            areas,
+            local: true,
+            seed: 1,
+            ranges: vec![(start, start + 2)],
+            blocks: vec![block.clone(), block],
+            endpoints: vec![2, 0],
+            endpoint_log: vec![FixedSum::of(1.0), FixedSum::default()],
+        }
+    }
+
+    /// JSON strings carry any name: the line-based version 1 broke at a newline.
+    #[test]
+    fn a_name_with_a_newline_round_trips() {
+        let c = tiny("two\nlines \"quoted\"", 0);
+        c.validate().unwrap();
+        let mut out = Vec::new();
+        c.save(&c.scene.name, &mut out).unwrap();
+        let (name, back) = VisibilityCounts::load(std::str::from_utf8(&out).unwrap()).unwrap();
+        assert_eq!(name, "two\nlines \"quoted\"");
+        assert_eq!(back, c);
+    }
+
+    /// A refused merge leaves the counts as they were; ranges join.
+    #[test]
+    fn merges_check_first_and_join_ranges() {
+        let mut a = tiny("s", 0);
+        let before = a.clone();
+        let mut far = tiny("s", 2);
+        far.blocks[0].pairs[0].count = u64::MAX;
+        assert!(a.merge(far).is_err());
+        assert!(matches!(a.merge(tiny("t", 2)), Err(CountsError::Mismatch(_))));
+        assert!(matches!(a.merge(tiny("s", 1)), Err(CountsError::Mismatch(m)) if m.contains("overlap")));
+        assert_eq!(a, before);
+        a.merge(tiny("s", 2)).unwrap();
+        assert_eq!(a.ranges, vec![(0, 4)]);
+        assert_eq!(a.blocks[0].pairs[0].count, 2);
+    }
+}

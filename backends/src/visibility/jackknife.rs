@@ -16,7 +16,7 @@ use std::borrow::Cow;
 use itgfx_core::sum::Neumaier;
 use itgfx_core::{Base, PairCount, SceneMeasures, scene_measures_from_counts};
 
-use super::counts_file::merge_sorted;
+use super::merge::merge_sorted;
 use super::{BlockCounts, ContinuousSums, VisibilityCounts};
 
 /// What `itgfx complexity` reports.

@@ -80,17 +80,8 @@ fn strs(v: &[String]) -> Vec<&str> {
 #[test]
 fn saved_runs_and_shards_reproduce_the_run_bit_for_bit() {
     let p = path("whole.counts");
-    let whole = json_of(&[
-        "complexity",
-        "cube-enclosure:2",
-        "--lines",
-        "30000",
-        "--seed",
-        "4",
-        "--save-counts",
-        &p,
-        "--json",
-    ]);
+    let whole =
+        json_of(&["complexity", "cube-enclosure:2", "--lines", "30000", "--seed", "4", "--save-counts", &p, "--json"]);
     let again = json_of(&["complexity", "cube-enclosure:2", "--seed", "4", "--merge", &p, "--json"]);
     assert_eq!(again, whole);
     let shard = |name: &str, off: &str, n: &str| {
@@ -150,7 +141,8 @@ fn bad_areas_are_refused() {
         v["areas"][0] = area;
         refused(&strs(&merge(&[&write("area.counts", &v)])), needle);
     }
-    let text = std::fs::read_to_string(save("inf.counts", &[])).unwrap().replacen("\"areas\":[1.0", "\"areas\":[1e999", 1);
+    let text =
+        std::fs::read_to_string(save("inf.counts", &[])).unwrap().replacen("\"areas\":[1.0", "\"areas\":[1e999", 1);
     let p = path("inf.counts");
     std::fs::write(&p, text).unwrap();
     refused(&strs(&merge(&[&p])), "number out of range");

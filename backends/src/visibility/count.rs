@@ -14,11 +14,11 @@ use glam::DVec3;
 use itgfx_core::PairCount;
 use rayon::prelude::*;
 
+use super::counts_file::SceneFingerprint;
 use super::{BlockCounts, ContinuousSums, CountsError, FixedSum, LineOptions, MAX_BLOCKS, VisibilityCounts};
 use crate::lines::{Line, LineRng, cosine_direction, global_line, sample_cdf};
 use crate::scene::Scene;
 use crate::tracer::{CrossingBuffer, Prepared, Tracer};
-use super::counts_file::SceneFingerprint;
 
 /// Lines per work unit.
 pub const CHUNK: u64 = 16_384;

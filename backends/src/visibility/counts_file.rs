@@ -69,7 +69,9 @@ impl Serialize for Fixed {
 impl<'de> Deserialize<'de> for Fixed {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let text = <std::borrow::Cow<'de, str>>::deserialize(d)?;
-        text.parse().map(Fixed).map_err(|_| serde::de::Error::custom("expected a fixed-point sum: a decimal integer string"))
+        text.parse()
+            .map(Fixed)
+            .map_err(|_| serde::de::Error::custom("expected a fixed-point sum: a decimal integer string"))
     }
 }
 
@@ -128,7 +130,7 @@ fn invalid(m: impl Into<String>) -> CountsError {
     CountsError::Invalid(m.into())
 }
 
-fn overflow(m: &str) -> CountsError {
+pub(super) fn overflow(m: &str) -> CountsError {
     CountsError::Overflow(m.into())
 }
 
@@ -156,7 +158,7 @@ fn check_sparse<K: PartialOrd + Copy>(
     Ok(total)
 }
 
-fn fmt_ranges(r: (u64, u64)) -> String {
+pub(super) fn fmt_ranges(r: (u64, u64)) -> String {
     format!("{}..{}", r.0, r.1)
 }
 
@@ -174,10 +176,7 @@ impl VisibilityCounts {
     pub fn validate(&self) -> Result<(), CountsError> {
         let n = self.areas.len();
         if n == 0 || self.scene.patches != n as u64 {
-            return Err(invalid(format!(
-                "the scene has {} patches but {n} areas are listed",
-                self.scene.patches
-            )));
+            return Err(invalid(format!("the scene has {} patches but {n} areas are listed", self.scene.patches)));
         }
         if let Some((i, a)) = self.areas.iter().enumerate().find(|(_, a)| !(a.is_finite() && **a > 0.0)) {
             return Err(invalid(format!("patch {i} has area {a}: areas must be positive and finite")));
@@ -235,11 +234,13 @@ impl VisibilityCounts {
             if self.local && blk.segments.checked_add(blk.escaped) != Some(blk.lines) {
                 return Err(invalid(format!("block {k}: local lines reaching a patch and escaping do not add up")));
             }
-            grand = grand.checked_add(pairs).and_then(|g| g.checked_add(bg)).ok_or_else(|| overflow("the total count"))?;
+            grand =
+                grand.checked_add(pairs).and_then(|g| g.checked_add(bg)).ok_or_else(|| overflow("the total count"))?;
             let c = &blk.continuous;
             let s = c.samples as f64 * (1.0 + 1e-9);
             let (sum, sq) = (c.sum.to_f64(), c.sum_sq.to_f64());
-            if c.samples > blk.segments || sum.abs() > LOG_BOUND * s || !(sq >= 0.0 && sq <= LOG_BOUND * LOG_BOUND * s) {
+            if c.samples > blk.segments || sum.abs() > LOG_BOUND * s || !(sq >= 0.0 && sq <= LOG_BOUND * LOG_BOUND * s)
+            {
                 return Err(invalid(format!("block {k}: the I_S^c sums are out of range")));
             }
             samples = samples.checked_add(c.samples).ok_or_else(|| overflow("the sample count"))?;
@@ -412,93 +413,6 @@ impl VisibilityCounts {
         let text = std::fs::read_to_string(path).map_err(io)?;
         Self::load(&text)
     }
-
-    /// Adds the counts of another shard of the same run: same scene, seed,
-    /// line kind and block count, line ranges disjoint from these. Integer
-    /// and fixed-point sums are exact, so any merge order gives the same
-    /// counts. On error `self` is unchanged.
-    ///
-    /// # Errors
-    /// [`CountsError::Mismatch`] naming what differs or the ranges that
-    /// overlap; [`CountsError::Overflow`] if a count would pass 64 bits.
-    pub fn merge(&mut self, other: VisibilityCounts) -> Result<(), CountsError> {
-        same_scene(&self.scene, &other.scene, "these counts are", "the others")?;
-        other.validate()?;
-        if other.local != self.local {
-            return Err(CountsError::Mismatch("cannot merge local-line and global-line counts".into()));
-        }
-        if other.seed != self.seed {
-            return Err(CountsError::Mismatch(format!(
-                "the counts are of seed {} and seed {}: shards of one run share a seed",
-                self.seed, other.seed
-            )));
-        }
-        if other.blocks.len() != self.blocks.len() {
-            return Err(CountsError::Mismatch(format!(
-                "the counts have {} and {} jackknife blocks: shards of one run share --blocks",
-                self.blocks.len(),
-                other.blocks.len()
-            )));
-        }
-        let mut ranges: Vec<(u64, u64)> = self.ranges.iter().chain(&other.ranges).copied().collect();
-        ranges.sort_unstable();
-        for w in ranges.windows(2) {
-            // Sorted: w[0] starts first; one inside the other is a repeat.
-            let inner = if w[1].1 <= w[0].1 { Some(w[1]) } else { (w[0].0 == w[1].0).then_some(w[0]) };
-            if let (Some(r), true) = (inner, w[1].0 < w[0].1) {
-                return Err(CountsError::Mismatch(format!("lines {} are counted twice", fmt_ranges(r))));
-            }
-            if w[1].0 < w[0].1 {
-                return Err(CountsError::Mismatch(format!(
-                    "line ranges {} and {} overlap",
-                    fmt_ranges(w[0]),
-                    fmt_ranges(w[1])
-                )));
-            }
-        }
-        let mut joined: Vec<(u64, u64)> = Vec::with_capacity(ranges.len());
-        for r in ranges {
-            match joined.last_mut() {
-                Some(last) if last.1 == r.0 => last.1 = r.1,
-                _ => joined.push(r),
-            }
-        }
-        let add = |a: u64, b: u64, what: &str| a.checked_add(b).ok_or_else(|| overflow(what));
-        let mut blocks = Vec::with_capacity(self.blocks.len());
-        for (a, b) in self.blocks.iter().zip(&other.blocks) {
-            blocks.push(BlockCounts {
-                lines: add(a.lines, b.lines, "a block's line count")?,
-                segments: add(a.segments, b.segments, "a block's segment count")?,
-                escaped: add(a.escaped, b.escaped, "a block's background count")?,
-                pairs: merge_sorted(&a.pairs, &b.pairs, |p| (p.from, p.to), |p| p.count, |p, c| PairCount {
-                    count: c,
-                    ..*p
-                })?,
-                background: merge_sorted(&a.background, &b.background, |p| p.0, |p| p.1, |p, c| (p.0, c))?,
-                continuous: a.continuous.checked_add(&b.continuous).ok_or_else(|| overflow("an I_S^c sum"))?,
-            });
-        }
-        let mut endpoints = self.endpoints.clone();
-        let mut endpoint_log = self.endpoint_log.clone();
-        for i in 0..endpoints.len() {
-            endpoints[i] = add(endpoints[i], other.endpoints[i], "an endpoint count")?;
-            endpoint_log[i] =
-                endpoint_log[i].checked_add(other.endpoint_log[i]).ok_or_else(|| overflow("an endpoint sum"))?;
-        }
-        let merged = Self {
-            scene: self.scene.clone(),
-            areas: self.areas.clone(),
-            local: self.local,
-            seed: self.seed,
-            ranges: joined,
-            blocks,
-            endpoints,
-            endpoint_log,
-        };
-        merged.validate()?;
-        *self = merged;
-        Ok(())
-    }
 }
 
 /// Bytes of memory per byte of counts file that reading may take: the text,
@@ -515,7 +429,12 @@ fn available_memory() -> Option<u64> {
     Some(kb.saturating_mul(1024))
 }
 
-fn same_scene(a: &SceneFingerprint, b: &SceneFingerprint, what_a: &str, what_b: &str) -> Result<(), CountsError> {
+pub(super) fn same_scene(
+    a: &SceneFingerprint,
+    b: &SceneFingerprint,
+    what_a: &str,
+    what_b: &str,
+) -> Result<(), CountsError> {
     if a.name != b.name {
         return Err(CountsError::Mismatch(format!("{what_a} of scene {:?}, {what_b} of {:?}", a.name, b.name)));
     }
@@ -534,35 +453,58 @@ fn same_scene(a: &SceneFingerprint, b: &SceneFingerprint, what_a: &str, what_b: 
     Ok(())
 }
 
-/// Merges two sorted sparse lists, adding the counts of equal keys.
-pub(super) fn merge_sorted<T: Copy, K: Ord>(
-    a: &[T],
-    b: &[T],
-    key: impl Fn(&T) -> K,
-    count: impl Fn(&T) -> u64,
-    with: impl Fn(&T, u64) -> T,
-) -> Result<Vec<T>, CountsError> {
-    let mut out = Vec::with_capacity(a.len() + b.len());
-    let (mut i, mut j) = (0, 0);
-    while i < a.len() && j < b.len() {
-        match key(&a[i]).cmp(&key(&b[j])) {
-            std::cmp::Ordering::Less => {
-                out.push(a[i]);
-                i += 1;
-            }
-            std::cmp::Ordering::Greater => {
-                out.push(b[j]);
-                j += 1;
-            }
-            std::cmp::Ordering::Equal => {
-                let c = count(&a[i]).checked_add(count(&b[j])).ok_or_else(|| overflow("a pair count"))?;
-                out.push(with(&a[i], c));
-                i += 1;
-                j += 1;
-            }
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A hand-made run of one local line per block over two patches.
+    fn tiny(name: &str, start: u64) -> VisibilityCounts {
+        let areas = vec![1.0, 0.5];
+        let block = BlockCounts {
+            lines: 1,
+            segments: 1,
+            escaped: 0,
+            pairs: vec![PairCount { from: 0, to: 1, count: 1 }],
+            background: Vec::new(),
+            continuous: ContinuousSums { samples: 1, sum: FixedSum::of(0.5), sum_sq: FixedSum::of(0.25) },
+        };
+        VisibilityCounts {
+            scene: SceneFingerprint::of(name, &areas),
+            areas,
+            local: true,
+            seed: 1,
+            ranges: vec![(start, start + 2)],
+            blocks: vec![block.clone(), block],
+            endpoints: vec![2, 0],
+            endpoint_log: vec![FixedSum::of(1.0), FixedSum::default()],
         }
     }
-    out.extend_from_slice(&a[i..]);
-    out.extend_from_slice(&b[j..]);
-    Ok(out)
+
+    /// JSON strings carry any name: the line-based version 1 broke at a newline.
+    #[test]
+    fn a_name_with_a_newline_round_trips() {
+        let c = tiny("two\nlines \"quoted\"", 0);
+        c.validate().unwrap();
+        let mut out = Vec::new();
+        c.save(&c.scene.name, &mut out).unwrap();
+        let (name, back) = VisibilityCounts::load(std::str::from_utf8(&out).unwrap()).unwrap();
+        assert_eq!(name, "two\nlines \"quoted\"");
+        assert_eq!(back, c);
+    }
+
+    /// A refused merge leaves the counts as they were; ranges join.
+    #[test]
+    fn merges_check_first_and_join_ranges() {
+        let mut a = tiny("s", 0);
+        let before = a.clone();
+        let mut far = tiny("s", 2);
+        far.blocks[0].pairs[0].count = u64::MAX;
+        assert!(a.merge(far).is_err());
+        assert!(matches!(a.merge(tiny("t", 2)), Err(CountsError::Mismatch(_))));
+        assert!(matches!(a.merge(tiny("s", 1)), Err(CountsError::Mismatch(m)) if m.contains("overlap")));
+        assert_eq!(a, before);
+        a.merge(tiny("s", 2)).unwrap();
+        assert_eq!(a.ranges, vec![(0, 4)]);
+        assert_eq!(a.blocks[0].pairs[0].count, 2);
+    }
 }

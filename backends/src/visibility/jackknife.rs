@@ -16,7 +16,7 @@ use std::borrow::Cow;
 use itgfx_core::sum::Neumaier;
 use itgfx_core::{Base, PairCount, SceneMeasures, scene_measures_from_counts};
 
-use super::counts_file::merge_sorted;
+use super::merge::merge_sorted;
 use super::{BlockCounts, ContinuousSums, VisibilityCounts};
 
 /// What `itgfx complexity` reports.
@@ -60,8 +60,7 @@ fn with_background(b: &BlockCounts, n: usize) -> Cow<'_, [PairCount]> {
     if b.background.is_empty() {
         return Cow::Borrowed(&b.pairs);
     }
-    let bg: Vec<PairCount> =
-        b.background.iter().map(|&(i, c)| PairCount { from: i, to: n as u32, count: c }).collect();
+    let bg: Vec<PairCount> = b.background.iter().map(|&(i, c)| PairCount { from: i, to: n as u32, count: c }).collect();
     Cow::Owned(add_sorted(&b.pairs, &bg))
 }
 
@@ -118,12 +117,7 @@ fn row_term(a: f64, n: u64, s: f64) -> f64 {
 /// `H_S` in nats without each block, in block order, by the running-totals
 /// identity of the module docs. `totals` are the pairs with background of
 /// all blocks, `rows` their row totals `N_i`.
-fn leave_one_out_scene_entropy(
-    a: &[f64],
-    per_block: &[&[PairCount]],
-    totals: &[PairCount],
-    rows: &[u64],
-) -> Vec<f64> {
+fn leave_one_out_scene_entropy(a: &[f64], per_block: &[&[PairCount]], totals: &[PairCount], rows: &[u64]) -> Vec<f64> {
     let n = a.len();
     let mut s = vec![0.0; n];
     {
@@ -234,8 +228,7 @@ impl VisibilityCounts {
         let used: Vec<&BlockCounts> = self.blocks.iter().filter(|b| b.lines > 0).collect();
         let (mut se, mut corrected, mut cse) = (None, None, None);
         if used.len() >= 2 {
-            let mi =
-                self.leave_one_out_mutual_information(&per_block, &totals, &rows, nats.positional_entropy, base);
+            let mi = self.leave_one_out_mutual_information(&per_block, &totals, &rows, nats.positional_entropy, base);
             let (s, c) = jackknife(measures.mutual_information, &mi);
             se = Some(s);
             corrected = Some(c);
@@ -338,7 +331,8 @@ mod tests {
         ] {
             let c = counts(spec, lines, local, blocks);
             let (per_block, totals, rows, _, nats) = c.tables();
-            let fast = c.leave_one_out_mutual_information(&per_block, &totals, &rows, nats.positional_entropy, Base::Bits);
+            let fast =
+                c.leave_one_out_mutual_information(&per_block, &totals, &rows, nats.positional_entropy, Base::Bits);
             let slow = remerged(&c, Base::Bits);
             assert_eq!(fast.len(), slow.len());
             assert!(fast.len() >= 2, "{spec}");

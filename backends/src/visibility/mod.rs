@@ -28,11 +28,12 @@
 //! ([`counts_file`]) evaluates to the same bits as the run itself.
 //!
 //! Modules: [`count`] casts lines into counts, [`counts_file`] saves, loads,
-//! validates and merges them, [`jackknife`] evaluates the measures.
+//! validates them, [`merge`] adds shards, [`jackknife`] evaluates the measures.
 
 pub mod count;
 pub mod counts_file;
 pub mod jackknife;
+pub mod merge;
 
 use std::fmt;
 

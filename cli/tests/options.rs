@@ -105,8 +105,8 @@ fn help_and_version_go_to_stdout() {
         assert!(!out.stdout.is_empty() && out.stderr.is_empty(), "{args:?}");
     }
     let s = String::from_utf8(itgfx(&["complexity", "--help"]).stdout).unwrap();
-    for (name, _) in itgfx_backends::scene::BUILT_IN {
-        assert!(s.contains(name), "built-in {name} missing from complexity help");
+    for b in itgfx_backends::scene::BUILT_IN {
+        assert!(s.contains(b.name), "built-in {} missing from complexity help", b.name);
     }
     for flag in ["--lines", "--seed", "--local", "--subdivide", "--blocks", "--backend", "--offset", "--merge"] {
         assert!(s.contains(flag), "{flag}");

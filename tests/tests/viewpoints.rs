@@ -273,7 +273,7 @@ fn tolerance_is_met_and_reported() {
 #[test]
 fn converged_vmi_is_robust_to_subdivision() {
     let coarse = solid_cube();
-    let fine = coarse.subdivided(4);
+    let fine = coarse.subdivided(4).expect("a 4x4 cube is within the size caps");
     let dirs = cube_directions();
     let measures = |s: &Scene| {
         let (ch, _) = solid_angle_channel(s, &dirs);

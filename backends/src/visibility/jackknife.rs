@@ -282,7 +282,8 @@ impl VisibilityCounts {
 mod tests {
     use super::*;
     use crate::scene::built_in;
-    use crate::tracer::{BackendChoice, Prepared, open};
+    use crate::tracer::Prepared;
+    use crate::{BackendChoice, open};
     use crate::visibility::{LineOptions, count_visibility};
 
     fn counts(spec: &str, lines: u64, local: bool, blocks: u32) -> VisibilityCounts {

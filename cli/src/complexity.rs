@@ -2,8 +2,8 @@
 
 use std::time::Instant;
 
-use itgfx_backends::scene::Scene;
 use itgfx_backends::open;
+use itgfx_backends::scene::Scene;
 use itgfx_backends::tracer::Prepared;
 use itgfx_backends::visibility::{CHUNK, LineOptions, VisibilityCounts, count_visibility};
 

@@ -199,7 +199,9 @@ pub fn run(m: &Measure) -> Result<Report, CliError> {
             // GTH elimination works on an n x n copy: refuse what cannot fit.
             let bytes = 8u64.saturating_mul(n as u64).saturating_mul(n as u64);
             if bytes > 8 << 30 {
-                return Err(CliError::usage(format!("--matrix: {n} states need {bytes} bytes of scratch; the limit is 8 GiB")));
+                return Err(CliError::usage(format!(
+                    "--matrix: {n} states need {bytes} bytes of scratch; the limit is 8 GiB"
+                )));
             }
             let w = core_::stationary_distribution(&m.data, n).map_err(|e| core_err("matrix", e))?;
             let h = core_::entropy_rate(&m.data, &w, base).map_err(|e| core_err("matrix", e))?;

@@ -9,8 +9,8 @@ use itgfx_core::Base;
 
 use crate::measure::MeasureCommand;
 use crate::values::{
-    backend, base, best_n, blocks, capture, count, distance, explore, lines, out_path, resolution, smooth, subdivide,
-    threads, viewpoint_count, vp_subdivide,
+    backend, base, best_n, blocks, capture, count, distance, explore, lines, max_subdivision, out_path, resolution,
+    smooth, subdivide, threads, tolerance, viewpoint_count, vp_subdivide,
 };
 
 /// `itgfx`: information theory for computer graphics.
@@ -128,9 +128,21 @@ pub struct ViewpointsOptions {
     /// Points of a subdivided icosahedron: 12, 42, 162, 642 or 2562
     #[arg(long, value_name = "N", default_value = "42", value_parser = viewpoint_count, help_heading = "Channel")]
     pub viewpoints: u32,
-    /// R x R rays per viewpoint over the cone around the object; small polygons need more
-    #[arg(long, value_name = "R", default_value = "128", value_parser = resolution, help_heading = "Channel")]
-    pub resolution: u32,
+    /// solid-angle: exact triangle solid angles, visibility sampled where it changes, refined to
+    /// --tolerance (converged, with standard errors); grid: R x R rays per viewpoint (plug-in counts,
+    /// biased upwards when polygons are smaller than the ray spacing)
+    #[arg(long, value_name = "solid-angle|grid", default_value = "solid-angle",
+          value_parser = ["solid-angle", "grid"], help_heading = "Channel")]
+    pub estimator: String,
+    /// Relative tolerance on every VMI (solid-angle): met when 2 standard errors <= F * VMI
+    #[arg(long, value_name = "F", default_value = "0.01", value_parser = tolerance, help_heading = "Channel")]
+    pub tolerance: f64,
+    /// Largest subdivision M (M x M visibility samples) of a triangle where visibility changes
+    #[arg(long, value_name = "M", default_value = "32", value_parser = max_subdivision, help_heading = "Channel")]
+    pub max_subdivision: u32,
+    /// R x R rays per viewpoint over the cone around the object (grid only; default 128)
+    #[arg(long, value_name = "R", value_parser = resolution, help_heading = "Channel")]
+    pub resolution: Option<u32>,
     /// Viewpoint distance in bounding-sphere radii (1.05..=1000: f32 tracing stays exact enough)
     #[arg(long, value_name = "D", default_value = "3", value_parser = distance, help_heading = "Channel")]
     pub distance: f64,

@@ -28,6 +28,8 @@ pub enum Item {
     Records(Vec<Report>),
     /// Not available (JSON `null`).
     Missing,
+    /// Yes or no (JSON `true`/`false`).
+    Flag(bool),
 }
 
 /// Named quantities in the order they are reported.
@@ -73,6 +75,12 @@ impl Report {
 
     fn text_null(&mut self, key: &str) -> &mut Self {
         self.items.push((key.to_string(), Item::Missing));
+        self
+    }
+
+    /// Adds a yes/no.
+    pub fn flag(&mut self, key: &str, v: bool) -> &mut Self {
+        self.items.push((key.to_string(), Item::Flag(v)));
         self
     }
 
@@ -135,6 +143,7 @@ impl Report {
                 Item::Texts(s) => Value::Array(s.iter().cloned().map(Value::String).collect()),
                 Item::Records(rs) => Value::Array(rs.iter().map(Report::to_json).collect()),
                 Item::Missing => Value::Null,
+                Item::Flag(b) => Value::Bool(*b),
             };
             m.insert(k.clone(), j);
         }
@@ -166,6 +175,7 @@ impl Report {
                 Item::Texts(s) => s.join(", "),
                 Item::Records(rs) => format!("{} records (use --json for all)", rs.len()),
                 Item::Missing => "n/a".into(),
+                Item::Flag(b) => if *b { "yes" } else { "no" }.into(),
             };
             out.push_str(&format!("{k:<width$}  {val}\n"));
         }

@@ -127,6 +127,26 @@ pub fn distance(s: &str) -> Result<f64, String> {
     }
 }
 
+/// `--tolerance`: a relative error on every VMI in `1e-4..=0.5` (below
+/// 1e-4 the subdivision cap, not the tolerance, decides the cost; above 0.5
+/// an estimate is no longer worth the name).
+///
+/// # Errors
+/// A reason.
+pub fn tolerance(s: &str) -> Result<f64, String> {
+    let t = real(s)?;
+    if (1e-4..=0.5).contains(&t) { Ok(t) } else { Err("must be in 1e-4..=0.5 (a relative error: 0.01 is 1%)".into()) }
+}
+
+/// `--max-subdivision`: `1..=256` (`M²` visibility rays per boundary
+/// triangle and viewpoint).
+///
+/// # Errors
+/// A reason.
+pub fn max_subdivision(s: &str) -> Result<u32, String> {
+    ranged(s, 1, 256).map(|v| v as u32)
+}
+
 /// `--capture`: a fraction in (0, 1].
 ///
 /// # Errors

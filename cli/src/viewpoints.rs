@@ -7,6 +7,7 @@ use itgfx_backends::open;
 use itgfx_backends::tracer::Prepared;
 use itgfx_backends::viewpoint::saliency::{mesh_saliency, patch_adjacency, smooth, viewpoint_saliency};
 use itgfx_backends::viewpoint::selection::{best_views, exploration, importance_information};
+use itgfx_backends::viewpoint::solid_angle::Refinement;
 use itgfx_backends::viewpoint::{ViewpointAnalysis, ViewpointChannel, ViewpointWeights, icosphere};
 
 use crate::CliError;
@@ -50,8 +51,12 @@ pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
     let base = o.common.base;
     let unit = Some(base.unit());
     let level = viewpoint_level(o.viewpoints);
-    let (resolution, distance, capture, max_views, steps, rounds) =
-        (o.resolution, o.distance, o.capture, o.best_n, o.explore, o.smooth);
+    let grid = o.estimator == "grid";
+    if !grid && o.resolution.is_some() {
+        return Err(CliError::usage("--resolution sets the ray grid: give it with --estimator grid"));
+    }
+    let resolution = o.resolution.unwrap_or(128);
+    let (distance, capture, max_views, steps, rounds) = (o.distance, o.capture, o.best_n, o.explore, o.smooth);
     let mut created = None;
     if let Some(d) = &o.out {
         if std::fs::metadata(d).is_ok_and(|m| !m.is_dir()) {
@@ -81,10 +86,24 @@ pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
     let tracer = open(o.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
     let dirs = icosphere(level);
     let mut progress = Progress::new();
-    let ch = ViewpointChannel::build(&prepared, tracer.as_ref(), &dirs, distance, resolution, &mut |d, t| {
-        progress.update(d, t);
-    })
-    .map_err(|e| CliError::usage(e.to_string()))?;
+    let mut tick = |d, t| progress.update(d, t);
+    let (ch, convergence) = if grid {
+        let ch = ViewpointChannel::build(&prepared, tracer.as_ref(), &dirs, distance, resolution, &mut tick)
+            .map_err(|e| CliError::usage(e.to_string()))?;
+        (ch, None)
+    } else {
+        let refine = Refinement {
+            distance,
+            tolerance: o.tolerance,
+            max: o.max_subdivision,
+            first: Refinement::default().first.min(o.max_subdivision),
+            weights,
+            background,
+        };
+        let (ch, c) = ViewpointChannel::build_solid_angle(&prepared, tracer.as_ref(), &dirs, &refine, &mut tick)
+            .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
+        (ch, Some(c))
+    };
     let t_channel = t0.elapsed().as_secs_f64();
     if ch.is_blind() {
         return Err(CliError::usage(format!("{spec}: no viewpoint sees any polygon (an empty mesh?)")));
@@ -105,10 +124,29 @@ pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
 
     let mut r = Report::new();
     r.text("mesh", scene.name.clone()).text("backend", tracer.name());
-    r.count("polygons", scene.patches.len() as u64)
-        .count("viewpoints", dirs.len() as u64)
-        .count("rays_per_viewpoint", ch.rays_per_viewpoint)
-        .count("channel_entries", ch.patch.len() as u64);
+    r.count("polygons", scene.patches.len() as u64).count("viewpoints", dirs.len() as u64);
+    r.text("estimator", if grid { "grid" } else { "solid-angle" });
+    if let Some(c) = &convergence {
+        let met = c.met.iter().filter(|&&m| m).count();
+        r.real("tolerance", o.tolerance, None)
+            .flag("tolerance_met", met == c.met.len())
+            .count("views_meeting_tolerance", met as u64)
+            .count("visibility_rays", c.rays)
+            .count("boundary_triangles", c.boundary_triangles)
+            .count("max_subdivision_used", u64::from(c.subdivision.iter().copied().max().unwrap_or(0)));
+        if met < c.met.len() {
+            eprintln!(
+                "itgfx: warning: {} of {} viewpoints missed --tolerance {} at --max-subdivision {} (see VMI_stderr)",
+                c.met.len() - met,
+                c.met.len(),
+                o.tolerance,
+                o.max_subdivision
+            );
+        }
+    } else {
+        r.count("rays_per_viewpoint", ch.rays_per_viewpoint);
+    }
+    r.count("channel_entries", ch.patch.len() as u64);
     r.text("p_v", if weights == ViewpointWeights::Uniform { "uniform" } else { "projected area" });
     r.text("background", if background { "an extra polygon" } else { "excluded" });
     r.real("I_VO", m.total_mutual_information, unit).real("H_O_given_V", m.conditional_entropy, unit).real(
@@ -130,6 +168,10 @@ pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
         let mut x = Report::new();
         x.reals("direction", d.to_array().to_vec());
         x.real("p_v", m.weight[v], None).real("VE", m.entropy[v], unit).real("VMI", m.mutual_information[v], unit);
+        if let Some(c) = &convergence {
+            // The builder's standard errors are in nats.
+            x.real("VMI_stderr", c.vmi_stderr[v] * base.per_nat(), unit).flag("tolerance_met", c.met[v]);
+        }
         x.maybe_real("VKL", Some(m.kullback_leibler[v]).filter(|x| !x.is_nan()), unit).real("HM", m.heuristic[v], None);
         x.maybe_real("instability", Some(instability[v]).filter(|x| x.is_finite()), unit);
         x.real("saliency", view_saliency[v], unit).real("importance_VMI", importance[v], unit);

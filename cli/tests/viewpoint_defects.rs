@@ -38,12 +38,32 @@ fn finite_where_seen(v: &serde_json::Value) -> usize {
 fn importance_vmi_is_finite_on_every_view_that_sees() {
     // Before: every one of the 12 views was "inf" (polygons hit by the rays of
     // a single view have zero saliency, so p'(o) = 0 where p(o|v) > 0).
-    let v = json(&["viewpoints", "geosphere:4", "--viewpoints", "12", "--resolution", "16", "--json"]);
+    let v = json(&[
+        "viewpoints",
+        "geosphere:4",
+        "--viewpoints",
+        "12",
+        "--estimator",
+        "grid",
+        "--resolution",
+        "16",
+        "--json",
+    ]);
     assert_eq!(finite_where_seen(&v), 12);
     let bunny = std::path::Path::new("/work/shared/data/meshes/stanford-bunny.obj");
     if bunny.is_file() {
         // Before: 35 of 42 views "inf".
-        let v = json(&["viewpoints", bunny.to_str().unwrap(), "--viewpoints", "42", "--resolution", "64", "--json"]);
+        let v = json(&[
+            "viewpoints",
+            bunny.to_str().unwrap(),
+            "--viewpoints",
+            "42",
+            "--estimator",
+            "grid",
+            "--resolution",
+            "64",
+            "--json",
+        ]);
         assert_eq!(finite_where_seen(&v), 42);
     }
 }
@@ -52,12 +72,12 @@ fn importance_vmi_is_finite_on_every_view_that_sees() {
 fn degenerate_but_valid_meshes_work() {
     // Before: "viewpoint channel: all values are zero" (no polygon salient).
     let tri = obj("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
-    let v = json(&["viewpoints", tri.to_str().unwrap(), "--resolution", "32", "--json"]);
+    let v = json(&["viewpoints", tri.to_str().unwrap(), "--estimator", "grid", "--resolution", "32", "--json"]);
     assert_eq!(v["polygons"], 1);
     assert_eq!(v["I_VO"], 0.0, "one polygon: nothing to learn from the view");
     assert!(finite_where_seen(&v) > 0);
     let quads = obj("quads.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\nf 1 2 3 4\nf 2 5 6 3\n");
-    let v = json(&["viewpoints", quads.to_str().unwrap(), "--resolution", "32", "--json"]);
+    let v = json(&["viewpoints", quads.to_str().unwrap(), "--estimator", "grid", "--resolution", "32", "--json"]);
     assert_eq!(v["polygons"], 2);
     // No salient polygon: the importance target is p(O), so I'(v;O) = VMI.
     for view in v["views"].as_array().unwrap() {
@@ -74,7 +94,19 @@ fn far_viewpoints_still_picture_the_mesh() {
     let d = std::env::temp_dir().join(format!("itgfx-vpd-far-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     let png = d.join("best.png");
-    let args = ["viewpoints", "cube", "--viewpoints", "12", "--resolution", "16", "--distance", "500", "--best-image"];
+    let args = [
+        "viewpoints",
+        "cube",
+        "--viewpoints",
+        "12",
+        "--estimator",
+        "grid",
+        "--resolution",
+        "16",
+        "--distance",
+        "500",
+        "--best-image",
+    ];
     let out = itgfx(&[&args[..], &[png.to_str().unwrap()]].concat());
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let img = image::open(&png).unwrap().to_rgb8();

@@ -24,6 +24,8 @@ fn cube_json_and_pictures() {
         obj.to_str().unwrap(),
         "--viewpoints",
         "42",
+        "--estimator",
+        "grid",
         "--resolution",
         "64",
         "--best-image",
@@ -67,6 +69,8 @@ fn built_in_mesh_writes_every_picture() {
         "table-chairs",
         "--viewpoints",
         "42",
+        "--estimator",
+        "grid",
         "--resolution",
         "48",
         "--out",
@@ -100,8 +104,45 @@ fn built_in_mesh_writes_every_picture() {
     assert!(v["exploration_path"].as_array().unwrap().len() > 1);
     assert!(v["views"][0]["saliency"].as_f64().unwrap() >= 0.0);
     // No per-polygon arrays by default.
-    let out = itgfx(&["viewpoints", "torus:12,6", "--viewpoints", "12", "--resolution", "16", "--json"]);
+    let out = itgfx(&[
+        "viewpoints",
+        "torus:12,6",
+        "--viewpoints",
+        "12",
+        "--estimator",
+        "grid",
+        "--resolution",
+        "16",
+        "--json",
+    ]);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!(v.get("saliency").is_none() && v.get("wrote").is_none());
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The default estimator (exact solid angles, visibility sampled where it
+/// changes) meets its tolerance and says so per view; `--resolution` belongs
+/// to the grid estimator only.
+#[test]
+fn default_estimator_reports_standard_errors_and_tolerance() {
+    let out = itgfx(&["viewpoints", "torus:16,8", "--viewpoints", "12", "--tolerance", "0.02", "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["estimator"], "solid-angle");
+    assert_eq!(v["tolerance_met"], true);
+    assert!(v.get("rays_per_viewpoint").is_none());
+    for view in v["views"].as_array().unwrap() {
+        let (vmi, se) = (view["VMI"].as_f64().unwrap(), view["VMI_stderr"].as_f64().unwrap());
+        assert!(se >= 0.0 && 2.0 * se <= 0.02 * vmi + 1e-12, "VMI {vmi} stderr {se}");
+        assert_eq!(view["tolerance_met"], true);
+    }
+    // The torus hides part of itself from most views: some triangles needed sampling.
+    assert!(v["boundary_triangles"].as_u64().unwrap() > 0);
+    let out = itgfx(&["viewpoints", "cube", "--resolution", "64"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--estimator grid"));
+    for bad in ["0", "0.9", "nan"] {
+        let out = itgfx(&["viewpoints", "cube", "--tolerance", bad]);
+        assert_eq!(out.status.code(), Some(2), "--tolerance {bad}");
+    }
 }

@@ -79,6 +79,6 @@ fn viewpoints_match_the_cpu_backend() {
     if !have_vulkan() {
         return;
     }
-    let args = ["viewpoints", "table-chairs", "--viewpoints", "42", "--resolution", "32"];
+    let args = ["viewpoints", "table-chairs", "--viewpoints", "42", "--estimator", "grid", "--resolution", "32"];
     assert_eq!(json_on(&args, "cpu"), json_on(&args, "vulkan"));
 }

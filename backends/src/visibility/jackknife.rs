@@ -283,8 +283,8 @@ mod tests {
     use super::*;
     use crate::scene::built_in;
     use crate::tracer::Prepared;
-    use crate::{BackendChoice, open};
     use crate::visibility::{LineOptions, count_visibility};
+    use crate::{BackendChoice, open};
 
     fn counts(spec: &str, lines: u64, local: bool, blocks: u32) -> VisibilityCounts {
         let scene = built_in(spec).unwrap();

@@ -1,14 +1,22 @@
 //! The viewpoint channel `V → O` of Part V: viewpoints on a sphere around an
-//! object, `p(o|v)` from the solid angle each polygon subtends at `v`.
+//! object, `p(o|v)` from the solid angle each polygon subtends at `v`
+//! (`a_o`, Part V eq. (2)). Two estimators build the same sparse channel:
 //!
-//! For each viewpoint, rays are cast through a stratified grid of directions
-//! covering the cone that contains the object's bounding sphere; every ray
-//! carries the same solid angle `Ω_cone / N`, so `a_o` (the projected area of
-//! polygon `o` on the sphere of directions, Part V eq. (2)) is estimated by
-//! `Ω_cone · hits_o / N` and converges as the resolution grows. The first
-//! surface a ray crosses is the polygon seen, whichever side faces the
-//! viewpoint (as a renderer without back-face culling; open meshes show their
-//! inside through holes); rays that miss see the background.
+//! * [`solid_angle`] (the CLI's default): each triangle's exact solid angle
+//!   times the fraction of it the viewpoint sees, that fraction sampled only
+//!   where visibility changes and refined until every VMI meets a relative
+//!   tolerance; exact on convex objects, with a standard error per VMI;
+//! * [`ViewpointChannel::build`], the ray grid: rays through a stratified grid
+//!   of directions covering the cone that contains the object's bounding
+//!   sphere, each carrying `Ω_cone / N`, so `a_o ≈ Ω_cone · hits_o / N`. With
+//!   many polygons smaller than the ray spacing this plug-in count is biased
+//!   upwards (docs/images and BENCHMARKS.md show by how much); it stays for
+//!   comparison and for the Vulkan conformance runs.
+//!
+//! The first surface a ray meets is the polygon seen (`Tracer::closest_hit`),
+//! whichever side faces the viewpoint (as a renderer without back-face
+//! culling; open meshes show their inside through holes); rays that miss see
+//! the background.
 //!
 //! The channel is kept sparse (a viewpoint sees at most one polygon per ray),
 //! so meshes of 10^6 polygons fit in memory. Its measures come from

@@ -5,7 +5,7 @@ use std::time::Instant;
 use itgfx_backends::open;
 use itgfx_backends::scene::Scene;
 use itgfx_backends::tracer::Prepared;
-use itgfx_backends::visibility::{CHUNK, LineOptions, VisibilityCounts, count_visibility};
+use itgfx_backends::visibility::{LineOptions, VisibilityCounts, count_visibility};
 
 use crate::CliError;
 use crate::options::ComplexityOptions;
@@ -13,19 +13,8 @@ use crate::progress::Progress;
 use crate::report::Report;
 use crate::scene::load_scene;
 
-/// Bytes the line counter allocates up front for a block of lines: one
-/// 8-byte chunk start per [`CHUNK`] lines of the largest block (backends
-/// `count_visibility` lists them before tracing).
-#[must_use]
-pub fn chunk_list_bytes(lines: u64, blocks: u32) -> u64 {
-    lines.div_ceil(u64::from(blocks.max(1))).div_ceil(CHUNK).saturating_mul(8)
-}
-
-/// The most memory the chunk list may take (256 MiB: 5e14 lines in 8 blocks).
-pub const CHUNK_LIST_LIMIT: u64 = 256 << 20;
-
 /// Checks everything `complexity` can check before loading or tracing: the
-/// scene argument, the line range and its memory, every output path.
+/// scene argument, the line range, every output path.
 ///
 /// # Errors
 /// One-line usage errors.
@@ -41,14 +30,6 @@ pub fn check(o: &ComplexityOptions) -> Result<String, CliError> {
                 o.offset, o.lines
             ))
         })?;
-        let bytes = chunk_list_bytes(o.lines, o.blocks);
-        if bytes > CHUNK_LIST_LIMIT {
-            return Err(CliError::usage(format!(
-                "--lines {}: the line counter would list {bytes} bytes of chunks up front (limit {CHUNK_LIST_LIMIT}); \
-                 run shards with --offset and --save-counts, or more --blocks",
-                o.lines
-            )));
-        }
     }
     for (flag, p) in [("--export-ply", &o.export_ply), ("--image", &o.image), ("--save-counts", &o.save_counts)] {
         if let Some(p) = p {
@@ -80,8 +61,8 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
         // Evaluate saved shards instead of tracing.
         let mut merged: Option<VisibilityCounts> = None;
         for f in &o.merge {
-            let text = std::fs::read_to_string(f).map_err(|e| CliError::usage(format!("{f:?}: {e}")))?;
-            let (_, c) = VisibilityCounts::load(&text).map_err(|e| CliError::usage(format!("{f:?}: {e}")))?;
+            let (_, c) = VisibilityCounts::read(f).map_err(|e| CliError::usage(format!("{f:?}: {e}")))?;
+            c.check_scene(&scene).map_err(|e| CliError::usage(format!("{f:?}: {e}")))?;
             match &mut merged {
                 None => merged = Some(c),
                 Some(m) => m.merge(c).map_err(|e| CliError::usage(format!("{f:?}: {e}")))?,
@@ -89,13 +70,6 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
         }
         merged.ok_or_else(|| CliError::usage("--merge: no files"))?
     };
-    if counts.areas.len() != scene.patches.len() {
-        return Err(CliError::usage(format!(
-            "--merge: the counts have {} patches, the scene {}",
-            counts.areas.len(),
-            scene.patches.len()
-        )));
-    }
     if let Some(p) = &o.save_counts {
         let mut bytes = Vec::new();
         counts.save(&scene.name, &mut bytes).map_err(|e| CliError::usage(format!("{p:?}: {e}")))?;
@@ -107,11 +81,11 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
     let mut r = Report::new();
     r.text("scene", scene.name.clone())
         .text("backend", tracer.name())
-        .text("lines_kind", if local { "local" } else { "global" });
+        .text("lines_kind", if counts.local { "local" } else { "global" });
     r.count("patches", scene.patches.len() as u64)
         .count("lines", c.lines)
         .count("segments", c.segments)
-        .count("seed", seed);
+        .count("seed", counts.seed);
     r.count("escaped", c.escaped).count("unsampled_patches", m.unsampled_patches as u64);
     r.real("H_P", m.positional_entropy, unit).real("H_S", m.scene_entropy, unit).real("H_J", m.joint_entropy, unit);
     r.real("I_S", m.mutual_information, unit);

@@ -148,7 +148,7 @@ fn shards_merge_into_one_run() {
     // A count file for another scene is refused.
     let out = itgfx(&["complexity", "cube-enclosure:4", "--merge", &list]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("patches"));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("the counts are of scene \"cube-enclosure:3\""));
 }
 
 #[test]

@@ -431,7 +431,6 @@ pub fn count_visibility(
         let mut acc = Accumulator::new(n);
         let mut background = vec![0u64; n];
         let mut block = BlockCounts { lines: count, ..BlockCounts::default() };
-        let chunks: Vec<u64> = (0..count).step_by(CHUNK as usize).collect();
         let run_wave = |w: &[u64]| -> Vec<Result<ChunkResult, CountsError>> {
             w.par_iter()
                 .map(|&k| {
@@ -457,9 +456,14 @@ pub fn count_visibility(
             }
             Ok(())
         };
-        let waves: Vec<&[u64]> = chunks.chunks(wave as usize).collect();
+        // Chunk starts are made one wave at a time: memory stays bounded
+        // whatever the line count (10^18 lines would list 5e14 chunks).
         let mut pending: Option<Vec<Result<ChunkResult, CountsError>>> = None;
-        for w in &waves {
+        let mut next_chunk = Some(0u64).filter(|_| count > 0);
+        while let Some(w0) = next_chunk {
+            let w: Vec<u64> = (0..wave).map_while(|j| w0.checked_add(j * CHUNK).filter(|&k| k < count)).collect();
+            next_chunk = w.last().and_then(|&k| k.checked_add(CHUNK)).filter(|&k| k < count);
+            let w = w.as_slice();
             let (merged, next) = match pending.take() {
                 Some(prev) => rayon::join(|| merge(prev), || run_wave(w)),
                 None => (Ok(()), run_wave(w)),

@@ -124,10 +124,10 @@ fn rate_nats<T: Real>(p: &MatrixRef<'_, T>, w: &[T]) -> f64 {
     let mut acc = Neumaier::new();
     for (i, wi) in w.iter().enumerate() {
         let wi = wi.to_f64();
-        if wi > 0.0 {
-            if let Ok(m) = mass_xlnx(p.row(i)) {
-                acc.add(wi * entropy_nats(m));
-            }
+        if wi > 0.0
+            && let Ok(m) = mass_xlnx(p.row(i))
+        {
+            acc.add(wi * entropy_nats(m));
         }
     }
     acc.value()

@@ -350,7 +350,7 @@ pub struct ImageError {
 /// [`Error::InvalidParameter`] for `peak`, [`Error::ZeroMass`] for all-zero weights.
 pub fn image_error(a: &[f64], b: &[f64], channels: usize, weights: &[f64], peak: f64) -> Result<ImageError, Error> {
     same_len(a.len(), b.len())?;
-    if channels == 0 || a.len() % channels != 0 {
+    if channels == 0 || !a.len().is_multiple_of(channels) {
         return Err(Error::LengthMismatch { expected: channels.max(1), found: a.len() });
     }
     same_len(channels, weights.len())?;

@@ -143,10 +143,10 @@ pub fn scene_measures_from_counts<T: Real>(
                 return Err(Error::LabelOutOfRange { index, label: idx as usize, groups: n });
             }
         }
-        if let Some(pr) = prev {
-            if (p.from, p.to) < pr {
-                return Err(Error::InvalidParameter { name: "pairs", value: index as f64 });
-            }
+        if let Some(pr) = prev
+            && (p.from, p.to) < pr
+        {
+            return Err(Error::InvalidParameter { name: "pairs", value: index as f64 });
         }
         prev = Some((p.from, p.to));
         row_totals[p.from as usize] += p.count;

@@ -105,12 +105,11 @@ pub(crate) fn test_triangle(
     tri: usize,
     hits: &mut Vec<Crossing>,
 ) {
-    if let Some(t) = shear.hit(&scene.triangles[tri]) {
-        if t >= l.tmin && t <= l.tmax {
+    if let Some(t) = shear.hit(&scene.triangles[tri])
+        && t >= l.tmin && t <= l.tmax {
             let cos = scene.normals[tri].dot(dir);
             hits.push(Crossing { t, patch: scene.triangle_patch[tri], cos, primitive: tri as u32 });
         }
-    }
 }
 
 /// Whether crossing `(t, primitive)` comes before `(bt, bp)` in a line's

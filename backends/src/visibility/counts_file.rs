@@ -198,15 +198,14 @@ impl VisibilityCounts {
             if r.0 >= r.1 {
                 return Err(invalid(format!("line range {} is empty or reversed", fmt_ranges(*r))));
             }
-            if let Some(next) = self.ranges.get(k + 1) {
-                if next.0 < r.1 {
+            if let Some(next) = self.ranges.get(k + 1)
+                && next.0 < r.1 {
                     return Err(CountsError::Mismatch(format!(
                         "line ranges {} and {} overlap or are out of order",
                         fmt_ranges(*r),
                         fmt_ranges(*next)
                     )));
                 }
-            }
         }
         let per_pair = if self.local { 1 } else { 2 };
         let mut grand = 0u64;
@@ -405,11 +404,10 @@ impl VisibilityCounts {
         let io = |e: std::io::Error| CountsError::Format(format!("{}: {e}", path.display()));
         let len = std::fs::metadata(path).map_err(io)?.len();
         let needed = len.saturating_mul(BYTES_PER_FILE_BYTE);
-        if let Some(available) = available_memory() {
-            if needed > available {
+        if let Some(available) = available_memory()
+            && needed > available {
                 return Err(CountsError::TooLarge { needed, available });
             }
-        }
         let text = std::fs::read_to_string(path).map_err(io)?;
         Self::load(&text)
     }

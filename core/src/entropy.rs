@@ -93,7 +93,7 @@ pub struct JointEntropies {
 impl JointEntropies {
     /// Mutual information normalised by the joint entropy, `I(X;Y) / H(X,Y)`
     /// in `[0, 1]` (Part III §3.2.3, the `Î_S = I_S / H_J` normalisation
-    /// beside eq. (51), used for image alignment by [Stu97]). 0 when
+    /// beside eq. (51), used for image alignment by \[Stu97\]). 0 when
     /// `H(X,Y) = 0` (both variables constant: nothing is shared).
     #[must_use]
     pub fn mi_over_joint(&self) -> f64 {
@@ -102,7 +102,7 @@ impl JointEntropies {
 
     /// Studholme's normalised mutual information `(H(X) + H(Y)) / H(X,Y)`
     /// in `[1, 2]`, which equals `1 + I(X;Y)/H(X,Y)` by Part II eq. (7)
-    /// ([Stu97], cited in Part III §3.2.3); invariant to the overlap's size.
+    /// (\[Stu97\], cited in Part III §3.2.3); invariant to the overlap's size.
     /// 1 when `H(X,Y) = 0`.
     #[must_use]
     pub fn studholme_nmi(&self) -> f64 {

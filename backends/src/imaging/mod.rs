@@ -9,8 +9,8 @@
 //!   similarity metrics, every one computed by `itgfx-core`'s
 //!   [`itgfx_core::joint_entropies`] (Part II eq. (7); Part III §3.2.3).
 //! * [`powell`]: Powell's direction-set optimiser with Brent line searches.
-//! * [`register`]: the multiresolution registration driver.
-//! * [`segment`]: BSP split by the greatest gain of `I(R;X)` and merge by the
+//! * [`mod@register`]: the multiresolution registration driver.
+//! * [`mod@segment`]: BSP split by the greatest gain of `I(R;X)` and merge by the
 //!   core's agglomerative information bottleneck.
 
 pub mod gray;

@@ -66,7 +66,7 @@ fn known_transform_recovered() {
     assert!(v["rotation_error_deg"].as_f64().unwrap() < 0.5);
     assert!(v["translation_error_px"].as_f64().unwrap() < 0.5);
     assert!(v["MI"].as_f64().unwrap() > v["MI_initial"].as_f64().unwrap());
-    for f in ["registered.png", "checkerboard.png", "overlay.png", "joint.png", "trace.png"] {
+    for f in ["registered.png", "checkerboard.png", "overlay.png", "joint.png", "joint-initial.png", "trace.png"] {
         assert_eq!(&std::fs::read(r.join(f)).unwrap()[1..4], b"PNG", "{f}");
     }
     let saved: serde_json::Value = serde_json::from_slice(&std::fs::read(r.join("result.json")).unwrap()).unwrap();

@@ -128,7 +128,8 @@ pub struct RegisterOptions {
     /// The true transform (transform.json from `itgfx phantom`): errors are reported
     #[arg(long, value_name = "transform.json")]
     pub truth: Option<PathBuf>,
-    /// Directory for registered.png, checkerboard.png, overlay.png, joint.png, trace.png, result.json
+    /// Directory for registered.png, checkerboard.png, overlay.png, joint.png, joint-initial.png, trace.png,
+    /// result.json
     #[arg(long, value_name = "DIR", value_parser = out_path)]
     pub out: PathBuf,
     /// Histogram bins per axis

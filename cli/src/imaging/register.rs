@@ -72,7 +72,8 @@ pub fn read_truth(path: &Path) -> Result<Rigid2, CliError> {
     }
 }
 
-const FILES: [&str; 6] = ["registered.png", "checkerboard.png", "overlay.png", "joint.png", "trace.png", "result.json"];
+const FILES: [&str; 7] =
+    ["registered.png", "checkerboard.png", "overlay.png", "joint.png", "joint-initial.png", "trace.png", "result.json"];
 
 /// Registers, writes the pictures and `result.json`, returns the report.
 ///
@@ -121,12 +122,15 @@ pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
     write_rgb(&checkerboard(&fixed, &registered, tile), &paths[1])?;
     write_rgb(&overlay(&fixed, &registered), &paths[2])?;
     let hist = joint_histogram(&fixed, &moving, &t, engine.bins, kind);
-    write_rgb(&histogram_image(&hist.counts, engine.bins, (256 / engine.bins as u32).max(1)), &paths[3])?;
+    let scale = (256 / engine.bins as u32).max(1);
+    write_rgb(&histogram_image(&hist.counts, engine.bins, scale), &paths[3])?;
+    let before = joint_histogram(&fixed, &moving, &engine.initial, engine.bins, kind);
+    write_rgb(&histogram_image(&before.counts, engine.bins, scale), &paths[4])?;
     // Metric per iteration, all levels one after another.
     let trace: Vec<f64> = r.levels.iter().flat_map(|l| l.trace.iter().copied()).collect();
     let pts: Vec<(f64, f64)> = trace.iter().enumerate().map(|(i, v)| (i as f64, *v)).collect();
     let (lo, hi) = trace.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
-    write_rgb(&plot(&[(pts, [200, 40, 40])], (0.0, (trace.len().max(2) - 1) as f64), (lo, hi), (320, 200)), &paths[4])?;
+    write_rgb(&plot(&[(pts, [200, 40, 40])], (0.0, (trace.len().max(2) - 1) as f64), (lo, hi), (320, 200)), &paths[5])?;
     let e = &r.entropies;
     let mut rep = Report::new();
     rep.real("angle_deg", t.angle_deg, Some("deg"))
@@ -174,6 +178,6 @@ pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
     }
     rep.texts("files", paths.iter().map(|p| p.display().to_string()).collect());
     let text = serde_json::to_string_pretty(&rep.to_json()).unwrap_or_default();
-    crate::output::write(&paths[5], format!("{text}\n").as_bytes())?;
+    crate::output::write(&paths[6], format!("{text}\n").as_bytes())?;
     Ok(rep)
 }

@@ -41,7 +41,8 @@ pub fn run_segment(o: &SegmentOptions) -> Result<Report, CliError> {
     write_rgb(&label_image(&s.labels, w, h), &paths[0])?;
     let means = Gray { width: w, height: h, data: s.labels.iter().map(|&l| s.means[l] as f32).collect() };
     write_gray(&means, &paths[1])?;
-    // I(R;X) against the number of regions: split (blue) rising, merge (orange) read from 1 cluster up.
+    // I(R;X) against the number of regions: split (blue) rising, merge (orange) read from 1 cluster
+    // up, H(X) (grey) above, the kept count (green).
     let split: Vec<(f64, f64)> = s.split_curve.iter().enumerate().map(|(i, v)| ((i + 1) as f64, *v)).collect();
     let merge: Vec<(f64, f64)> = s.merge_curve.iter().enumerate().map(|(i, v)| ((i + 1) as f64, *v)).collect();
     let hx = [(1.0, s.h_x), (s.leaves.len() as f64, s.h_x)].to_vec();
@@ -51,7 +52,7 @@ pub fn run_segment(o: &SegmentOptions) -> Result<Report, CliError> {
         &plot(
             &[(hx, [160, 160, 160]), (chosen, [40, 160, 40]), (split, [40, 90, 200]), (merge, [230, 120, 20])],
             (1.0, xmax),
-            (0.0, s.h_x),
+            (0.0, 1.05 * s.h_x),
             (360, 240),
         ),
         &paths[2],

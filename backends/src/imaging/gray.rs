@@ -50,6 +50,27 @@ impl Gray {
         Some(a * (1.0 - fy) + b * fy)
     }
 
+    /// The four samples around continuous coordinates `(x, y)` with their
+    /// bilinear weights (summing to 1); `None` outside the image, as
+    /// [`Self::bilinear`]. Partial-volume histograms spread a point over them.
+    #[inline]
+    #[must_use]
+    pub fn neighbours(&self, x: f64, y: f64) -> Option<[(f32, f64); 4]> {
+        let (w, h) = (self.width, self.height);
+        if !(x >= 0.0 && y >= 0.0 && x <= (w - 1) as f64 && y <= (h - 1) as f64) {
+            return None;
+        }
+        let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+        let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+        let (fx, fy) = (x - x0 as f64, y - y0 as f64);
+        Some([
+            (self.at(x0, y0), (1.0 - fx) * (1.0 - fy)),
+            (self.at(x1, y0), fx * (1.0 - fy)),
+            (self.at(x0, y1), (1.0 - fx) * fy),
+            (self.at(x1, y1), fx * fy),
+        ])
+    }
+
     /// Separable Gaussian smoothing with standard deviation `sigma` pixels
     /// (kernel radius `⌈3σ⌉`, edges clamped); `sigma ≤ 0` copies.
     #[must_use]

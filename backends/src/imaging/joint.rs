@@ -18,6 +18,10 @@ pub enum HistogramKind {
     /// moving one spread over 4 bins by a cubic B-spline Parzen window, so
     /// the metric is a smooth function of the transform.
     Parzen,
+    /// Maes et al.'s partial-volume interpolation: no new intensity is
+    /// made; the pair's unit weight is spread over the bins of the four
+    /// moving pixels around the mapped point by their bilinear weights.
+    PartialVolume,
 }
 
 /// The quantity the registration maximises.
@@ -132,7 +136,7 @@ impl JointHistogram {
         let b = self.bins;
         let row = (f as usize).min(b - 1) * b;
         match kind {
-            HistogramKind::Binned => self.counts[row + (m as usize).min(b - 1)] += 1.0,
+            HistogramKind::Binned | HistogramKind::PartialVolume => self.counts[row + (m as usize).min(b - 1)] += 1.0,
             HistogramKind::Parzen => {
                 // Bin k's centre sits at k + ½.
                 let x = m - 0.5;
@@ -143,6 +147,20 @@ impl JointHistogram {
                 }
             }
         }
+        self.samples += 1;
+    }
+
+    /// Adds weight `w` to the nearest bins of a pair (partial volume), not
+    /// counting a sample: call [`Self::count_sample`] once per point.
+    #[inline]
+    pub fn add_weight(&mut self, f: f64, m: f64, w: f64) {
+        let b = self.bins;
+        self.counts[(f as usize).min(b - 1) * b + (m as usize).min(b - 1)] += w;
+    }
+
+    /// Counts one sample whose weight was added by [`Self::add_weight`].
+    #[inline]
+    pub fn count_sample(&mut self) {
         self.samples += 1;
     }
 

@@ -28,7 +28,7 @@ pub struct PowellResult<const N: usize> {
     pub iterations: usize,
     /// Evaluations of `f`.
     pub evaluations: usize,
-    /// `f` after each outer iteration.
+    /// `f` at the start, then after each outer iteration.
     pub trace: Vec<f64>,
 }
 
@@ -156,7 +156,7 @@ pub fn minimise<const N: usize, F: FnMut(&[f64; N]) -> f64>(
     let mut x = x0;
     let mut fx = f.eval(&x);
     let mut pt = x;
-    let mut trace = Vec::new();
+    let mut trace = vec![fx];
     let mut iterations = 0;
     while iterations < o.max_iterations {
         iterations += 1;

@@ -76,7 +76,7 @@ pub struct LevelResult {
     pub evaluations: usize,
     /// The transform at the end of the level.
     pub transform: Rigid2,
-    /// Metric after each iteration.
+    /// Metric at the level's start, then after each iteration.
     pub trace: Vec<f64>,
 }
 
@@ -165,9 +165,17 @@ impl Pair {
                 let px = (i as f64 + 0.5) * s - 0.5 - c.0;
                 let qx = cs * px - sn * py + c.0 + t.tx;
                 let qy = sn * px + cs * py + c.1 + t.ty;
-                if let Some(m) = self.moving.bilinear((qx + 0.5) / s - 0.5, (qy + 0.5) / s - 0.5) {
-                    let f = f64::from(self.fixed.data[j * w + i]);
-                    h.add(kind, self.fbin.position(f), self.mbin.position(m));
+                let (mx, my) = ((qx + 0.5) / s - 0.5, (qy + 0.5) / s - 0.5);
+                let f = self.fbin.position(f64::from(self.fixed.data[j * w + i]));
+                if kind == HistogramKind::PartialVolume {
+                    if let Some(nb) = self.moving.neighbours(mx, my) {
+                        for (v, wgt) in nb {
+                            h.add_weight(f, self.mbin.position(f64::from(v)), wgt);
+                        }
+                        h.count_sample();
+                    }
+                } else if let Some(m) = self.moving.bilinear(mx, my) {
+                    h.add(kind, f, self.mbin.position(m));
                 }
             }
         }
@@ -312,6 +320,18 @@ mod tests {
         let ab = register(&f, &m, &o, |_, _| {}).unwrap().transform;
         let ba = register(&m, &f, &o, |_, _| {}).unwrap().transform;
         assert!(ab.corner_distance(&ba.inverse(), 64, 64) < 0.25, "{ab:?} vs {:?}", ba.inverse());
+    }
+
+    /// Every kind of histogram holds one unit of weight per overlapping pixel.
+    #[test]
+    fn histograms_hold_one_unit_per_sample() {
+        let truth = Rigid2 { angle_deg: 2.0, tx: 1.5, ty: -0.5 };
+        let (f, m) = render(&PhantomOptions { width: 40, height: 36, truth, noise: 0.01, bias: 0.0, seed: 2 });
+        for kind in [HistogramKind::Binned, HistogramKind::Parzen, HistogramKind::PartialVolume] {
+            let h = joint_histogram(&f, &m, &truth, 16, kind);
+            assert!(h.samples > 1000);
+            assert!((h.counts.iter().sum::<f64>() - h.samples as f64).abs() < 1e-9, "{kind:?}");
+        }
     }
 
     #[test]

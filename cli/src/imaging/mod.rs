@@ -135,8 +135,9 @@ pub struct RegisterOptions {
     /// Histogram bins per axis
     #[arg(long, value_name = "N", default_value = "32", value_parser = bins)]
     pub bins: usize,
-    /// Joint histogram: parzen (cubic B-spline window on the moving intensity, Mattes) or binned
-    #[arg(long, value_name = "KIND", default_value = "parzen", value_parser = ["parzen", "binned"])]
+    /// Joint histogram: parzen (cubic B-spline window on the moving intensity, Mattes), binned, or pv
+    /// (partial-volume interpolation, Maes)
+    #[arg(long, value_name = "KIND", default_value = "parzen", value_parser = ["parzen", "binned", "pv"])]
     pub histogram: String,
     /// Metric maximised: mi, nmi (Studholme), ecc (entropy correlation), mi-over-joint
     #[arg(long, value_name = "M", default_value = "mi", value_parser = ["mi", "nmi", "ecc", "mi-over-joint"])]

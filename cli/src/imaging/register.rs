@@ -90,7 +90,11 @@ pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
         )));
     }
     let truth = o.truth.as_deref().map(read_truth).transpose()?;
-    let kind = if o.histogram == "binned" { HistogramKind::Binned } else { HistogramKind::Parzen };
+    let kind = match o.histogram.as_str() {
+        "binned" => HistogramKind::Binned,
+        "pv" => HistogramKind::PartialVolume,
+        _ => HistogramKind::Parzen,
+    };
     let metric = match o.metric.as_str() {
         "nmi" => Metric::Nmi,
         "ecc" => Metric::Ecc,
@@ -126,18 +130,25 @@ pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
     write_rgb(&histogram_image(&hist.counts, engine.bins, scale), &paths[3])?;
     let before = joint_histogram(&fixed, &moving, &engine.initial, engine.bins, kind);
     write_rgb(&histogram_image(&before.counts, engine.bins, scale), &paths[4])?;
-    // Metric per iteration, all levels one after another.
-    let trace: Vec<f64> = r.levels.iter().flat_map(|l| l.trace.iter().copied()).collect();
-    let pts: Vec<(f64, f64)> = trace.iter().enumerate().map(|(i, v)| (i as f64, *v)).collect();
-    let (lo, hi) = trace.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
-    write_rgb(&plot(&[(pts, [200, 40, 40])], (0.0, (trace.len().max(2) - 1) as f64), (lo, hi), (320, 200)), &paths[5])?;
+    // Metric per iteration, levels one after another, one colour each (values differ between
+    // levels: smoothing and shrinking change the histogram).
+    let colours = [[200, 40, 40], [40, 90, 200], [40, 160, 40], [230, 120, 20]];
+    let (mut curves, mut at) = (Vec::new(), 0usize);
+    for (k, l) in r.levels.iter().enumerate() {
+        let pts: Vec<(f64, f64)> = l.trace.iter().enumerate().map(|(i, v)| ((at + i) as f64, *v)).collect();
+        at += l.trace.len();
+        curves.push((pts, colours[k % colours.len()]));
+    }
+    let all = r.levels.iter().flat_map(|l| l.trace.iter().copied());
+    let (lo, hi) = all.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+    write_rgb(&plot(&curves, (0.0, (at.max(2) - 1) as f64), (lo, hi), (320, 200)), &paths[5])?;
     let e = &r.entropies;
     let mut rep = Report::new();
     rep.real("angle_deg", t.angle_deg, Some("deg"))
         .real("tx", t.tx, Some("px"))
         .real("ty", t.ty, Some("px"))
         .text("metric", metric.name())
-        .text("histogram", if kind == HistogramKind::Parzen { "parzen" } else { "binned" })
+        .text("histogram", o.histogram.as_str())
         .count("bins", engine.bins as u64)
         .real("metric_value", r.metric, None)
         .real("MI", e.mutual_information, Some("bits"))

@@ -15,6 +15,8 @@
 //!   table with chairs).
 //! * [`viewpoint`]: the viewpoint channel of Part V.
 //! * [`vulkan`]: the Vulkan compute backend (ash + naga), tracing and reductions.
+//! * [`imaging`]: mutual-information registration and information-channel
+//!   segmentation of images (syllabus Part 8).
 //! * [`visibility`]: the scene visibility channel of Part III, with
 //!   jackknife standard errors.
 
@@ -22,6 +24,7 @@
 
 pub mod backend;
 pub mod camera;
+pub mod imaging;
 pub mod lines;
 pub mod meshes;
 pub mod obj;

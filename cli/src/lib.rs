@@ -5,6 +5,7 @@ pub mod clap_error;
 pub mod complexity;
 pub mod devices;
 pub mod export;
+pub mod imaging;
 pub mod input;
 pub mod measure;
 pub mod measure_options;

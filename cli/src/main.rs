@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use clap::Parser;
 use clap::error::ErrorKind;
 use itgfx_cli::options::{Cli, Command};
-use itgfx_cli::{CliError, complexity, devices, measure, viewpoints};
+use itgfx_cli::{CliError, complexity, devices, imaging, measure, viewpoints};
 
 /// One JSON object, or the readable table.
 fn render(report: &itgfx_cli::report::Report, json: bool) -> String {
@@ -39,6 +39,9 @@ fn run(cli: Cli) -> Result<String, CliError> {
             Ok(render(&viewpoints::run(&o)?, o.common.json))
         }
         Command::Devices(c) => Ok(render(&devices::run()?, c.json)),
+        Command::Phantom(o) => Ok(render(&imaging::run_phantom(&o)?, o.json)),
+        Command::Register(o) => Ok(render(&imaging::run_register(&o)?, o.json)),
+        Command::Segment(o) => Ok(render(&imaging::run_segment(&o)?, o.json)),
     }
 }
 

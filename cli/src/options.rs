@@ -41,6 +41,12 @@ pub enum Command {
     Viewpoints(ViewpointsOptions),
     /// Vulkan devices found, and the one --backend vulkan uses
     Devices(Common),
+    /// A synthetic two-modality image pair with a known rigid transform (Part 8)
+    Phantom(crate::imaging::PhantomOptions),
+    /// Rigid 2D registration by mutual information, multiresolution (Part 8)
+    Register(crate::imaging::RegisterOptions),
+    /// Image segmentation by the region-intensity information channel (Part 8)
+    Segment(crate::imaging::SegmentOptions),
 }
 
 /// Options every command has.

@@ -90,6 +90,36 @@ pub struct JointEntropies {
     pub mutual_information: f64,
 }
 
+impl JointEntropies {
+    /// Mutual information normalised by the joint entropy, `I(X;Y) / H(X,Y)`
+    /// in `[0, 1]` (Part III §3.2.3, the `Î_S = I_S / H_J` normalisation
+    /// beside eq. (51), used for image alignment by \[Stu97\]). 0 when
+    /// `H(X,Y) = 0` (both variables constant: nothing is shared).
+    #[must_use]
+    pub fn mi_over_joint(&self) -> f64 {
+        if self.h_xy > 0.0 { (self.mutual_information / self.h_xy).clamp(0.0, 1.0) } else { 0.0 }
+    }
+
+    /// Studholme's normalised mutual information `(H(X) + H(Y)) / H(X,Y)`
+    /// in `[1, 2]`, which equals `1 + I(X;Y)/H(X,Y)` by Part II eq. (7)
+    /// (\[Stu97\], cited in Part III §3.2.3); invariant to the overlap's size.
+    /// 1 when `H(X,Y) = 0`.
+    #[must_use]
+    pub fn studholme_nmi(&self) -> f64 {
+        1.0 + self.mi_over_joint()
+    }
+
+    /// Entropy correlation coefficient `2 I(X;Y) / (H(X) + H(Y))` in
+    /// `[0, 1]`, the symmetric uncertainty of Maes et al. (1997): a monotone
+    /// function of [`Self::studholme_nmi`], `ECC = 2 − 2/NMI`. 0 when
+    /// `H(X) + H(Y) = 0`.
+    #[must_use]
+    pub fn entropy_correlation(&self) -> f64 {
+        let s = self.h_x + self.h_y;
+        if s > 0.0 { (2.0 * self.mutual_information / s).clamp(0.0, 1.0) } else { 0.0 }
+    }
+}
+
 /// Every entropy of a joint distribution, in `base`, allocation-free.
 ///
 /// Three compensated passes over the matrix: entries, row sums and column

@@ -23,6 +23,22 @@ proptest! {
         prop_assert!(close(e.mutual_information, et.mutual_information, TOL));
     }
 
+    /// The normalised variants (Part III §3.2.3): I/H(X,Y) ∈ [0,1],
+    /// NMI = (H(X)+H(Y))/H(X,Y) = 1 + I/H(X,Y) ∈ [1,2], ECC = 2 − 2/NMI ∈ [0,1].
+    #[test]
+    fn normalised_mi((j, r, c) in joint(12)) {
+        let e = joint_entropies(&j, r, c, Base::Bits).unwrap();
+        let (q, nmi, ecc) = (e.mi_over_joint(), e.studholme_nmi(), e.entropy_correlation());
+        prop_assert!((0.0..=1.0).contains(&q) && (1.0..=2.0).contains(&nmi) && (0.0..=1.0).contains(&ecc));
+        if e.h_xy > 1e-9 {
+            prop_assert!(close(nmi, (e.h_x + e.h_y) / e.h_xy, 1e-9));
+            prop_assert!(close(ecc, 2.0 - 2.0 / nmi, 1e-9));
+        }
+        // The base cancels in every ratio.
+        let n = joint_entropies(&j, r, c, Base::Nats).unwrap();
+        prop_assert!(close(n.mi_over_joint(), q, 1e-12) && close(n.entropy_correlation(), ecc, 1e-12));
+    }
+
     /// I(X;Y) = D_KL(p(x,y) ‖ p(x)p(y)) (Part II eq. (9)); I = 0 iff independent.
     #[test]
     fn mi_is_kl_to_product((j, r, c) in joint(10)) {

@@ -1,0 +1,181 @@
+//! Image files of the imaging commands: reading scalar PNGs, writing grey,
+//! colour, checkerboard, overlay, histogram and curve pictures (atomically,
+//! through [`crate::output::write`]).
+
+use std::path::Path;
+
+use image::{GrayImage, ImageReader, Rgb, RgbImage};
+use itgfx_backends::imaging::Gray;
+
+use crate::CliError;
+use crate::export::{viridis, write_png};
+
+/// Most pixels an input image may have (memory: a few `f32` copies each).
+pub const MAX_PIXELS: u64 = 16 * 1024 * 1024;
+
+/// Reads a PNG (8 or 16 bit, grey or colour: converted to luma) as samples in `[0, 1]`.
+/// The size is checked against [`MAX_PIXELS`] before decoding.
+///
+/// # Errors
+/// One line naming the file: missing, not a PNG, too large, undecodable.
+pub fn read_gray(path: &Path) -> Result<Gray, CliError> {
+    let fail = |e: &dyn std::fmt::Display| CliError::usage(format!("{path:?}: {e}"));
+    if path.is_dir() {
+        return Err(fail(&"is a directory, not a PNG image"));
+    }
+    let mut head = [0u8; 8];
+    let n =
+        std::io::Read::read(&mut std::fs::File::open(path).map_err(|e| fail(&e))?, &mut head).map_err(|e| fail(&e))?;
+    if n < 8 || head != *b"\x89PNG\r\n\x1a\n" {
+        return Err(fail(&"not a PNG image (no PNG signature)"));
+    }
+    let reader = ImageReader::open(path).map_err(|e| fail(&e))?.with_guessed_format().map_err(|e| fail(&e))?;
+    let (w, h) = ImageReader::open(path)
+        .map_err(|e| fail(&e))?
+        .with_guessed_format()
+        .map_err(|e| fail(&e))?
+        .into_dimensions()
+        .map_err(|e| fail(&e))?;
+    if u64::from(w) * u64::from(h) > MAX_PIXELS {
+        return Err(fail(&format!("{w} x {h} pixels: more than the {MAX_PIXELS} allowed")));
+    }
+    let img = reader.decode().map_err(|e| fail(&e))?.to_luma32f();
+    Ok(Gray { width: w as usize, height: h as usize, data: img.into_raw() })
+}
+
+/// Writes an 8-bit grey PNG of samples in `[0, 1]` (clamped).
+///
+/// # Errors
+/// Encoding and I/O errors, one line.
+pub fn write_gray(g: &Gray, path: &Path) -> Result<(), CliError> {
+    let img = GrayImage::from_fn(g.width as u32, g.height as u32, |x, y| {
+        image::Luma([(g.at(x as usize, y as usize).clamp(0.0, 1.0) * 255.0).round() as u8])
+    });
+    let mut bytes = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
+        .map_err(|e| CliError::usage(format!("{path:?}: {e}")))?;
+    crate::output::write(path, &bytes)
+}
+
+fn byte(v: f32) -> u8 {
+    (v.clamp(0.0, 1.0) * 255.0).round() as u8
+}
+
+/// A checkerboard of `a` and `b` in squares of `tile` pixels.
+#[must_use]
+pub fn checkerboard(a: &Gray, b: &Gray, tile: usize) -> RgbImage {
+    RgbImage::from_fn(a.width as u32, a.height as u32, |x, y| {
+        let (x, y) = (x as usize, y as usize);
+        let v = if (x / tile + y / tile).is_multiple_of(2) { a.at(x, y) } else { b.at(x, y) };
+        Rgb([byte(v); 3])
+    })
+}
+
+/// `a` in magenta, `b` in green: aligned structures look grey.
+#[must_use]
+pub fn overlay(a: &Gray, b: &Gray) -> RgbImage {
+    RgbImage::from_fn(a.width as u32, a.height as u32, |x, y| {
+        let (p, q) = (byte(a.at(x as usize, y as usize)), byte(b.at(x as usize, y as usize)));
+        Rgb([p, q, p])
+    })
+}
+
+/// A `bins × bins` joint histogram as a picture (`log(1 + count)`, viridis),
+/// fixed bins down, moving bins across, each bin `scale` pixels.
+#[must_use]
+pub fn histogram_image(counts: &[f64], bins: usize, scale: u32) -> RgbImage {
+    let top = counts.iter().copied().fold(0.0, f64::max).ln_1p().max(1e-12);
+    RgbImage::from_fn(bins as u32 * scale, bins as u32 * scale, |x, y| {
+        let (i, j) = ((y / scale) as usize, (x / scale) as usize);
+        Rgb(viridis(counts[i * bins + j].ln_1p() / top))
+    })
+}
+
+/// A distinct colour for label `k`.
+#[must_use]
+pub fn palette(k: usize) -> [u8; 3] {
+    // Golden-angle hues, alternating lightness.
+    let h = (k as f64 * 0.618_033_988_75).fract() * 6.0;
+    let (l, s) = if k.is_multiple_of(2) { (0.55, 0.75) } else { (0.4, 0.65) };
+    let c = (1.0 - (2.0 * l - 1.0f64).abs()) * s;
+    let x = c * (1.0 - (h % 2.0 - 1.0).abs());
+    let (r, g, b) = match h as usize {
+        0 => (c, x, 0.0),
+        1 => (x, c, 0.0),
+        2 => (0.0, c, x),
+        3 => (0.0, x, c),
+        4 => (x, 0.0, c),
+        _ => (c, 0.0, x),
+    };
+    let m = l - c / 2.0;
+    [((r + m) * 255.0) as u8, ((g + m) * 255.0) as u8, ((b + m) * 255.0) as u8]
+}
+
+/// Labels in [`palette`] colours.
+#[must_use]
+pub fn label_image(labels: &[usize], w: usize, h: usize) -> RgbImage {
+    RgbImage::from_fn(w as u32, h as u32, |x, y| Rgb(palette(labels[y as usize * w + x as usize])))
+}
+
+/// A polyline `(x, y)` and its colour.
+pub type Curve = (Vec<(f64, f64)>, [u8; 3]);
+
+/// Curves `y(x)` on a white `w × h` plot with a grey frame and a light grid
+/// of 10 × 10 cells; axes span `[x0, x1] × [y0, y1]`. Each curve is a list
+/// of points and a colour; points are joined and marked.
+#[must_use]
+pub fn plot(curves: &[Curve], x: (f64, f64), y: (f64, f64), size: (u32, u32)) -> RgbImage {
+    let (w, h) = size;
+    let mut img = RgbImage::from_pixel(w, h, Rgb([255, 255, 255]));
+    let m = 12i64;
+    let (pw, ph) = (i64::from(w) - 2 * m, i64::from(h) - 2 * m);
+    for k in 0..=10 {
+        let gx = m + pw * k / 10;
+        let gy = m + ph * k / 10;
+        let c = if k == 0 || k == 10 { Rgb([90, 90, 90]) } else { Rgb([228, 228, 228]) };
+        for t in 0..=ph {
+            img.put_pixel(gx as u32, (m + t) as u32, c);
+        }
+        for t in 0..=pw {
+            img.put_pixel((m + t) as u32, gy as u32, c);
+        }
+    }
+    let to = |px: f64, py: f64| -> (i64, i64) {
+        let fx = if x.1 > x.0 { (px - x.0) / (x.1 - x.0) } else { 0.5 };
+        let fy = if y.1 > y.0 { (py - y.0) / (y.1 - y.0) } else { 0.5 };
+        (m + (fx.clamp(0.0, 1.0) * pw as f64).round() as i64, m + ph - (fy.clamp(0.0, 1.0) * ph as f64).round() as i64)
+    };
+    let put = |img: &mut RgbImage, px: i64, py: i64, c: [u8; 3]| {
+        if px >= 0 && py >= 0 && px < i64::from(w) && py < i64::from(h) {
+            img.put_pixel(px as u32, py as u32, Rgb(c));
+        }
+    };
+    for (points, colour) in curves {
+        for pair in points.windows(2) {
+            let (a, b) = (to(pair[0].0, pair[0].1), to(pair[1].0, pair[1].1));
+            let n = (b.0 - a.0).abs().max((b.1 - a.1).abs()).max(1);
+            for s in 0..=n {
+                let (px, py) = (a.0 + (b.0 - a.0) * s / n, a.1 + (b.1 - a.1) * s / n);
+                put(&mut img, px, py, *colour);
+                put(&mut img, px, py + 1, *colour);
+            }
+        }
+        if points.len() <= 64 {
+            for p in points {
+                let (px, py) = to(p.0, p.1);
+                for (dx, dy) in [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, -1), (1, -1), (-1, 1)] {
+                    put(&mut img, px + dx, py + dy, *colour);
+                }
+            }
+        }
+    }
+    img
+}
+
+/// Writes a colour picture.
+///
+/// # Errors
+/// Encoding and I/O errors, one line.
+pub fn write_rgb(img: &RgbImage, path: &Path) -> Result<(), CliError> {
+    write_png(img, path)
+}

@@ -1,0 +1,194 @@
+//! `itgfx register FIXED MOVING`: rigid registration by mutual information.
+
+use std::path::Path;
+use std::time::Instant;
+
+use itgfx_backends::imaging::register::{joint_histogram, resample};
+use itgfx_backends::imaging::{HistogramKind, Level, Metric, RegisterOptions as Engine, Rigid2, register};
+
+use super::RegisterOptions;
+use super::pictures::{checkerboard, histogram_image, overlay, plot, read_gray, write_gray, write_rgb};
+use crate::CliError;
+use crate::report::Report;
+
+/// The `--levels` pyramid, coarse to fine.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Levels(pub Vec<Level>);
+
+/// Parses `--levels`: `shrink:sigma` pairs, comma-separated (shrink
+/// 1..=64, sigma in `[0, 64]` full-resolution pixels), 1 to 8 levels.
+///
+/// # Errors
+/// A reason.
+pub fn levels(s: &str) -> Result<Levels, String> {
+    let mut out = Vec::new();
+    for part in s.split(',') {
+        let (a, b) = part.split_once(':').ok_or(format!("{part:?} is not shrink:sigma"))?;
+        let shrink: usize = a.trim().parse().map_err(|_| format!("shrink {a:?} is not a whole number"))?;
+        let sigma: f64 =
+            b.trim().parse().ok().filter(|x: &f64| x.is_finite()).ok_or(format!("sigma {b:?} is not a number"))?;
+        if !(1..=64).contains(&shrink) {
+            return Err(format!("shrink {shrink} must be in 1..=64"));
+        }
+        if !(0.0..=64.0).contains(&sigma) {
+            return Err(format!("sigma {sigma} must be in [0, 64]"));
+        }
+        out.push(Level { shrink, sigma });
+    }
+    if out.is_empty() || out.len() > 8 {
+        return Err("give 1 to 8 levels".into());
+    }
+    Ok(Levels(out))
+}
+
+/// `--initial DEG,X,Y`.
+///
+/// # Errors
+/// A reason.
+pub fn start(s: &str) -> Result<Rigid2, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>().ok().filter(|v| v.is_finite()).ok_or(format!("{x:?} is not a finite number")))
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [a, x, y] if a.abs() <= 180.0 => Ok(Rigid2 { angle_deg: a, tx: x, ty: y }),
+        [_, _, _] => Err("the angle must be in [-180, 180]".into()),
+        _ => Err("is not DEG,X,Y (three numbers)".into()),
+    }
+}
+
+/// Reads `transform.json` (`angle_deg`, `tx`, `ty`).
+///
+/// # Errors
+/// One line naming the file.
+pub fn read_truth(path: &Path) -> Result<Rigid2, CliError> {
+    let fail = |e: &dyn std::fmt::Display| CliError::usage(format!("--truth {path:?}: {e}"));
+    let text = std::fs::read_to_string(path).map_err(|e| fail(&e))?;
+    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| fail(&e))?;
+    let get = |k: &str| v.get(k).and_then(serde_json::Value::as_f64).filter(|x| x.is_finite());
+    match (get("angle_deg"), get("tx"), get("ty")) {
+        (Some(a), Some(x), Some(y)) => Ok(Rigid2 { angle_deg: a, tx: x, ty: y }),
+        _ => Err(fail(&"needs finite numbers angle_deg, tx and ty")),
+    }
+}
+
+const FILES: [&str; 7] =
+    ["registered.png", "checkerboard.png", "overlay.png", "joint.png", "joint-initial.png", "trace.png", "result.json"];
+
+/// Registers, writes the pictures and `result.json`, returns the report.
+///
+/// # Errors
+/// Bad inputs and output errors, one line.
+pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
+    let levels = o.levels.0.clone();
+    let fixed = read_gray(&o.fixed)?;
+    let moving = read_gray(&o.moving)?;
+    if (fixed.width, fixed.height) != (moving.width, moving.height) {
+        return Err(CliError::usage(format!(
+            "the fixed image is {} x {} but the moving image is {} x {}: register needs the same size",
+            fixed.width, fixed.height, moving.width, moving.height
+        )));
+    }
+    let truth = o.truth.as_deref().map(read_truth).transpose()?;
+    let kind = match o.histogram.as_str() {
+        "binned" => HistogramKind::Binned,
+        "pv" => HistogramKind::PartialVolume,
+        _ => HistogramKind::Parzen,
+    };
+    let metric = match o.metric.as_str() {
+        "nmi" => Metric::Nmi,
+        "ecc" => Metric::Ecc,
+        "mi-over-joint" => Metric::MiOverJoint,
+        _ => Metric::Mi,
+    };
+    let engine = Engine {
+        bins: o.bins,
+        kind,
+        metric,
+        levels,
+        initial: o.initial,
+        max_iterations: o.max_iterations as usize,
+        ..Engine::default()
+    };
+    // Everything readable and valid: now the output directory.
+    let paths = super::prepare_out(&o.out, &FILES)?;
+    let t0 = Instant::now();
+    let r = register(&fixed, &moving, &engine, |k, n| {
+        let l = engine.levels[k];
+        super::say(&format!("register: level {}/{n} (shrink {}, sigma {})", k + 1, l.shrink, l.sigma));
+    })
+    .map_err(|e| CliError::usage(e.to_string()))?;
+    let seconds = t0.elapsed().as_secs_f64();
+    let t = r.transform;
+    let registered = resample(&moving, &t, 0.0);
+    write_gray(&registered, &paths[0])?;
+    let tile = (fixed.width.max(fixed.height) / 8).max(2);
+    write_rgb(&checkerboard(&fixed, &registered, tile), &paths[1])?;
+    write_rgb(&overlay(&fixed, &registered), &paths[2])?;
+    let hist = joint_histogram(&fixed, &moving, &t, engine.bins, kind);
+    let scale = (256 / engine.bins as u32).max(1);
+    write_rgb(&histogram_image(&hist.counts, engine.bins, scale), &paths[3])?;
+    let before = joint_histogram(&fixed, &moving, &engine.initial, engine.bins, kind);
+    write_rgb(&histogram_image(&before.counts, engine.bins, scale), &paths[4])?;
+    // Metric per iteration, levels one after another, one colour each (values differ between
+    // levels: smoothing and shrinking change the histogram).
+    let colours = [[200, 40, 40], [40, 90, 200], [40, 160, 40], [230, 120, 20]];
+    let (mut curves, mut at) = (Vec::new(), 0usize);
+    for (k, l) in r.levels.iter().enumerate() {
+        let pts: Vec<(f64, f64)> = l.trace.iter().enumerate().map(|(i, v)| ((at + i) as f64, *v)).collect();
+        at += l.trace.len();
+        curves.push((pts, colours[k % colours.len()]));
+    }
+    let all = r.levels.iter().flat_map(|l| l.trace.iter().copied());
+    let (lo, hi) = all.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+    write_rgb(&plot(&curves, (0.0, (at.max(2) - 1) as f64), (lo, hi), (320, 200)), &paths[5])?;
+    let e = &r.entropies;
+    let mut rep = Report::new();
+    rep.real("angle_deg", t.angle_deg, Some("deg"))
+        .real("tx", t.tx, Some("px"))
+        .real("ty", t.ty, Some("px"))
+        .text("metric", metric.name())
+        .text("histogram", o.histogram.as_str())
+        .count("bins", engine.bins as u64)
+        .real("metric_value", r.metric, None)
+        .real("MI", e.mutual_information, Some("bits"))
+        .real("NMI", e.studholme_nmi(), None)
+        .real("ECC", e.entropy_correlation(), None)
+        .real("MI_over_joint", e.mi_over_joint(), None)
+        .real("H_fixed", e.h_x, Some("bits"))
+        .real("H_moving", e.h_y, Some("bits"))
+        .real("H_joint", e.h_xy, Some("bits"))
+        .maybe_real("MI_initial", r.initial_entropies.map(|e| e.mutual_information), Some("bits"))
+        .real("overlap", r.overlap, None)
+        .count("iterations", r.levels.iter().map(|l| l.iterations as u64).sum())
+        .count("evaluations", r.levels.iter().map(|l| l.evaluations as u64).sum())
+        .real("seconds", seconds, Some("s"));
+    let levels: Vec<Report> = r
+        .levels
+        .iter()
+        .map(|l| {
+            let mut x = Report::new();
+            x.count("shrink", l.level.shrink as u64)
+                .real("sigma", l.level.sigma, None)
+                .counts("size", vec![l.size.0 as u64, l.size.1 as u64])
+                .count("iterations", l.iterations as u64)
+                .count("evaluations", l.evaluations as u64)
+                .reals("transform", l.transform.params().to_vec())
+                .reals("trace", l.trace.clone());
+            x
+        })
+        .collect();
+    rep.records("levels", levels);
+    if let Some(truth) = truth {
+        let rot = (t.angle_deg - truth.angle_deg).abs();
+        let trans = (t.tx - truth.tx).hypot(t.ty - truth.ty);
+        rep.real("rotation_error_deg", rot, Some("deg"))
+            .real("translation_error_px", trans, Some("px"))
+            .real("corner_error_px", t.corner_distance(&truth, fixed.width, fixed.height), Some("px"))
+            .flag("success", rot < 0.5 && trans < 0.5);
+    }
+    rep.texts("files", paths.iter().map(|p| p.display().to_string()).collect());
+    let text = serde_json::to_string_pretty(&rep.to_json()).unwrap_or_default();
+    crate::output::write(&paths[6], format!("{text}\n").as_bytes())?;
+    Ok(rep)
+}

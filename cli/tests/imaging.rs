@@ -1,0 +1,160 @@
+//! `itgfx phantom`, `itgfx register` and `itgfx segment` end to end.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn itgfx(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_itgfx")).args(args).output().expect("run itgfx")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("itgfx-imaging-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn json(out: &Output) -> serde_json::Value {
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+fn refused(args: &[&str], needle: &str) {
+    let out = itgfx(args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+    assert!(err.contains(needle), "{args:?}: {err}");
+}
+
+/// A known rigid transform between two modalities is recovered to well under
+/// the 0.5 px / 0.5° success threshold of the benchmark, and every picture is a PNG.
+#[test]
+fn known_transform_recovered() {
+    let d = tmp("known");
+    let p = d.join("pair");
+    json(&itgfx(&[
+        "phantom",
+        "--out",
+        s(&p),
+        "--size",
+        "72,64",
+        "--angle",
+        "-5",
+        "--shift",
+        "3.5,-2.25",
+        "--seed",
+        "7",
+        "--json",
+    ]));
+    let r = d.join("reg");
+    let v = json(&itgfx(&[
+        "register",
+        s(&p.join("fixed.png")),
+        s(&p.join("moving.png")),
+        "--truth",
+        s(&p.join("transform.json")),
+        "--out",
+        s(&r),
+        "--json",
+    ]));
+    assert_eq!(v["success"], true, "{v}");
+    assert!(v["rotation_error_deg"].as_f64().unwrap() < 0.5);
+    assert!(v["translation_error_px"].as_f64().unwrap() < 0.5);
+    assert!(v["MI"].as_f64().unwrap() > v["MI_initial"].as_f64().unwrap());
+    for f in ["registered.png", "checkerboard.png", "overlay.png", "joint.png", "joint-initial.png", "trace.png"] {
+        assert_eq!(&std::fs::read(r.join(f)).unwrap()[1..4], b"PNG", "{f}");
+    }
+    let saved: serde_json::Value = serde_json::from_slice(&std::fs::read(r.join("result.json")).unwrap()).unwrap();
+    assert_eq!(saved["tx"], v["tx"]);
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// An image registered onto itself stays put, and then I(F;M) = H(F)
+/// (Part II eq. (7) with M = F); NMI = 2 and ECC = 1.
+#[test]
+fn identity_and_mi_identities() {
+    let d = tmp("identity");
+    let p = d.join("pair");
+    json(&itgfx(&["phantom", "--out", s(&p), "--size", "48,48", "--noise", "0.01", "--json"]));
+    let f = p.join("fixed.png");
+    let v = json(&itgfx(&["register", s(&f), s(&f), "--out", s(&d.join("r")), "--histogram", "binned", "--json"]));
+    for k in ["angle_deg", "tx", "ty"] {
+        assert!(v[k].as_f64().unwrap().abs() < 0.05, "{k}: {v}");
+    }
+    let (mi, hf, hm) = (v["MI"].as_f64().unwrap(), v["H_fixed"].as_f64().unwrap(), v["H_moving"].as_f64().unwrap());
+    assert!((mi - hf).abs() < 1e-3 && (hf - hm).abs() < 1e-9, "{v}");
+    assert!((v["NMI"].as_f64().unwrap() - 2.0).abs() < 1e-3);
+    assert!((v["ECC"].as_f64().unwrap() - 1.0).abs() < 1e-3);
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// Four grey levels on rectangles: the split reaches I(R;X) = H(X) and the
+/// bottleneck keeps exactly four clusters at ratio 1; both curves are monotone.
+#[test]
+fn piecewise_constant_segmented() {
+    let d = tmp("segment");
+    let img = d.join("blocks.png");
+    let (w, h) = (40u32, 30u32);
+    let pic = image::GrayImage::from_fn(w, h, |x, y| {
+        image::Luma([match (x < 15, y < 12) {
+            (true, true) => 20,
+            (true, false) => 200,
+            (false, true) => 120,
+            (false, false) => {
+                if x < 30 {
+                    250
+                } else {
+                    20
+                }
+            }
+        }])
+    });
+    pic.save(&img).unwrap();
+    let v = json(&itgfx(&["segment", s(&img), "--out", s(&d.join("o")), "--ratio", "1", "--json"]));
+    let hx = v["H_X"].as_f64().unwrap();
+    assert_eq!(v["regions"], 4, "{v}");
+    assert!((v["I_regions"].as_f64().unwrap() - hx).abs() < 1e-9);
+    let split: Vec<f64> = v["split_curve"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    let merge: Vec<f64> = v["merge_curve"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    assert!(split.windows(2).all(|p| p[1] >= p[0] - 1e-12));
+    assert!(merge.windows(2).all(|p| p[1] >= p[0] - 1e-12));
+    assert!(merge[2] < hx - 0.05, "three clusters lose information: {merge:?}");
+    let v = json(&itgfx(&["segment", s(&img), "--out", s(&d.join("o2")), "--regions", "2", "--json"]));
+    assert_eq!(v["regions"], 2);
+    assert_eq!(&std::fs::read(d.join("o2/curve.png")).unwrap()[1..4], b"PNG");
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// Bad input: one line, exit 2, nothing half done.
+#[test]
+fn bad_input() {
+    let d = tmp("bad");
+    let p = d.join("pair");
+    json(&itgfx(&["phantom", "--out", s(&p), "--size", "32,32", "--json"]));
+    let small = d.join("small");
+    json(&itgfx(&["phantom", "--out", s(&small), "--size", "32,24", "--json"]));
+    let text = d.join("notes.png");
+    std::fs::write(&text, "not an image\n").unwrap();
+    let flat = d.join("flat.png");
+    image::GrayImage::from_pixel(8, 8, image::Luma([90])).save(&flat).unwrap();
+    let (f, out) = (p.join("fixed.png"), d.join("o"));
+    refused(&["register", "/nonexistent/a.png", s(&f), "--out", s(&out)], "/nonexistent/a.png");
+    refused(&["register", s(&text), s(&f), "--out", s(&out)], "not a PNG");
+    refused(&["register", s(&f), s(&small.join("moving.png")), "--out", s(&out)], "same size");
+    refused(&["register", s(&f), s(&flat), "--out", s(&out)], "size");
+    refused(&["register", s(&f), s(&f), "--out", s(&out), "--truth", s(&text)], "--truth");
+    refused(&["register", s(&f), s(&f), "--out", s(&out), "--levels", "4:2,0:1"], "--levels");
+    refused(&["register", s(&f), s(&f), "--out", s(&out), "--bins", "1"], "--bins");
+    refused(&["phantom", "--out", s(&out), "--size", "100000,100000"], "--size");
+    refused(&["phantom", "--out", s(&out), "--size", "8000,8000"], "--size");
+    refused(&["segment", s(&flat), "--out", s(&out)], "constant");
+    refused(&["segment", "/nonexistent/b.png", "--out", s(&out)], "/nonexistent/b.png");
+    assert!(!out.exists(), "a refused run leaves no --out behind");
+    refused(&["segment", s(&f), "--out", s(&text)], "not a directory");
+    std::fs::remove_dir_all(&d).unwrap();
+}

@@ -39,6 +39,11 @@ fn run(cli: Cli) -> Result<String, CliError> {
             Ok(render(&viewpoints::run(&o)?, o.common.json))
         }
         Command::Devices(c) => Ok(render(&devices::run()?, c.json)),
+        Command::Render(o) => {
+            threads(o.threads)?;
+            Ok(render(&itgfx_cli::render::run(&o)?, o.common.json))
+        }
+        Command::Compare(o) => Ok(render(&itgfx_cli::render::run_compare(&o)?, o.common.json)),
     }
 }
 

@@ -41,6 +41,10 @@ pub enum Command {
     Viewpoints(ViewpointsOptions),
     /// Vulkan devices found, and the one --backend vulkan uses
     Devices(Common),
+    /// Path-traced image with adaptive pixel sampling (Part IV; Part III-IV §5)
+    Render(crate::render::RenderOptions),
+    /// RMSE, PSNR and relMSE of one EXR image against another
+    Compare(crate::render::CompareOptions),
 }
 
 /// Options every command has.

@@ -29,6 +29,7 @@ pub mod lines;
 pub mod meshes;
 pub mod obj;
 pub mod preview;
+pub mod render;
 pub mod scene;
 pub mod solids;
 pub mod tracer;

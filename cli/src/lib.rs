@@ -12,6 +12,7 @@ pub mod measure_options;
 pub mod options;
 pub mod output;
 pub mod progress;
+pub mod render;
 pub mod report;
 pub mod scene;
 pub mod values;

@@ -42,6 +42,11 @@ fn run(cli: Cli) -> Result<String, CliError> {
         Command::Phantom(o) => Ok(render(&imaging::run_phantom(&o)?, o.json)),
         Command::Register(o) => Ok(render(&imaging::run_register(&o)?, o.json)),
         Command::Segment(o) => Ok(render(&imaging::run_segment(&o)?, o.json)),
+        Command::Render(o) => {
+            threads(o.threads)?;
+            Ok(render(&itgfx_cli::render::run(&o)?, o.common.json))
+        }
+        Command::Compare(o) => Ok(render(&itgfx_cli::render::run_compare(&o)?, o.common.json)),
     }
 }
 

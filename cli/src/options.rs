@@ -47,6 +47,10 @@ pub enum Command {
     Register(crate::imaging::RegisterOptions),
     /// Image segmentation by the region-intensity information channel (Part 8)
     Segment(crate::imaging::SegmentOptions),
+    /// Path-traced image with adaptive pixel sampling (Part IV; Part III-IV §5)
+    Render(crate::render::RenderOptions),
+    /// RMSE, PSNR and relMSE of one EXR image against another
+    Compare(crate::render::CompareOptions),
 }
 
 /// Options every command has.

@@ -14,6 +14,7 @@
 //! * [`meshes`]: built-in objects seen from outside (geodesic sphere, torus,
 //!   table with chairs).
 //! * [`viewpoint`]: the viewpoint channel of Part V.
+//! * [`simplify`]: viewpoint-driven mesh simplification (Part VII).
 //! * [`vulkan`]: the Vulkan compute backend (ash + naga), tracing and reductions.
 //! * [`visibility`]: the scene visibility channel of Part III, with
 //!   jackknife standard errors.
@@ -27,6 +28,7 @@ pub mod meshes;
 pub mod obj;
 pub mod preview;
 pub mod scene;
+pub mod simplify;
 pub mod solids;
 pub mod tracer;
 pub mod viewpoint;

@@ -14,6 +14,7 @@
 //! * [`meshes`]: built-in objects seen from outside (geodesic sphere, torus,
 //!   table with chairs).
 //! * [`viewpoint`]: the viewpoint channel of Part V.
+//! * [`simplify`]: viewpoint-driven mesh simplification (Part VII).
 //! * [`vulkan`]: the Vulkan compute backend (ash + naga), tracing and reductions.
 //! * [`imaging`]: mutual-information registration and information-channel
 //!   segmentation of images (syllabus Part 8).
@@ -31,6 +32,7 @@ pub mod obj;
 pub mod preview;
 pub mod render;
 pub mod scene;
+pub mod simplify;
 pub mod solids;
 pub mod tracer;
 pub mod viewpoint;

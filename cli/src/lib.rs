@@ -15,6 +15,7 @@ pub mod progress;
 pub mod render;
 pub mod report;
 pub mod scene;
+pub mod simplify;
 pub mod values;
 pub mod viewpoints;
 

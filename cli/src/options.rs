@@ -39,6 +39,8 @@ pub enum Command {
     Measure(MeasureCommand),
     /// Viewpoint channel V -> O: VE, VMI, best views (Part V)
     Viewpoints(ViewpointsOptions),
+    /// Viewpoint-driven mesh simplification by VMI or VE (Part VII)
+    Simplify(crate::simplify::SimplifyOptions),
     /// Vulkan devices found, and the one --backend vulkan uses
     Devices(Common),
     /// A synthetic two-modality image pair with a known rigid transform (Part 8)

@@ -1,4 +1,7 @@
-use itgfx_core::{Base, Channel, jensen_shannon, joint_entropies, kl_divergence};
+use itgfx_core::{
+    Base, Channel, entropy_of_weight_sums, entropy_of_weights, jensen_shannon, joint_entropies, kl_divergence,
+    mutual_information_of_weight_sums, weight_log_term,
+};
 use proptest::prelude::*;
 
 use crate::strategies::*;
@@ -85,5 +88,22 @@ proptest! {
         for i in 0..r { same[i * row.len()..(i + 1) * row.len()].copy_from_slice(&row); }
         let z = Channel::new(&input, &same, row.len()).unwrap().measures(Base::Bits);
         prop_assert!(z.mutual_information < 1e-12);
+    }
+
+    /// I(X;Y) and H from running sums of unnormalised weights (Part II
+    /// eqs. (2), (7)) equal the normalised joint's, at any scale of the
+    /// weights (the simplifier's incremental I(V;O), Part V eq. (6)).
+    #[test]
+    fn mi_from_weight_sums((j, r, c) in joint(10), scale in 1e-4..1e4f64) {
+        let w: Vec<f64> = j.iter().map(|x| x * scale).collect();
+        let rows: Vec<f64> = (0..r).map(|i| w[i * c..(i + 1) * c].iter().sum()).collect();
+        let cols: Vec<f64> = (0..c).map(|k| (0..r).map(|i| w[i * c + k]).sum()).collect();
+        let term = |v: &[f64]| v.iter().map(|&x| weight_log_term(x).unwrap()).sum::<f64>();
+        let s: f64 = w.iter().sum();
+        let i = mutual_information_of_weight_sums(s, term(&w), term(&rows), term(&cols), Base::Bits).unwrap();
+        let e = joint_entropies(&j, r, c, Base::Bits).unwrap();
+        prop_assert!(close(i, e.mutual_information, 1e-9));
+        let h = entropy_of_weight_sums(rows.iter().sum::<f64>(), term(&rows), Base::Bits).unwrap();
+        prop_assert!(close(h, entropy_of_weights(&rows, Base::Bits).unwrap(), 1e-9));
     }
 }

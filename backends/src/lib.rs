@@ -14,6 +14,7 @@
 //! * [`meshes`]: built-in objects seen from outside (geodesic sphere, torus,
 //!   table with chairs).
 //! * [`viewpoint`]: the viewpoint channel of Part V.
+//! * [`volume`]: volumes, ray casting and the viewpoint channel over voxels (Part VI).
 //! * [`vulkan`]: the Vulkan compute backend (ash + naga), tracing and reductions.
 //! * [`visibility`]: the scene visibility channel of Part III, with
 //!   jackknife standard errors.
@@ -31,6 +32,7 @@ pub mod solids;
 pub mod tracer;
 pub mod viewpoint;
 pub mod visibility;
+pub mod volume;
 pub mod vulkan;
 
 pub use backend::{BackendChoice, BackendError, open};

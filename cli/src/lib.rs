@@ -15,6 +15,7 @@ pub mod report;
 pub mod scene;
 pub mod values;
 pub mod viewpoints;
+pub mod volume;
 
 use std::fmt;
 

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use clap::Parser;
 use clap::error::ErrorKind;
 use itgfx_cli::options::{Cli, Command};
-use itgfx_cli::{CliError, complexity, devices, measure, viewpoints};
+use itgfx_cli::{CliError, complexity, devices, measure, viewpoints, volume};
 
 /// One JSON object, or the readable table.
 fn render(report: &itgfx_cli::report::Report, json: bool) -> String {
@@ -37,6 +37,10 @@ fn run(cli: Cli) -> Result<String, CliError> {
         Command::Viewpoints(o) => {
             threads(o.threads)?;
             Ok(render(&viewpoints::run(&o)?, o.common.json))
+        }
+        Command::Volume(o) => {
+            threads(o.threads)?;
+            Ok(render(&volume::run(&o)?, o.common.json))
         }
         Command::Devices(c) => Ok(render(&devices::run()?, c.json)),
     }

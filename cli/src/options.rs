@@ -39,6 +39,8 @@ pub enum Command {
     Measure(MeasureCommand),
     /// Viewpoint channel V -> O: VE, VMI, best views (Part V)
     Viewpoints(ViewpointsOptions),
+    /// Viewpoint channel over voxels V -> Z: VMI, VoMI, EVMI, best views of a volume (Part VI)
+    Volume(crate::volume::VolumeOptions),
     /// Vulkan devices found, and the one --backend vulkan uses
     Devices(Common),
 }

@@ -60,9 +60,11 @@ pub struct VolumeOptions {
     /// Viewpoints: 12, 42, 162, 642 or 2562 points of a subdivided icosahedron
     #[arg(long, value_name = "N", default_value = "42", value_parser = viewpoint_count, help_heading = "Channel")]
     pub viewpoints: u32,
-    /// Image side of the ray caster for the channel: N x N rays per viewpoint (8..=1024)
-    #[arg(long, value_name = "N", default_value = "64", value_parser = size, help_heading = "Channel")]
-    pub size: u32,
+    /// Image side of the ray caster for the channel: N x N rays per viewpoint (8..=1024;
+    /// default twice the volume's largest dimension, at least 32, at most 512: under about two
+    /// rays per voxel the rows alias and I(V;Z) is biased upwards)
+    #[arg(long, value_name = "N", value_parser = size, help_heading = "Channel")]
+    pub size: Option<u32>,
     /// Sample step along rays, in voxels (0.05..=2)
     #[arg(long, value_name = "F", default_value = "0.5", value_parser = step, help_heading = "Channel")]
     pub step: f64,
@@ -267,7 +269,9 @@ fn run_in(
         )));
     }
     let mut progress = Progress::new();
-    let copts = VolumeChannelOptions { directions: dirs.clone(), distance: o.distance, size: o.size };
+    let largest = volume.dims.iter().copied().max().unwrap_or(1) as u32;
+    let rays = o.size.unwrap_or((2 * largest).clamp(32, 512));
+    let copts = VolumeChannelOptions { directions: dirs.clone(), distance: o.distance, size: rays };
     let ch = volume_channel(&caster, &copts, &mut |d, t| progress.update(d, t));
     let t_channel = t0.elapsed().as_secs_f64();
     if ch.is_blind() {

@@ -72,6 +72,25 @@ fn hydrogen_symmetries_and_channel_identities() {
 }
 
 #[test]
+fn vmi_is_robust_to_resolution_and_ve_is_not() {
+    // Part V/VI (after [VFSG06]): splitting every voxel into 8 equal ones
+    // raises VE = H(Z|v) by log2 8 = 3 bits and leaves VMI unchanged. Doubling
+    // a built-in's resolution is that split plus finer detail (the object and
+    // its optical depth stay the same: opacity is per world unit), so VE must
+    // rise by most of 3 bits (> 2) while I(V;Z) moves by under 10%.
+    let run = |n: &str, size: &str| {
+        json(&["volume", &format!("hydrogen:3,2,0,{n}"), "--viewpoints", "12", "--size", size, "--json"])
+    };
+    let (a, b) = (run("12", "32"), run("24", "48"));
+    let mean = |r: &Value, k: &str| views(r).iter().map(|v| v[k].as_f64().unwrap()).sum::<f64>() / 12.0;
+    let ve = mean(&b, "H_Z_given_v") - mean(&a, "H_Z_given_v");
+    assert!(ve > 2.0 && ve < 3.2, "VE rose by {ve} bits");
+    let (ia, ib) = (a["I_VZ"].as_f64().unwrap(), b["I_VZ"].as_f64().unwrap());
+    assert!((ia - ib).abs() < 0.1 * ia, "I(V;Z) {ia} -> {ib}");
+    assert!((mean(&a, "VMI") - mean(&b, "VMI")).abs() < 0.1 * ve);
+}
+
+#[test]
 fn opaque_cube_is_best_seen_from_a_corner() {
     // The volume counterpart of Part V's cube: with a step transfer function
     // the cube is an opaque box; views that show three faces (directions far

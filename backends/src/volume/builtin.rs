@@ -15,6 +15,11 @@
 //!   polygonal cube of Part V.
 //! * `sphere[:N]`: a radial Gaussian, value `exp(−8 r²)`: every direction is
 //!   equivalent.
+//!
+//! Every built-in spans [`REFERENCE_SIZE`] world units whatever `N`, so its
+//! voxel spacing is `64/N`: opacity being per world unit, `hydrogen` at
+//! `N = 32` and at `N = 64` are the same semi-transparent object sampled
+//! twice as finely (the resolution test of VMI against VE needs that).
 
 use glam::DVec3;
 
@@ -39,6 +44,10 @@ pub const BUILT_IN: &[BuiltInVolume] = &[
     BuiltInVolume { syntax: "cube[:N]", description: "a solid cube, the middle half of each axis (default 32)" },
     BuiltInVolume { syntax: "sphere[:N]", description: "a radial Gaussian exp(-8 r^2) (default 32)" },
 ];
+
+/// Extent of every built-in in world units: a voxel of a built-in at
+/// `N = 64` is one unit wide.
+pub const REFERENCE_SIZE: f64 = 64.0;
 
 /// Smallest and largest `N` of a built-in.
 pub const SIZES: (usize, usize) = (4, 512);
@@ -121,7 +130,10 @@ fn field(name: &str, n: usize, mut f: impl FnMut(DVec3) -> f64) -> Volume {
             }
         }
     }
-    Volume { name: name.into(), dims: [n; 3], spacing: [1.0; 3], data, labels: None, label_names: Vec::new() }
+    // 64 world units across whatever the resolution: opacity is per world
+    // unit (see `raycast`), so a built-in resampled keeps its optical depth.
+    let h = REFERENCE_SIZE / n as f64;
+    Volume { name: name.into(), dims: [n; 3], spacing: [h; 3], data, labels: None, label_names: Vec::new() }
 }
 
 /// Generalised Laguerre polynomial `L_k^(α)(x)` by its three-term recurrence.

@@ -4,8 +4,10 @@
 //! direction, looks at the centre and its square image just covers the
 //! bounding sphere (a half angle of `asin(1/distance)` to the sphere's
 //! tangents). A ray samples the volume every `step` voxels from where it
-//! enters the box; each sample's transfer-function opacity is corrected for
-//! the step, `α = 1 − (1 − α_tf)^step`, and it adds `T · α` to the image,
+//! enters the box; each sample's transfer-function opacity, given per world
+//! unit of length (a voxel of spacing 1, as in VTK), is corrected for the
+//! step, `α = 1 − (1 − α_tf)^Δ` with `Δ` the step in world units, and the
+//! sample adds `T · α` to the image,
 //! `T` the transmittance in front of it. That contribution is the sample's
 //! visibility (Part VI §2.2); it is shared among the eight voxels around the
 //! sample by their trilinear weights, so `Σ_z vis(z|v) = Σ_rays (1 − T_end)`.
@@ -89,10 +91,11 @@ impl<'a> Caster<'a> {
         let (lo, hi) = volume.range();
         let (lo, hi) = (f64::from(lo), f64::from(hi));
         let inv_range = if hi > lo { 1.0 / (hi - lo) } else { 0.0 };
+        let world_step = step_voxels * volume.spacing.iter().copied().fold(f64::INFINITY, f64::min);
         let table = (0..TABLE)
             .map(|k| {
                 let (a, c) = tf.eval(k as f64 / (TABLE - 1) as f64);
-                (1.0 - (1.0 - a.min(1.0)).powf(step_voxels), c)
+                (1.0 - (1.0 - a.min(1.0)).powf(world_step), c)
             })
             .collect();
         let voxel_opacity = volume.data.iter().map(|&v| tf.eval((f64::from(v) - lo) * inv_range).0).collect();

@@ -12,7 +12,7 @@ use super::VolumeError;
 pub struct ControlPoint {
     /// Normalised scalar in `[0, 1]`.
     pub value: f64,
-    /// Opacity per voxel length in `[0, 1]`.
+    /// Opacity per world unit of length (a voxel of spacing 1) in `[0, 1]`.
     pub opacity: f64,
     /// Linear RGB in `[0, 1]`.
     pub colour: [f64; 3],

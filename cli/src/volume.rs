@@ -10,6 +10,7 @@ use itgfx_backends::viewpoint::selection::{best_views, exploration};
 use itgfx_backends::viewpoint::{ViewpointWeights, icosphere};
 use itgfx_backends::volume::builtin::{BUILT_IN, built_in, is_built_in};
 use itgfx_backends::volume::channel::{channel_memory, viewpoint_colour};
+use itgfx_backends::volume::nrrd::read_nrrd;
 use itgfx_backends::volume::raw::{RawType, read_raw};
 use itgfx_backends::volume::raycast::{Caster, View};
 use itgfx_backends::volume::transfer::PRESETS;
@@ -26,8 +27,10 @@ use crate::{CliError, core_err};
 pub const MEMORY_LIMIT: u64 = 6 << 30;
 
 fn volume_help() -> String {
-    let mut s =
-        String::from("VOLUME is a built-in or a raw file (little-endian values, x fastest; give --dims and --type):\n");
+    let mut s = String::from(
+        "VOLUME is a built-in, an .nrrd file (one raw scalar volume, little-endian) or a raw file\n\
+                      (little-endian values, x fastest; give --dims and --type):\n",
+    );
     for b in BUILT_IN {
         s.push_str(&format!("  {}\n      {}\n", b.syntax, b.description));
     }
@@ -42,7 +45,7 @@ fn volume_help() -> String {
 #[derive(Debug, Args)]
 #[command(after_help = volume_help())]
 pub struct VolumeOptions {
-    /// A built-in volume (hydrogen:3,2,0,64, phantom:64, cube:32, sphere:32) or a raw file
+    /// A built-in volume (hydrogen:3,2,0,64, phantom:64, cube:32, sphere:32), an .nrrd or a raw file
     #[arg(value_name = "VOLUME")]
     pub volume: Option<String>,
     /// Raw file size X,Y,Z in voxels
@@ -162,6 +165,12 @@ fn load(o: &VolumeOptions, spec: &str) -> Result<Volume, CliError> {
             return Err(CliError::usage(format!("{spec:?}: no such file")));
         }
         return built_in(spec).map_err(usage);
+    }
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("nrrd")) {
+        if o.dims.is_some() || o.value_type.is_some() || o.spacing.is_some() {
+            return Err(CliError::usage("--dims, --type and --spacing are for raw files: an NRRD header has them"));
+        }
+        return read_nrrd(path).map_err(usage);
     }
     let d = o.dims.ok_or_else(|| CliError::usage(format!("{spec:?}: a raw file needs --dims X,Y,Z")))?;
     let ty = RawType::parse(o.value_type.as_deref().unwrap_or("u8")).map_err(usage)?;

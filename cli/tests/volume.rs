@@ -160,6 +160,14 @@ fn raw_volumes_and_bad_input() {
     let rs = raw.to_str().unwrap();
     let r = json(&["volume", rs, "--dims", "6,6,6", "--type", "u8", "--viewpoints", "12", "--size", "8", "--json"]);
     assert_eq!(r["voxels"], 216);
+    // The same ball as NRRD: the same channel.
+    let nrrd = dir.join("ball.nrrd");
+    let head = "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 6 6 6\nencoding: raw\n\n";
+    std::fs::write(&nrrd, [head.as_bytes(), &bytes].concat()).unwrap();
+    let n = json(&["volume", nrrd.to_str().unwrap(), "--viewpoints", "12", "--size", "8", "--json"]);
+    assert_eq!(n["I_VZ"], r["I_VZ"]);
+    let bad_nrrd = dir.join("bad.nrrd");
+    std::fs::write(&bad_nrrd, [head.replace("raw", "gzip").as_bytes(), &bytes].concat()).unwrap();
     let short = dir.join("short.raw");
     std::fs::write(&short, &bytes[..100]).unwrap();
     let nan = dir.join("nan.raw");
@@ -183,6 +191,8 @@ fn raw_volumes_and_bad_input() {
         (vec!["volume", ns, "--dims", "2,1,1", "--type", "f32"], "not finite"),
         (vec!["volume", zs, "--dims", "2,2,2"], "constant volume"),
         (vec!["volume", rs, "--dims", "6,6"], "--dims"),
+        (vec!["volume", bad_nrrd.to_str().unwrap()], "encoding"),
+        (vec!["volume", nrrd.to_str().unwrap(), "--dims", "6,6,6"], "NRRD header"),
         (vec!["volume", rs, "--dims", "6,6,6", "--type", "i64"], "--type"),
         (vec!["volume", "sphere:8", "--tf", es], "no control point"),
         (vec!["volume", "sphere:8", "--tf", cs], "opacity 0 everywhere"),

@@ -3,7 +3,7 @@
 //!
 //! A ray caster ([`raycast`]) composites a scalar grid ([`Volume`]) front to
 //! back through a transfer function ([`transfer`]); the opacity each sample
-//! adds to the image, `T · α` (its *visibility*, Part VI §2.2 after [BS05]),
+//! adds to the image, `T · α` (its *visibility*, Part VI §2.2 after Bordoloi and Shen 2005),
 //! is shared among the eight voxels around it by their trilinear weights.
 //! Summed over the rays of viewpoint `v`, these give the row `vis(z|v)` of
 //! the channel `V → Z` over voxels ([`channel`]), stored in the sparse
@@ -19,7 +19,7 @@
 //! * [`builtin`]: analytic volumes (hydrogen orbitals, a labelled phantom,
 //!   a solid cube);
 //! * [`raw`]: raw volumes (u8/u16/f32, little-endian) with size checks
-//!   before any allocation;
+//!   before any allocation; [`nrrd`]: the single-file raw NRRD subset;
 //! * [`transfer`]: piecewise-linear opacity and colour over the scalar;
 //! * [`raycast`]: cameras on the viewpoint sphere, visibility and pictures;
 //! * [`channel`]: the channel and its measures.
@@ -27,6 +27,7 @@
 pub mod builtin;
 pub mod channel;
 pub mod grid;
+pub mod nrrd;
 pub mod raw;
 pub mod raycast;
 pub mod transfer;

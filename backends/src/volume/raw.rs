@@ -73,13 +73,19 @@ pub fn read_raw(path: &Path, dims: [usize; 3], ty: RawType, spacing: [f64; 3]) -
     if bytes.len() as u64 != want {
         return Err(q(format!("read {} bytes, expected {want} (changed while reading?)", bytes.len())));
     }
-    let data: Vec<f32> = match ty {
+    let data = decode(&bytes, ty);
+    let name = path.file_name().map_or_else(|| "volume".to_string(), |s| s.to_string_lossy().into_owned());
+    Volume::new(name, dims, spacing, data).map_err(|e| q(e.0))
+}
+
+/// Little-endian values of type `ty` as `f32` (a trailing partial value is ignored).
+#[must_use]
+pub fn decode(bytes: &[u8], ty: RawType) -> Vec<f32> {
+    match ty {
         RawType::U8 => bytes.iter().map(|&b| f32::from(b)).collect(),
         RawType::U16 => bytes.chunks_exact(2).map(|c| f32::from(u16::from_le_bytes([c[0], c[1]]))).collect(),
         RawType::F32 => bytes.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect(),
-    };
-    let name = path.file_name().map_or_else(|| "volume".to_string(), |s| s.to_string_lossy().into_owned());
-    Volume::new(name, dims, spacing, data).map_err(|e| q(e.0))
+    }
 }
 
 #[cfg(test)]

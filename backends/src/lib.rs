@@ -15,6 +15,7 @@
 //!   table with chairs).
 //! * [`viewpoint`]: the viewpoint channel of Part V.
 //! * [`simplify`]: viewpoint-driven mesh simplification (Part VII).
+//! * [`volume`]: volumes, ray casting and the viewpoint channel over voxels (Part VI).
 //! * [`vulkan`]: the Vulkan compute backend (ash + naga), tracing and reductions.
 //! * [`imaging`]: mutual-information registration and information-channel
 //!   segmentation of images (syllabus Part 8).
@@ -37,6 +38,7 @@ pub mod solids;
 pub mod tracer;
 pub mod viewpoint;
 pub mod visibility;
+pub mod volume;
 pub mod vulkan;
 
 pub use backend::{BackendChoice, BackendError, open};

@@ -18,6 +18,7 @@ pub mod scene;
 pub mod simplify;
 pub mod values;
 pub mod viewpoints;
+pub mod volume;
 
 use std::fmt;
 

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use clap::Parser;
 use clap::error::ErrorKind;
 use itgfx_cli::options::{Cli, Command};
-use itgfx_cli::{CliError, complexity, devices, imaging, measure, simplify, viewpoints};
+use itgfx_cli::{CliError, complexity, devices, imaging, measure, simplify, viewpoints, volume};
 
 /// One JSON object, or the readable table.
 fn render(report: &itgfx_cli::report::Report, json: bool) -> String {
@@ -41,6 +41,10 @@ fn run(cli: Cli) -> Result<String, CliError> {
         Command::Simplify(o) => {
             threads(o.threads)?;
             Ok(render(&simplify::run(&o)?, o.common.json))
+        }
+        Command::Volume(o) => {
+            threads(o.threads)?;
+            Ok(render(&volume::run(&o)?, o.common.json))
         }
         Command::Devices(c) => Ok(render(&devices::run()?, c.json)),
         Command::Phantom(o) => Ok(render(&imaging::run_phantom(&o)?, o.json)),

@@ -41,6 +41,8 @@ pub enum Command {
     Viewpoints(ViewpointsOptions),
     /// Viewpoint-driven mesh simplification by VMI or VE (Part VII)
     Simplify(crate::simplify::SimplifyOptions),
+    /// Viewpoint channel over voxels V -> Z: VMI, VoMI, EVMI, best views of a volume (Part VI)
+    Volume(crate::volume::VolumeOptions),
     /// Vulkan devices found, and the one --backend vulkan uses
     Devices(Common),
     /// A synthetic two-modality image pair with a known rigid transform (Part 8)

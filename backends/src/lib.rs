@@ -26,6 +26,7 @@ pub mod lines;
 pub mod meshes;
 pub mod obj;
 pub mod preview;
+pub mod radiosity;
 pub mod scene;
 pub mod solids;
 pub mod tracer;

@@ -11,6 +11,7 @@ pub mod measure_options;
 pub mod options;
 pub mod output;
 pub mod progress;
+pub mod radiosity;
 pub mod report;
 pub mod scene;
 pub mod values;

@@ -39,6 +39,10 @@ fn run(cli: Cli) -> Result<String, CliError> {
             Ok(render(&viewpoints::run(&o)?, o.common.json))
         }
         Command::Devices(c) => Ok(render(&devices::run()?, c.json)),
+        Command::Radiosity(o) => {
+            threads(o.threads)?;
+            Ok(render(&itgfx_cli::radiosity::run(&o)?, o.common.json))
+        }
     }
 }
 

@@ -41,6 +41,8 @@ pub enum Command {
     Viewpoints(ViewpointsOptions),
     /// Vulkan devices found, and the one --backend vulkan uses
     Devices(Common),
+    /// Hierarchical radiosity refined by the oracles of Part III §9 and Part III-IV §4
+    Radiosity(crate::radiosity::RadiosityOptions),
 }
 
 /// Options every command has.

@@ -32,6 +32,7 @@ pub mod meshes;
 pub mod obj;
 pub mod preview;
 pub mod render;
+pub mod radiosity;
 pub mod scene;
 pub mod simplify;
 pub mod solids;

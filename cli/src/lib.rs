@@ -13,6 +13,7 @@ pub mod options;
 pub mod output;
 pub mod progress;
 pub mod render;
+pub mod radiosity;
 pub mod report;
 pub mod scene;
 pub mod simplify;

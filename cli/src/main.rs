@@ -55,6 +55,10 @@ fn run(cli: Cli) -> Result<String, CliError> {
             Ok(render(&itgfx_cli::render::run(&o)?, o.common.json))
         }
         Command::Compare(o) => Ok(render(&itgfx_cli::render::run_compare(&o)?, o.common.json)),
+        Command::Radiosity(o) => {
+            threads(o.threads)?;
+            Ok(render(&itgfx_cli::radiosity::run(&o)?, o.common.json))
+        }
     }
 }
 

@@ -55,6 +55,8 @@ pub enum Command {
     Render(crate::render::RenderOptions),
     /// RMSE, PSNR and relMSE of one EXR image against another
     Compare(crate::render::CompareOptions),
+    /// Hierarchical radiosity refined by the oracles of Part III §9 and Part III-IV §4
+    Radiosity(crate::radiosity::RadiosityOptions),
 }
 
 /// Options every command has.

@@ -13,6 +13,7 @@ pub mod output;
 pub mod progress;
 pub mod report;
 pub mod scene;
+pub mod shard;
 pub mod values;
 pub mod viewpoints;
 

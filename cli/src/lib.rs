@@ -17,6 +17,7 @@ pub mod radiosity;
 pub mod report;
 pub mod scene;
 pub mod simplify;
+pub mod shard;
 pub mod values;
 pub mod viewpoints;
 pub mod volume;

@@ -153,6 +153,9 @@ fn bad_input() {
     let flat32 = d.join("flat32.png");
     image::GrayImage::from_pixel(32, 32, image::Luma([90])).save(&flat32).unwrap();
     refused(&["register", s(&f), s(&flat32), "--out", s(&out)], "constant");
+    let tiny = d.join("tiny.png");
+    image::GrayImage::from_fn(3, 3, |x, _| image::Luma([x as u8 * 100])).save(&tiny).unwrap();
+    refused(&["register", s(&tiny), s(&tiny), "--out", s(&out)], "4 x 4");
     refused(&["segment", "/nonexistent/b.png", "--out", s(&out)], "/nonexistent/b.png");
     assert!(!out.exists(), "a refused run leaves no --out behind");
     refused(&["segment", s(&f), "--out", s(&text)], "not a directory");

@@ -89,6 +89,12 @@ pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
             fixed.width, fixed.height, moving.width, moving.height
         )));
     }
+    if fixed.width < 4 || fixed.height < 4 {
+        return Err(CliError::usage(format!(
+            "{:?}: {} x {} pixels: register needs at least 4 x 4",
+            o.fixed, fixed.width, fixed.height
+        )));
+    }
     for (img, path) in [(&fixed, &o.fixed), (&moving, &o.moving)] {
         let (lo, hi) = img.range();
         if lo >= hi {

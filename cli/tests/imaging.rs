@@ -100,19 +100,16 @@ fn piecewise_constant_segmented() {
     let d = tmp("segment");
     let img = d.join("blocks.png");
     let (w, h) = (40u32, 30u32);
-    let pic = image::GrayImage::from_fn(w, h, |x, y| {
-        image::Luma([match (x < 15, y < 12) {
+    // 16-bit samples: the reader takes 8- and 16-bit PNGs.
+    let pic = image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_fn(w, h, |x, y| {
+        let level: u16 = match (x < 15, y < 12) {
             (true, true) => 20,
             (true, false) => 200,
             (false, true) => 120,
-            (false, false) => {
-                if x < 30 {
-                    250
-                } else {
-                    20
-                }
-            }
-        }])
+            (false, false) if x < 30 => 250,
+            (false, false) => 20,
+        };
+        image::Luma([257 * level])
     });
     pic.save(&img).unwrap();
     let v = json(&itgfx(&["segment", s(&img), "--out", s(&d.join("o")), "--ratio", "1", "--json"]));
@@ -153,6 +150,12 @@ fn bad_input() {
     refused(&["phantom", "--out", s(&out), "--size", "100000,100000"], "--size");
     refused(&["phantom", "--out", s(&out), "--size", "8000,8000"], "--size");
     refused(&["segment", s(&flat), "--out", s(&out)], "constant");
+    let flat32 = d.join("flat32.png");
+    image::GrayImage::from_pixel(32, 32, image::Luma([90])).save(&flat32).unwrap();
+    refused(&["register", s(&f), s(&flat32), "--out", s(&out)], "constant");
+    let tiny = d.join("tiny.png");
+    image::GrayImage::from_fn(3, 3, |x, _| image::Luma([x as u8 * 100])).save(&tiny).unwrap();
+    refused(&["register", s(&tiny), s(&tiny), "--out", s(&out)], "4 x 4");
     refused(&["segment", "/nonexistent/b.png", "--out", s(&out)], "/nonexistent/b.png");
     assert!(!out.exists(), "a refused run leaves no --out behind");
     refused(&["segment", s(&f), "--out", s(&text)], "not a directory");

@@ -43,6 +43,10 @@ pub struct RegisterOptions {
     /// image; below it the metric is refused (a penalty), so the optimiser
     /// cannot win by sliding the images apart.
     pub min_overlap: f64,
+    /// Farthest a line search may reach, in level pixels (angles: the
+    /// rotation that moves the image's rim that far) at the first level;
+    /// later levels, which start near the answer, reach half as far.
+    pub max_step: f64,
 }
 
 impl Default for RegisterOptions {
@@ -59,6 +63,7 @@ impl Default for RegisterOptions {
             initial: Rigid2::default(),
             max_iterations: 50,
             min_overlap: 0.25,
+            max_step: 8.0,
         }
     }
 }
@@ -214,8 +219,10 @@ pub fn register(
         progress(k, o.levels.len());
         let pair = Pair::new(fixed, moving, level, o.bins);
         let s = level.shrink as f64;
+        // Powell's directions start as the translations, then the rotation:
+        // the shift is usually the larger part of a misalignment.
         let objective = |p: &[f64; 3]| {
-            let tr = Rigid2::from_params(*p);
+            let tr = Rigid2 { angle_deg: p[2], tx: p[0], ty: p[1] };
             let overlap = pair.histogram(&tr, o.kind, &mut h);
             if overlap < o.min_overlap {
                 return PENALTY;
@@ -226,12 +233,12 @@ pub fn register(
             ftol: 1e-7,
             xtol: if level.shrink == 1 { 0.002 } else { 0.01 },
             max_iterations: o.max_iterations,
-            max_step: 40.0,
+            max_step: if k == 0 { o.max_step } else { o.max_step / 2.0 },
         };
         // One unit of each direction moves the image's rim by about one level pixel.
-        let scales = [s * radius.recip().to_degrees(), s, s];
-        let r = minimise(objective, t.params(), scales, &popt);
-        t = Rigid2::from_params(r.x);
+        let scales = [s, s, s * radius.recip().to_degrees()];
+        let r = minimise(objective, [t.tx, t.ty, t.angle_deg], scales, &popt);
+        t = Rigid2 { angle_deg: r.x[2], tx: r.x[0], ty: r.x[1] };
         levels.push(LevelResult {
             level,
             size: (pair.fixed.width, pair.fixed.height),

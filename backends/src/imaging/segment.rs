@@ -163,7 +163,9 @@ fn leaf_joint(q: &[u16], width: usize, leaves: &[Rect], bins: usize, total: f64)
     j
 }
 
-/// Segments `img`; `progress(done, total)` reports the split.
+/// Segments `img`; `progress(leaves, max_leaves)` reports the split as it
+/// grows, then `progress(n, n)` once, with the final leaf count, as the
+/// merge starts.
 ///
 /// # Errors
 /// [`SegmentError`] for an empty or constant image.
@@ -217,6 +219,7 @@ pub fn segment(
         let i = mutual_information(&j, leaves.len(), bins, Base::Bits).unwrap_or(0.0);
         split_curve.push(i);
     }
+    progress(leaves.len() as u64, leaves.len() as u64);
     let j = leaf_joint(&q, w, &leaves, bins, total);
     let ib = agglomerative_bottleneck(&j, leaves.len(), bins, Base::Bits).map_err(|_| SegmentError::Constant)?;
     let n = leaves.len();

@@ -165,7 +165,8 @@ pub struct SegmentOptions {
     /// Directory for labels.png, means.png, curve.png, result.json
     #[arg(long, value_name = "DIR", value_parser = out_path)]
     pub out: PathBuf,
-    /// Regions kept after merging (default: the fewest keeping --ratio of I(R;X))
+    /// Regions kept after merging, at most the leaves of the split (default: the fewest keeping
+    /// --ratio of I(R;X))
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=512))]
     pub regions: Option<u32>,
     /// Without --regions: keep the fewest clusters with I(T;X) >= ratio * I(R;X) of the split

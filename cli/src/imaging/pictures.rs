@@ -71,7 +71,8 @@ pub fn checkerboard(a: &Gray, b: &Gray, tile: usize) -> RgbImage {
     })
 }
 
-/// `a` in magenta, `b` in green: aligned structures look grey.
+/// `a` in magenta, `b` in green: edges coincide when the images are aligned
+/// (grey only where the two intensities are equal, i.e. one modality).
 #[must_use]
 pub fn overlay(a: &Gray, b: &Gray) -> RgbImage {
     RgbImage::from_fn(a.width as u32, a.height as u32, |x, y| {

@@ -89,6 +89,18 @@ pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
             fixed.width, fixed.height, moving.width, moving.height
         )));
     }
+    if fixed.width < 4 || fixed.height < 4 {
+        return Err(CliError::usage(format!(
+            "{:?}: {} x {} pixels: register needs at least 4 x 4",
+            o.fixed, fixed.width, fixed.height
+        )));
+    }
+    for (img, path) in [(&fixed, &o.fixed), (&moving, &o.moving)] {
+        let (lo, hi) = img.range();
+        if lo >= hi {
+            return Err(CliError::usage(format!("{path:?}: the image is constant: nothing to register")));
+        }
+    }
     let truth = o.truth.as_deref().map(read_truth).transpose()?;
     let kind = match o.histogram.as_str() {
         "binned" => HistogramKind::Binned,

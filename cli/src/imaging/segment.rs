@@ -9,7 +9,6 @@ use itgfx_backends::imaging::{Gray, segment};
 use super::SegmentOptions;
 use super::pictures::{label_image, plot, read_gray, write_gray, write_rgb};
 use crate::CliError;
-use crate::progress::Progress;
 use crate::report::Report;
 
 const FILES: [&str; 4] = ["labels.png", "means.png", "curve.png", "result.json"];
@@ -33,9 +32,16 @@ pub fn run_segment(o: &SegmentOptions) -> Result<Report, CliError> {
         ratio: o.ratio,
     };
     let t0 = Instant::now();
-    let mut bar = Progress::new();
-    let s =
-        segment(&img, &engine, |d, n| bar.update(d, n)).map_err(|e| CliError::usage(format!("{:?}: {e}", o.image)))?;
+    let mut next = 1;
+    let s = segment(&img, &engine, |d, n| {
+        if d == n {
+            super::say(&format!("segment: {n} leaves; merging by the information bottleneck (cost ~ leaves^3)"));
+        } else if d >= next {
+            super::say(&format!("segment: splitting, {d}/{n} leaves"));
+            next = d * 2;
+        }
+    })
+    .map_err(|e| CliError::usage(format!("{:?}: {e}", o.image)))?;
     let seconds = t0.elapsed().as_secs_f64();
     let (w, h) = (img.width, img.height);
     write_rgb(&label_image(&s.labels, w, h), &paths[0])?;

@@ -186,6 +186,24 @@ fn cornell_box_images_json_and_threads() {
         (v, std::fs::read(out.join("image.exr")).unwrap(), out)
     };
     let (v, exr1, out) = run("one", "1");
+    // --export-scene: one OBJ per material and scene.json for peers.
+    let ex = dir.join("export");
+    json(&itgfx(&[
+        "render",
+        "cornell-box",
+        "--out",
+        s(&ex),
+        "--size",
+        "8x8",
+        "--spp",
+        "1",
+        "--export-scene",
+        "--json",
+    ]));
+    let desc: serde_json::Value = serde_json::from_slice(&std::fs::read(ex.join("scene.json")).unwrap()).unwrap();
+    let mats = desc["materials"].as_array().unwrap();
+    assert_eq!(mats.iter().map(|m| m["triangles"].as_u64().unwrap()).sum::<u64>(), 34, "17 quads");
+    assert!(mats.iter().any(|m| m["radiance"][0].as_f64().unwrap() == 17.0), "the light emits");
     assert_eq!(v["width"], 32);
     assert_eq!(v["height"], 24);
     assert_eq!(v["spp_mean"].as_f64().unwrap(), 8.0);

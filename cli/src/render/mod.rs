@@ -1,6 +1,7 @@
 //! `itgfx render SCENE`: path-traced images with the tutorial's adaptive
 //! pixel criteria (Part IV; Part III-IV §5), and `itgfx compare A.exr B.exr`.
 
+mod export_scene;
 pub mod images;
 mod metrics;
 
@@ -75,6 +76,10 @@ pub struct RenderOptions {
     /// Add RMSE/PSNR/relMSE against this reference EXR to the output
     #[arg(long, value_name = "R.exr")]
     pub reference: Option<PathBuf>,
+    /// Also write the scene for other renderers: one OBJ per material and scene.json (materials,
+    /// camera, size) in DIR
+    #[arg(long)]
+    pub export_scene: bool,
     /// Tracing backend: cpu, reference or vulkan
     #[arg(long, value_name = "cpu|reference|vulkan", default_value = "cpu", value_parser = backend)]
     pub backend: BackendChoice,
@@ -250,6 +255,10 @@ fn render_into(o: &RenderOptions, spec: &str, dir: &std::path::Path) -> Result<R
     images::write_exr(&image, &files[0])?;
     images::write_display_png(&image, o.exposure, &files[1])?;
     images::write_density_png(&frame.samples, image.width, image.height, &files[2])?;
+    let mut wrote: Vec<PathBuf> = files.to_vec();
+    if o.export_scene {
+        wrote.extend(export_scene::export_scene(&scene, &camera, o.size, dir)?);
+    }
 
     let mut r = Report::new();
     r.text("scene", scene.name.clone()).text("backend", tracer.name()).text("sampler", o.sampler.clone());
@@ -276,7 +285,7 @@ fn render_into(o: &RenderOptions, spec: &str, dir: &std::path::Path) -> Result<R
     }
     let traced: f64 = frame.samples.iter().chain(&frame.pilot_samples).map(|&s| f64::from(s)).sum();
     r.real("seconds", seconds, Some("s")).real("Msamples_per_s", traced / seconds.max(1e-9) / 1e6, None);
-    r.texts("wrote", files.iter().map(|p| p.display().to_string()).collect());
+    r.texts("wrote", wrote.iter().map(|p| p.display().to_string()).collect());
     Ok(r)
 }
 

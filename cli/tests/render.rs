@@ -79,6 +79,93 @@ fn furnace_is_unbiased() {
 }
 
 #[test]
+fn unbiased_adaptive_sampling_keeps_the_furnace_mean() {
+    let dir = temp("furnace-adaptive");
+    let obj = furnace(&dir, 0.6, 1.0);
+    let camera = "0.5,0.5,0.5,0.5,0.5,1,0,1,0,90";
+    let want = 1.0 / (1.0 - 0.6);
+    for (sampler, threshold) in [("ct", "0.2"), ("kl-sqrt", "0.002")] {
+        let out = dir.join(sampler);
+        let v = json(&itgfx(&[
+            "render",
+            s(&obj),
+            "--out",
+            s(&out),
+            "--size",
+            "24x24",
+            "--spp",
+            "8",
+            "--camera",
+            camera,
+            "--sampler",
+            sampler,
+            "--threshold",
+            threshold,
+            "--max-spp",
+            "32",
+            "--unbiased",
+            "--json",
+        ]));
+        let (image, traced) = (v["spp_mean"].as_f64().unwrap(), v["spp_traced_mean"].as_f64().unwrap());
+        assert!(image > 8.0, "{sampler}: some pixels refined ({image})");
+        assert_eq!(traced, 2.0 * image, "{sampler}: pilot and image sets are the same size");
+        // At least 8 fresh paths a pixel: the SE bound of the uniform test holds.
+        let mean = v["mean_luminance"].as_f64().unwrap();
+        assert!((mean - want).abs() < 3.0 * want / (576.0f64 * 8.0).sqrt(), "{sampler}: mean {mean}, want {want}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn adaptive_samplers_spend_the_budget() {
+    let dir = temp("adaptive");
+    // The threshold tuned to an average of 16 (pilot: every pixel of 24 x 24, another seed).
+    let out = dir.join("hl");
+    let v = json(&itgfx(&[
+        "render",
+        "mirror-room:1",
+        "--out",
+        s(&out),
+        "--size",
+        "24x24",
+        "--spp",
+        "16",
+        "--sampler",
+        "hl-sqrt",
+        "--json",
+    ]));
+    let mean = v["spp_mean"].as_f64().unwrap();
+    assert!((mean - 16.0).abs() < 4.0, "spent {mean} a pixel for a budget of 16");
+    assert!(v["spp_min"].as_u64().unwrap() >= 8 && v["spp_max"].as_u64().unwrap() <= 256);
+    assert!(v["spp_max"].as_u64().unwrap() > v["spp_min"].as_u64().unwrap(), "the density varies");
+    assert!(v["threshold"].as_f64().unwrap() > 0.0);
+    assert_eq!(&std::fs::read(out.join("density.png")).unwrap()[1..4], b"PNG");
+    // Every criterion runs with a given threshold.
+    for c in ["cc", "ct", "kl", "cs", "hl", "kl-sqrt", "cs-sqrt", "ec"] {
+        let out = dir.join(c);
+        let v = json(&itgfx(&[
+            "render",
+            "cornell-box",
+            "--out",
+            s(&out),
+            "--size",
+            "12x12",
+            "--spp",
+            "8",
+            "--sampler",
+            c,
+            "--threshold",
+            "0.01",
+            "--max-spp",
+            "24",
+            "--json",
+        ]));
+        assert!(v["spp_min"].as_u64().unwrap() >= 8 && v["spp_max"].as_u64().unwrap() <= 24, "{c}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn cornell_box_images_json_and_threads() {
     let dir = temp("cornell");
     let run = |sub: &str, threads: &str| {
@@ -99,6 +186,24 @@ fn cornell_box_images_json_and_threads() {
         (v, std::fs::read(out.join("image.exr")).unwrap(), out)
     };
     let (v, exr1, out) = run("one", "1");
+    // --export-scene: one OBJ per material and scene.json for peers.
+    let ex = dir.join("export");
+    json(&itgfx(&[
+        "render",
+        "cornell-box",
+        "--out",
+        s(&ex),
+        "--size",
+        "8x8",
+        "--spp",
+        "1",
+        "--export-scene",
+        "--json",
+    ]));
+    let desc: serde_json::Value = serde_json::from_slice(&std::fs::read(ex.join("scene.json")).unwrap()).unwrap();
+    let mats = desc["materials"].as_array().unwrap();
+    assert_eq!(mats.iter().map(|m| m["triangles"].as_u64().unwrap()).sum::<u64>(), 34, "17 quads");
+    assert!(mats.iter().any(|m| m["radiance"][0].as_f64().unwrap() == 17.0), "the light emits");
     assert_eq!(v["width"], 32);
     assert_eq!(v["height"], 24);
     assert_eq!(v["spp_mean"].as_f64().unwrap(), 8.0);
@@ -169,6 +274,10 @@ fn bad_input_is_one_line_exit_2() {
     fails(&["render", "cornell-box", "--out", o, "--camera", "1,2,3"], "--camera");
     fails(&["render", "cornell-box", "--out", o, "--sampler", "magic"], "--sampler");
     fails(&["render", "cornell-box", "--size", "8x8"], "--out");
+    fails(&["render", "cornell-box", "--out", o, "--threshold", "0.1"], "adaptive");
+    fails(&["render", "cornell-box", "--out", o, "--sampler", "kl", "--spp", "4"], "at least 8");
+    fails(&["render", "cornell-box", "--out", o, "--sampler", "kl", "--spp", "16", "--max-spp", "8"], "--max-spp");
+    fails(&["render", "cornell-box", "--out", o, "--sampler", "kl", "--threshold=-1"], "--threshold");
     fails(&["render", "--out", o], "scene");
     fails(&["render", "/nonexistent/x.obj", "--out", o], "/nonexistent/x.obj");
     let file = dir.join("file");

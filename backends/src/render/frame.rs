@@ -119,6 +119,7 @@ fn position(x: u32, y: u32, i: u32, first: u32, n: u32, rng: &LineRng, odd: bool
 #[derive(Clone, Copy)]
 struct Batch {
     pixel: u32,
+    slot: u32,
     first: u32,
     n: u32,
     odd: bool,
@@ -175,7 +176,8 @@ pub fn render(
     let rows: Vec<Vec<([f64; 3], u32, u32)>> = (0..h)
         .into_par_iter()
         .map(|y| {
-            let row = render_row(pt, view, policy, y);
+            let pixels: Vec<u32> = (y * w..(y + 1) * w).collect();
+            let row = render_pixels(pt, view, policy, &pixels);
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, u64::from(h));
             row
         })
@@ -195,25 +197,42 @@ pub fn render(
     Ok(frame)
 }
 
-fn render_row(
+/// Samples taken by each of `pixels` (indices `y · width + x`) under
+/// `policy`: what [`render`] would spend there (the pixels of a pilot run).
+///
+/// # Errors
+/// Backend failures only.
+pub fn sample_counts(
     pt: &PathTracer,
     view: &View,
     policy: &dyn Policy,
-    y: u32,
+    pixels: &[u32],
+) -> Result<Vec<u32>, BackendError> {
+    let parts: Vec<Vec<([f64; 3], u32, u32)>> =
+        pixels.par_chunks(64).map(|c| render_pixels(pt, view, policy, c)).collect::<Result<_, _>>()?;
+    Ok(parts.into_iter().flatten().map(|(_, n, pilot)| n.max(pilot)).collect())
+}
+
+/// Renders the given pixels (indices `y · width + x`): (mean, image samples, pilot samples).
+fn render_pixels(
+    pt: &PathTracer,
+    view: &View,
+    policy: &dyn Policy,
+    ids: &[u32],
 ) -> Result<Vec<([f64; 3], u32, u32)>, BackendError> {
-    let w = view.width;
     let unbiased = policy.unbiased();
     let first = policy.first().clamp(1, MAX_PIXEL_SAMPLES);
     let mut pixels: Vec<Pixel> =
-        (0..w).map(|_| Pixel { samples: PixelSamples::default(), batches: 0, next: first, image: 0 }).collect();
+        ids.iter().map(|_| Pixel { samples: PixelSamples::default(), batches: 0, next: first, image: 0 }).collect();
     // Decision rounds: every pixel still asking gets its next batch.
     loop {
         let batches: Vec<Batch> = pixels
             .iter()
             .enumerate()
             .filter(|(_, p)| p.next > 0)
-            .map(|(x, p)| Batch {
-                pixel: y * w + x as u32,
+            .map(|(k, p)| Batch {
+                pixel: ids[k],
+                slot: k as u32,
                 first: p.samples.rgb.len() as u32,
                 n: p.next,
                 odd: p.batches % 2 == 1,
@@ -226,7 +245,7 @@ fn render_row(
         let rgb = trace(pt, view, &batches)?;
         let mut k = 0;
         for b in &batches {
-            let p = &mut pixels[(b.pixel - y * w) as usize];
+            let p = &mut pixels[b.slot as usize];
             p.samples.rgb.extend_from_slice(&rgb[k..k + b.n as usize]);
             k += b.n as usize;
             p.batches += 1;
@@ -241,9 +260,9 @@ fn render_row(
     let batches: Vec<Batch> = pixels
         .iter_mut()
         .enumerate()
-        .map(|(x, p)| {
+        .map(|(k, p)| {
             p.image = p.samples.rgb.len() as u32;
-            Batch { pixel: y * w + x as u32, first: 0, n: p.image, odd: false, pilot: false }
+            Batch { pixel: ids[k], slot: k as u32, first: 0, n: p.image, odd: false, pilot: false }
         })
         .collect();
     let rgb = trace(pt, view, &batches)?;

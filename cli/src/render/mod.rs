@@ -1,6 +1,7 @@
 //! `itgfx render SCENE`: path-traced images with the tutorial's adaptive
 //! pixel criteria (Part IV; Part III-IV §5), and `itgfx compare A.exr B.exr`.
 
+mod export_scene;
 pub mod images;
 mod metrics;
 
@@ -11,7 +12,7 @@ use std::time::Instant;
 use clap::Args;
 use glam::DVec3;
 use itgfx_backends::camera::Camera;
-use itgfx_backends::render::{self, Shading, Uniform, views};
+use itgfx_backends::render::{self, Criterion, Sampling, Shading, criteria, views};
 use itgfx_backends::tracer::Prepared;
 use itgfx_backends::{BackendChoice, open};
 
@@ -45,9 +46,21 @@ pub struct RenderOptions {
     /// Samples per pixel (uniform), or the average every adaptive sampler spends
     #[arg(long, value_name = "N", default_value = "16", value_parser = spp)]
     pub spp: u32,
-    /// Pixel sampler: uniform (stratified)
-    #[arg(long, value_name = "NAME", default_value = "uniform", value_parser = ["uniform"])]
+    /// Pixel sampler: uniform (stratified), or an adaptive criterion: cc (classic contrast), ct
+    /// (confidence test), kl cs hl (f-divergences), kl-sqrt cs-sqrt hl-sqrt (their square roots), ec
+    /// (entropy contrast); see docs/RENDER.md
+    #[arg(long, value_name = "NAME", default_value = "uniform", value_parser = sampler_name)]
     pub sampler: String,
+    /// Adaptive: most samples one pixel may take (default 16 x --spp)
+    #[arg(long, value_name = "N", value_parser = spp)]
+    pub max_spp: Option<u32>,
+    /// Adaptive: this threshold instead of one tuned to spend --spp on average
+    #[arg(long, value_name = "EPS", value_parser = threshold)]
+    pub threshold: Option<f64>,
+    /// Adaptive: decide on a separate pilot set of samples and estimate each pixel from as many
+    /// fresh ones (no bias from samples that chose their own count; traces twice the rays)
+    #[arg(long)]
+    pub unbiased: bool,
     /// Image size in pixels
     #[arg(long, value_name = "WxH", default_value = "256x256", value_parser = size)]
     pub size: (u32, u32),
@@ -63,6 +76,10 @@ pub struct RenderOptions {
     /// Add RMSE/PSNR/relMSE against this reference EXR to the output
     #[arg(long, value_name = "R.exr")]
     pub reference: Option<PathBuf>,
+    /// Also write the scene for other renderers: one OBJ per material and scene.json (materials,
+    /// camera, size) in DIR
+    #[arg(long)]
+    pub export_scene: bool,
     /// Tracing backend: cpu, reference or vulkan
     #[arg(long, value_name = "cpu|reference|vulkan", default_value = "cpu", value_parser = backend)]
     pub backend: BackendChoice,
@@ -96,6 +113,19 @@ fn spp(s: &str) -> Result<u32, String> {
         n @ 1..=65_536 => Ok(n as u32),
         _ => Err(format!("must be in 1..={MAX_SPP}")),
     }
+}
+
+fn sampler_name(s: &str) -> Result<String, String> {
+    if s == "uniform" || Criterion::from_name(s).is_some() {
+        Ok(s.to_string())
+    } else {
+        Err(format!("unknown sampler {s:?}: uniform, {}", criteria::NAMES.join(", ")))
+    }
+}
+
+fn threshold(s: &str) -> Result<f64, String> {
+    let x = finite(s)?;
+    if x >= 0.0 { Ok(x) } else { Err("must be a finite number >= 0".into()) }
 }
 
 fn exposure(s: &str) -> Result<f64, String> {
@@ -151,6 +181,24 @@ pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
     {
         return Err(CliError::usage(format!("--reference {r:?}: not a file")));
     }
+    let adaptive = o.sampler != "uniform";
+    if !adaptive && (o.max_spp.is_some() || o.threshold.is_some() || o.unbiased) {
+        return Err(CliError::usage(
+            "--max-spp, --threshold and --unbiased are for adaptive samplers (--sampler cc, kl, ...)",
+        ));
+    }
+    if let Some(m) = o.max_spp
+        && m < o.spp
+    {
+        return Err(CliError::usage(format!("--max-spp {m} is below --spp {}", o.spp)));
+    }
+    if adaptive && o.spp < criteria::BATCH {
+        return Err(CliError::usage(format!(
+            "--spp {}: adaptive samplers take at least {} per pixel",
+            o.spp,
+            criteria::BATCH
+        )));
+    }
     let (dir, made) = out_dir(o)?;
     let result = render_into(o, &spec, &dir);
     if result.is_err() && made {
@@ -179,7 +227,16 @@ fn render_into(o: &RenderOptions, spec: &str, dir: &std::path::Path) -> Result<R
     let shading = Shading::new(&scene, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
     let tracer = open(o.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
     let camera = o.camera.unwrap_or_else(|| views::default_camera(&scene));
-    let policy = Uniform(o.spp);
+    let sampling = match Criterion::from_name(&o.sampler) {
+        None => Sampling::Uniform(o.spp),
+        Some(criterion) => Sampling::Adaptive {
+            criterion,
+            spp: o.spp,
+            max: o.max_spp.unwrap_or(o.spp.saturating_mul(16).min(MAX_SPP)),
+            unbiased: o.unbiased,
+            threshold: o.threshold,
+        },
+    };
     let t0 = Instant::now();
     let progress = Mutex::new(Progress::new());
     let tick = |d: u64, t: u64| {
@@ -187,8 +244,10 @@ fn render_into(o: &RenderOptions, spec: &str, dir: &std::path::Path) -> Result<R
             p.update(d, t);
         }
     };
-    let frame = render::render(tracer.as_ref(), &scene, &prepared, &shading, &camera, o.size, o.seed, &policy, &tick)
-        .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
+    let rendered =
+        render::render(tracer.as_ref(), &scene, &prepared, &shading, &camera, o.size, o.seed, &sampling, &tick)
+            .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
+    let frame = &rendered.frame;
     let seconds = t0.elapsed().as_secs_f64();
     // The values the EXR holds (f32), so --reference and compare agree.
     let rgb = frame.rgb.iter().map(|c| c.map(|v| f64::from(v as f32))).collect();
@@ -196,6 +255,10 @@ fn render_into(o: &RenderOptions, spec: &str, dir: &std::path::Path) -> Result<R
     images::write_exr(&image, &files[0])?;
     images::write_display_png(&image, o.exposure, &files[1])?;
     images::write_density_png(&frame.samples, image.width, image.height, &files[2])?;
+    let mut wrote: Vec<PathBuf> = files.to_vec();
+    if o.export_scene {
+        wrote.extend(export_scene::export_scene(&scene, &camera, o.size, dir)?);
+    }
 
     let mut r = Report::new();
     r.text("scene", scene.name.clone()).text("backend", tracer.name()).text("sampler", o.sampler.clone());
@@ -203,6 +266,12 @@ fn render_into(o: &RenderOptions, spec: &str, dir: &std::path::Path) -> Result<R
     r.reals("camera_eye", camera.eye.to_array().to_vec())
         .reals("camera_forward", camera.forward.to_array().to_vec())
         .real("camera_fov_y", camera.fov_y.to_degrees(), Some("deg"));
+    if let Sampling::Adaptive { max, unbiased, .. } = sampling {
+        r.maybe_real("threshold", rendered.threshold, None).count("max_spp", u64::from(max)).flag("unbiased", unbiased);
+        if let Some(t) = rendered.tuned {
+            r.count("pilot_pixels", u64::from(t.pilot_pixels)).real("pilot_spp_mean", t.pilot_mean, None);
+        }
+    }
     r.count("spp_requested", u64::from(o.spp))
         .real("spp_mean", frame.mean_samples(), None)
         .real("spp_traced_mean", frame.mean_traced(), None)
@@ -216,7 +285,7 @@ fn render_into(o: &RenderOptions, spec: &str, dir: &std::path::Path) -> Result<R
     }
     let traced: f64 = frame.samples.iter().chain(&frame.pilot_samples).map(|&s| f64::from(s)).sum();
     r.real("seconds", seconds, Some("s")).real("Msamples_per_s", traced / seconds.max(1e-9) / 1e6, None);
-    r.texts("wrote", files.iter().map(|p| p.display().to_string()).collect());
+    r.texts("wrote", wrote.iter().map(|p| p.display().to_string()).collect());
     Ok(r)
 }
 

@@ -25,7 +25,7 @@ use crate::values::{
 /// `itgfx simplify MESH`.
 #[derive(Debug, Args)]
 #[command(after_help = "MESH is an .obj file (or a built-in scene) that welds into a manifold triangle mesh.\n\
-                        Writes DIR/simplified_N.obj per target, DIR/original.png, DIR/simplified_N.png and\n\
+                        Writes DIR/input.obj (welded, repaired), DIR/simplified_N.obj per target, DIR/original.png, DIR/simplified_N.png and\n\
                         DIR/compare.png (rows: original, then each target; columns: evaluation views).")]
 pub struct SimplifyOptions {
     /// An .obj file or a built-in scene name
@@ -194,7 +194,10 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
     let weld = |s: &itgfx_backends::scene::Scene, what: &str| {
         IndexedMesh::weld(&s.triangles, centre, scale).map_err(|e| CliError::usage(format!("{what}: {e}")))
     };
-    let original = weld(&scene, &spec)?;
+    let (original, repairs) = weld(&scene, &spec)?;
+    if repairs.any() {
+        eprintln!("itgfx: warning: {spec}: repaired: {repairs}");
+    }
     let n = original.triangles();
     let wanted = targets(o, n)?;
     let evaluated = match &o.evaluate {
@@ -218,9 +221,14 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
     r.text("mesh", scene.name.clone()).count("triangles", n as u64).count("vertices", original.positions.len() as u64);
     r.count("evaluation_views", eyes.len() as u64).count("image_size", u64::from(o.image_size));
     r.count("hausdorff_samples", o.samples as u64);
+    r.count("repaired_degenerate", repairs.degenerate as u64)
+        .count("repaired_duplicates", repairs.duplicates as u64)
+        .count("repaired_detached", repairs.detached as u64)
+        .count("repaired_split_vertices", repairs.split_vertices as u64);
     r.text("distance_unit", "bounding-box half diagonal");
 
     let mut results: Vec<Simplified> = Vec::new();
+    let mut results_written: Vec<String> = Vec::new();
     if let Some(m) = evaluated {
         r.text("mode", "evaluate");
         let label = Path::new(o.evaluate.as_deref().unwrap_or("evaluated"))
@@ -259,9 +267,17 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
         }
     }
 
+    if o.evaluate.is_none() {
+        // The welded, repaired mesh the collapses started from (the input of any peer to compare with).
+        let input = out.join("input.obj");
+        let comment = format!("itgfx simplify: {spec} welded and repaired, {n} triangles");
+        crate::output::write(&input, original.to_obj(centre, scale, &comment).as_bytes())?;
+        results_written.push(input.display().to_string());
+    }
     let mut rows = vec![reference.iter().take(SHOWN).map(picture).collect::<Vec<_>>()];
     write_png(&montage(&rows[0], SHOWN), &out.join("original.png"))?;
-    let mut written = vec![out.join("original.png").display().to_string()];
+    let mut written = results_written;
+    written.push(out.join("original.png").display().to_string());
     let mut stages = Vec::new();
     for Simplified { label, mesh, seconds, mi, stalled } in &results {
         let imgs = renders(mesh, o, &eyes)?;

@@ -206,7 +206,7 @@ fn bad_input_is_one_line_and_exit_2() {
         (vec!["simplify", m, "--target", "10%", "--out", file.to_str().unwrap()], "not a directory"),
         (vec!["simplify", m, "--target", "10%", "--out", o, "--metric", "qem"], "--metric"),
         (vec!["simplify", m, "--target", "10%", "--out", o, "--viewpoints", "50"], "--viewpoints"),
-        (vec!["simplify", fin.to_str().unwrap(), "--target", "1", "--out", o], "non-manifold"),
+        (vec!["simplify", "sphere", "--target", "10%", "--out", o], "no triangles"),
         (vec!["simplify", "/nonexistent/mesh.obj", "--target", "10%", "--out", o], "/nonexistent/mesh.obj"),
         (vec!["simplify", m, "--target", "10%", "--evaluate", m, "--out", o], "--evaluate"),
     ] {
@@ -216,5 +216,15 @@ fn bad_input_is_one_line_and_exit_2() {
         assert!(err.contains(needle), "{args:?}: {err}");
         assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
     }
+    // A fin (three triangles on an edge) is repaired: the third triangle is
+    // detached; three triangles cannot lose one and stay a surface, so the
+    // run stops short of its target and says why.
+    let out = itgfx(&["simplify", fin.to_str().unwrap(), "--target", "2", "--out", o, "--json"]);
+    let v = json(&out);
+    assert_eq!(v["repaired_detached"], 1);
+    assert_eq!(v["results"][0]["triangles"], 3);
+    assert!(v["results"][0]["stalled"].as_str().unwrap().contains("stopped at 3"));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("repaired") && err.contains("not reached"), "{err}");
     std::fs::remove_dir_all(&d).unwrap();
 }

@@ -37,7 +37,7 @@ use rayon::prelude::*;
 
 pub use collapse::Dynamic;
 pub use cost::{Metric, ViewState};
-pub use mesh::{IndexedMesh, MeshError};
+pub use mesh::{IndexedMesh, MeshError, Repairs};
 
 use crate::backend::{BackendChoice, BackendError, open};
 use crate::viewpoint::solid_angle::{ChannelError, Refinement};

@@ -40,8 +40,9 @@ pub struct SimplifyOptions {
     /// Output directory (created if missing)
     #[arg(long, value_name = "DIR", value_parser = out_path)]
     pub out: Option<PathBuf>,
-    /// Collapse cost: vmi = |change of I(V;O)|, ve = mean |change of viewpoint entropy|
-    #[arg(long, value_name = "vmi|ve", default_value = "vmi", value_parser = ["vmi", "ve"])]
+    /// Collapse cost: vmi = mean |change of each viewpoint's I(v;O)|, ve = mean |change of viewpoint
+    /// entropy|, ivo = |change of the channel's I(V;O)|
+    #[arg(long, value_name = "vmi|ve|ivo", default_value = "vmi", value_parser = ["vmi", "ve", "ivo"])]
     pub metric: String,
     /// Viewpoints of the channel: 12, 42, 162, 642 or 2562 (a subdivided icosahedron)
     #[arg(long, value_name = "N", default_value = "42", value_parser = viewpoint_count)]
@@ -55,6 +56,10 @@ pub struct SimplifyOptions {
     /// Largest subdivision M of triangles where visibility changes
     #[arg(long, value_name = "M", default_value = "8", value_parser = max_subdivision)]
     pub max_subdivision: u32,
+    /// Leave the background out of the channel (by default it is an extra polygon, Part V §3.1,
+    /// so that a shrinking silhouette changes the channel)
+    #[arg(long)]
+    pub no_background: bool,
     /// Measure this already simplified OBJ against MESH instead of simplifying (e.g. QEM's output)
     #[arg(long, value_name = "F.obj")]
     pub evaluate: Option<String>,
@@ -185,7 +190,11 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
     if std::fs::metadata(&out).is_ok_and(|m| !m.is_dir()) {
         return Err(CliError::usage(format!("--out {out:?}: not a directory")));
     }
-    let metric = if o.metric == "ve" { Metric::Ve } else { Metric::Vmi };
+    let metric = match o.metric.as_str() {
+        "ve" => Metric::Ve,
+        "ivo" => Metric::Ivo,
+        _ => Metric::Vmi,
+    };
     // Syntax first, before any file is read; the counts once the mesh is known.
     targets(o, usize::MAX)?;
     let scene = load_scene(&spec, 1)?;
@@ -245,11 +254,15 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
             refresh: 0.5,
             tolerance: o.tolerance,
             max_subdivision: o.max_subdivision,
+            background: !o.no_background,
         };
         let mut progress = Progress::new();
         let outcome = simplify(&original, &wanted, &settings, &mut |d, t| progress.update(d, t))
             .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
-        r.text("mode", "simplify").text("metric", o.metric.clone()).count("viewpoints", u64::from(o.viewpoints));
+        r.text("mode", "simplify")
+            .text("metric", o.metric.clone())
+            .flag("background", !o.no_background)
+            .count("viewpoints", u64::from(o.viewpoints));
         r.real("I_VO_bits", outcome.initial_mutual_information, Some("bits"));
         r.count("collapses", outcome.collapses).count("channel_traces", u64::from(outcome.traces));
         r.real("channel_seconds", outcome.trace_seconds, Some("s"));

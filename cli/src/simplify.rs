@@ -25,7 +25,7 @@ use crate::values::{
 /// `itgfx simplify MESH`.
 #[derive(Debug, Args)]
 #[command(after_help = "MESH is an .obj file (or a built-in scene) that welds into a manifold triangle mesh.\n\
-                        Writes DIR/simplified_N.obj per target, DIR/original.png, DIR/simplified_N.png and\n\
+                        Writes DIR/input.obj (welded, repaired), DIR/simplified_N.obj per target, DIR/original.png, DIR/simplified_N.png and\n\
                         DIR/compare.png (rows: original, then each target; columns: evaluation views).")]
 pub struct SimplifyOptions {
     /// An .obj file or a built-in scene name
@@ -40,8 +40,9 @@ pub struct SimplifyOptions {
     /// Output directory (created if missing)
     #[arg(long, value_name = "DIR", value_parser = out_path)]
     pub out: Option<PathBuf>,
-    /// Collapse cost: vmi = |change of I(V;O)|, ve = mean |change of viewpoint entropy|
-    #[arg(long, value_name = "vmi|ve", default_value = "vmi", value_parser = ["vmi", "ve"])]
+    /// Collapse cost: vmi = mean |change of each viewpoint's I(v;O)|, ve = mean |change of viewpoint
+    /// entropy|, ivo = |change of the channel's I(V;O)|
+    #[arg(long, value_name = "vmi|ve|ivo", default_value = "vmi", value_parser = ["vmi", "ve", "ivo"])]
     pub metric: String,
     /// Viewpoints of the channel: 12, 42, 162, 642 or 2562 (a subdivided icosahedron)
     #[arg(long, value_name = "N", default_value = "42", value_parser = viewpoint_count)]
@@ -55,6 +56,10 @@ pub struct SimplifyOptions {
     /// Largest subdivision M of triangles where visibility changes
     #[arg(long, value_name = "M", default_value = "8", value_parser = max_subdivision)]
     pub max_subdivision: u32,
+    /// Leave the background out of the channel (by default it is an extra polygon, Part V §3.1,
+    /// so that a shrinking silhouette changes the channel)
+    #[arg(long)]
+    pub no_background: bool,
     /// Measure this already simplified OBJ against MESH instead of simplifying (e.g. QEM's output)
     #[arg(long, value_name = "F.obj")]
     pub evaluate: Option<String>,
@@ -185,7 +190,11 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
     if std::fs::metadata(&out).is_ok_and(|m| !m.is_dir()) {
         return Err(CliError::usage(format!("--out {out:?}: not a directory")));
     }
-    let metric = if o.metric == "ve" { Metric::Ve } else { Metric::Vmi };
+    let metric = match o.metric.as_str() {
+        "ve" => Metric::Ve,
+        "ivo" => Metric::Ivo,
+        _ => Metric::Vmi,
+    };
     // Syntax first, before any file is read; the counts once the mesh is known.
     targets(o, usize::MAX)?;
     let scene = load_scene(&spec, 1)?;
@@ -194,7 +203,10 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
     let weld = |s: &itgfx_backends::scene::Scene, what: &str| {
         IndexedMesh::weld(&s.triangles, centre, scale).map_err(|e| CliError::usage(format!("{what}: {e}")))
     };
-    let original = weld(&scene, &spec)?;
+    let (original, repairs) = weld(&scene, &spec)?;
+    if repairs.any() {
+        eprintln!("itgfx: warning: {spec}: repaired: {repairs}");
+    }
     let n = original.triangles();
     let wanted = targets(o, n)?;
     let evaluated = match &o.evaluate {
@@ -218,9 +230,14 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
     r.text("mesh", scene.name.clone()).count("triangles", n as u64).count("vertices", original.positions.len() as u64);
     r.count("evaluation_views", eyes.len() as u64).count("image_size", u64::from(o.image_size));
     r.count("hausdorff_samples", o.samples as u64);
+    r.count("repaired_degenerate", repairs.degenerate as u64)
+        .count("repaired_duplicates", repairs.duplicates as u64)
+        .count("repaired_detached", repairs.detached as u64)
+        .count("repaired_split_vertices", repairs.split_vertices as u64);
     r.text("distance_unit", "bounding-box half diagonal");
 
     let mut results: Vec<Simplified> = Vec::new();
+    let mut results_written: Vec<String> = Vec::new();
     if let Some(m) = evaluated {
         r.text("mode", "evaluate");
         let label = Path::new(o.evaluate.as_deref().unwrap_or("evaluated"))
@@ -237,11 +254,15 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
             refresh: 0.5,
             tolerance: o.tolerance,
             max_subdivision: o.max_subdivision,
+            background: !o.no_background,
         };
         let mut progress = Progress::new();
         let outcome = simplify(&original, &wanted, &settings, &mut |d, t| progress.update(d, t))
             .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
-        r.text("mode", "simplify").text("metric", o.metric.clone()).count("viewpoints", u64::from(o.viewpoints));
+        r.text("mode", "simplify")
+            .text("metric", o.metric.clone())
+            .flag("background", !o.no_background)
+            .count("viewpoints", u64::from(o.viewpoints));
         r.real("I_VO_bits", outcome.initial_mutual_information, Some("bits"));
         r.count("collapses", outcome.collapses).count("channel_traces", u64::from(outcome.traces));
         r.real("channel_seconds", outcome.trace_seconds, Some("s"));
@@ -259,9 +280,17 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
         }
     }
 
+    if o.evaluate.is_none() {
+        // The welded, repaired mesh the collapses started from (the input of any peer to compare with).
+        let input = out.join("input.obj");
+        let comment = format!("itgfx simplify: {spec} welded and repaired, {n} triangles");
+        crate::output::write(&input, original.to_obj(centre, scale, &comment).as_bytes())?;
+        results_written.push(input.display().to_string());
+    }
     let mut rows = vec![reference.iter().take(SHOWN).map(picture).collect::<Vec<_>>()];
     write_png(&montage(&rows[0], SHOWN), &out.join("original.png"))?;
-    let mut written = vec![out.join("original.png").display().to_string()];
+    let mut written = results_written;
+    written.push(out.join("original.png").display().to_string());
     let mut stages = Vec::new();
     for Simplified { label, mesh, seconds, mi, stalled } in &results {
         let imgs = renders(mesh, o, &eyes)?;

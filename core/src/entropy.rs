@@ -122,6 +122,40 @@ pub fn mutual_information_of_weight_sums<T: Real>(
     Ok(T::from_f64(if i < 0.0 { 0.0 } else { i * base.per_nat() }))
 }
 
+/// Specific information `I(x;Y) = Σ_y p(y|x) ln(p(y|x)/p(y))` of one row
+/// of non-negative joint weights `w_xy` (Part V eq. (7): the viewpoint
+/// mutual information when `x` is a viewpoint), from running sums: the
+/// total `S = Σ w`, the row sum `R = Σ_y w_xy`, `X = Σ_y w_xy ln w_xy` and
+/// the cross term `K = Σ_y w_xy ln c_y` with the column sums `c_y`:
+///
+/// ```text
+/// I(x;Y) = ln S − ln R + (X − K) / R
+/// ```
+/// since `p(y|x) = w_xy / R` and `p(y) = c_y / S`. Rounding below 0 is
+/// clamped to 0.
+///
+/// # Errors
+/// [`Error::ZeroMass`] when `S ≤ 0` or `R ≤ 0`; [`Error::NonFinite`]
+/// (index 0..=3 in argument order) for a sum that is not finite.
+pub fn specific_information_of_weight_sums<T: Real>(
+    total: T,
+    row_sum: T,
+    row_xlnx: T,
+    row_cross: T,
+    base: Base,
+) -> Result<T, Error> {
+    let v = [total.to_f64(), row_sum.to_f64(), row_xlnx.to_f64(), row_cross.to_f64()];
+    if let Some(index) = v.iter().position(|x| !x.is_finite()) {
+        return Err(Error::NonFinite { index });
+    }
+    let [s, r, x, k] = v;
+    if s <= 0.0 || r <= 0.0 {
+        return Err(Error::ZeroMass);
+    }
+    let i = ln(s) - ln(r) + (x - k) / r;
+    Ok(T::from_f64(if i < 0.0 { 0.0 } else { i * base.per_nat() }))
+}
+
 /// Binary entropy `H(p, 1−p)` (Part II eq. (4)).
 ///
 /// # Errors

@@ -75,12 +75,12 @@ impl std::error::Error for MeshError {}
 
 impl IndexedMesh {
     /// Welds triangles (scene units) by exact vertex coordinates, maps them
-    /// to the normalised frame `(p − centre) / scale` and checks that the
-    /// result is manifold.
+    /// to the normalised frame `(p − centre) / scale`, [repairs](IndexedMesh::repair)
+    /// what it can and checks that the result is manifold.
     ///
     /// # Errors
-    /// [`MeshError`] for an empty, degenerate or non-manifold mesh.
-    pub fn weld(triangles: &[[DVec3; 3]], centre: DVec3, scale: f64) -> Result<Self, MeshError> {
+    /// [`MeshError`] for an empty or non-manifold mesh.
+    pub fn weld(triangles: &[[DVec3; 3]], centre: DVec3, scale: f64) -> Result<(Self, Repairs), MeshError> {
         let key = |v: DVec3| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
         let mut ids: HashMap<[u64; 3], u32> = HashMap::new();
         let mut positions = Vec::new();
@@ -95,9 +95,10 @@ impl IndexedMesh {
                 })
             })
             .collect();
-        let mesh = Self { positions, faces };
+        let mut mesh = Self { positions, faces };
+        let repairs = mesh.repair();
         mesh.check()?;
-        Ok(mesh)
+        Ok((mesh, repairs))
     }
 
     /// As [`IndexedMesh::weld`] without the manifold checks, for meshes
@@ -274,13 +275,10 @@ impl IndexedMesh {
 }
 
 /// Fans of triangles around vertex `v` (`fs`: its triangles): groups
-/// connected through edges that contain `v`.
-pub(crate) fn fans(faces: &[[u32; 3]], v: u32, fs: &[u32]) -> usize {
-    if fs.is_empty() {
-        return 0;
-    }
+/// connected through edges that contain `v`. Returns the fan of each
+/// triangle of `fs` (`0..fans`, in order of first appearance) and the count.
+pub(crate) fn fan_labels(faces: &[[u32; 3]], v: u32, fs: &[u32]) -> (Vec<usize>, usize) {
     // Union-find over the triangles around v, joined by their other vertices.
-    let mut parent: Vec<usize> = (0..fs.len()).collect();
     fn root(p: &mut [usize], mut i: usize) -> usize {
         while p[i] != i {
             p[i] = p[p[i]];
@@ -288,6 +286,7 @@ pub(crate) fn fans(faces: &[[u32; 3]], v: u32, fs: &[u32]) -> usize {
         }
         i
     }
+    let mut parent: Vec<usize> = (0..fs.len()).collect();
     let mut by_vertex: HashMap<u32, usize> = HashMap::new();
     for (i, &f) in fs.iter().enumerate() {
         for &w in &faces[f as usize] {
@@ -302,7 +301,130 @@ pub(crate) fn fans(faces: &[[u32; 3]], v: u32, fs: &[u32]) -> usize {
             }
         }
     }
-    (0..fs.len()).filter(|&i| root(&mut parent, i) == i).count()
+    let mut label = vec![usize::MAX; fs.len()];
+    let mut of_root: HashMap<usize, usize> = HashMap::new();
+    for (i, l) in label.iter_mut().enumerate() {
+        let r = root(&mut parent, i);
+        let n = of_root.len();
+        *l = *of_root.entry(r).or_insert(n);
+    }
+    let n = of_root.len();
+    (label, n)
+}
+
+/// Fans of triangles around vertex `v` (see [`fan_labels`]).
+pub(crate) fn fans(faces: &[[u32; 3]], v: u32, fs: &[u32]) -> usize {
+    fan_labels(faces, v, fs).1
+}
+
+/// What [`IndexedMesh::repair`] changed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Repairs {
+    /// Triangles removed for a repeated vertex or no area.
+    pub degenerate: usize,
+    /// Triangles removed for repeating an earlier triangle's vertices.
+    pub duplicates: usize,
+    /// Triangles given vertices of their own because an edge of theirs
+    /// already had two triangles (the later ones in input order).
+    pub detached: usize,
+    /// Vertices split because separate fans of triangles met there.
+    pub split_vertices: usize,
+}
+
+impl Repairs {
+    /// Whether anything changed.
+    #[must_use]
+    pub fn any(&self) -> bool {
+        self.degenerate + self.duplicates + self.detached + self.split_vertices > 0
+    }
+}
+
+impl std::fmt::Display for Repairs {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "removed {} degenerate and {} duplicate triangles, detached {} triangles from edges with more than two, \
+             split {} vertices where separate surfaces touched",
+            self.degenerate, self.duplicates, self.detached, self.split_vertices
+        )
+    }
+}
+
+impl IndexedMesh {
+    /// Repairs what can be repaired without guessing: triangles with a
+    /// repeated vertex or no area and repeated triangles are removed, and a
+    /// vertex where several fans of triangles meet becomes one vertex per
+    /// fan (same position). A triangle with an edge that two earlier
+    /// triangles already have gets copies of its vertices (it becomes a
+    /// separate piece), as OpenMesh's reader does. The result passes
+    /// [`IndexedMesh::check`] unless it is empty.
+    pub fn repair(&mut self) -> Repairs {
+        let mut r = Repairs::default();
+        let mut seen = std::collections::HashSet::new();
+        let positions = &self.positions;
+        self.faces.retain(|t| {
+            let [a, b, c] = t.map(|i| positions[i as usize]);
+            if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || (b - a).cross(c - a).length_squared() == 0.0 {
+                r.degenerate += 1;
+                return false;
+            }
+            let mut s = *t;
+            s.sort_unstable();
+            if seen.insert(s) {
+                true
+            } else {
+                r.duplicates += 1;
+                false
+            }
+        });
+        let mut count: HashMap<(u32, u32), u8> = HashMap::new();
+        for f in 0..self.faces.len() {
+            let t = self.faces[f];
+            let key = |a: u32, b: u32| (a.min(b), a.max(b));
+            let full = [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]
+                .iter()
+                .any(|&(a, b)| count.get(&key(a, b)).is_some_and(|&c| c >= 2));
+            if full {
+                r.detached += 1;
+                let first = self.positions.len() as u32;
+                for w in t {
+                    self.positions.push(self.positions[w as usize]);
+                }
+                self.faces[f] = [first, first + 1, first + 2];
+                continue;
+            }
+            for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                *count.entry(key(a, b)).or_default() += 1;
+            }
+        }
+        let mut around: Vec<Vec<u32>> = vec![Vec::new(); self.positions.len()];
+        for (f, t) in self.faces.iter().enumerate() {
+            for &v in t {
+                around[v as usize].push(f as u32);
+            }
+        }
+        for (v, fs) in around.iter().enumerate() {
+            let (label, n) = fan_labels(&self.faces, v as u32, fs);
+            if n <= 1 {
+                continue;
+            }
+            r.split_vertices += 1;
+            let first = self.positions.len() as u32;
+            for _ in 1..n {
+                self.positions.push(self.positions[v]);
+            }
+            for (i, &f) in fs.iter().enumerate() {
+                if label[i] > 0 {
+                    for w in &mut self.faces[f as usize] {
+                        if *w == v as u32 {
+                            *w = first + label[i] as u32 - 1;
+                        }
+                    }
+                }
+            }
+        }
+        r
+    }
 }
 
 #[cfg(test)]
@@ -327,6 +449,10 @@ mod tests {
         m.positions.push(DVec3::new(-1.0, -1.0, 0.5));
         m.faces.push([0, 1, 4]);
         assert!(matches!(m.check(), Err(MeshError::NonManifoldEdge { faces: 3, .. })));
+        let r = m.repair();
+        assert_eq!(r.detached, 1);
+        assert_eq!(m.check(), Ok(()));
+        assert_eq!(m.faces[4], [5, 6, 7]);
     }
 
     #[test]
@@ -337,6 +463,12 @@ mod tests {
             faces: vec![[0, 1, 2], [0, 3, 4]],
         };
         assert_eq!(m.check(), Err(MeshError::NonManifoldVertex { vertex: 0, fans: 2 }));
+        let mut fixed = m.clone();
+        let r = fixed.repair();
+        assert_eq!(r.split_vertices, 1);
+        assert_eq!(fixed.check(), Ok(()));
+        assert_eq!(fixed.positions.len(), 6);
+        assert_eq!(fixed.positions[5], fixed.positions[0]);
     }
 
     #[test]
@@ -347,5 +479,11 @@ mod tests {
         let mut m = tetra();
         m.faces[0] = [0, 0, 1];
         assert_eq!(m.check(), Err(MeshError::Degenerate { face: 0 }));
+        let mut m = tetra();
+        m.faces.push([2, 0, 1]);
+        m.faces.push([3, 3, 1]);
+        let r = m.repair();
+        assert_eq!((r.duplicates, r.degenerate), (1, 1));
+        assert_eq!(m, tetra());
     }
 }

@@ -37,7 +37,7 @@ use rayon::prelude::*;
 
 pub use collapse::Dynamic;
 pub use cost::{Metric, ViewState};
-pub use mesh::{IndexedMesh, MeshError};
+pub use mesh::{IndexedMesh, MeshError, Repairs};
 
 use crate::backend::{BackendChoice, BackendError, open};
 use crate::viewpoint::solid_angle::{ChannelError, Refinement};
@@ -61,6 +61,8 @@ pub struct Settings {
     pub tolerance: f64,
     /// Largest subdivision of triangles where visibility changes.
     pub max_subdivision: u32,
+    /// Count the background as a polygon (Part V §3.1).
+    pub background: bool,
 }
 
 /// The mesh when the simplification reached (or stopped short of) a target.
@@ -155,7 +157,7 @@ impl Ord for Entry {
 }
 
 /// Traces the channel of the living triangles.
-fn trace(d: &Dynamic, s: &Settings) -> Result<ViewState, SimplifyError> {
+pub(crate) fn trace(d: &Dynamic, s: &Settings) -> Result<ViewState, SimplifyError> {
     let live: Vec<u32> = (0..d.faces.len() as u32).filter(|&f| d.alive[f as usize]).collect();
     let bytes = ViewState::bytes(d.faces.len(), s.directions.len());
     if bytes > MAX_BYTES {
@@ -176,7 +178,7 @@ fn trace(d: &Dynamic, s: &Settings) -> Result<ViewState, SimplifyError> {
     let (ch, _) =
         ViewpointChannel::build_solid_angle(&prepared, tracer.as_ref(), &s.directions, &refine, &mut |_, _| {})
             .map_err(SimplifyError::Channel)?;
-    Ok(ViewState::from_channel(&ch, d, &live))
+    Ok(ViewState::from_channel(&ch, d, &live, s.background))
 }
 
 /// Evaluates every valid half-edge leaving the vertices `from`.

@@ -1,6 +1,6 @@
 use itgfx_core::{
     Base, Channel, entropy_of_weight_sums, entropy_of_weights, jensen_shannon, joint_entropies, kl_divergence,
-    mutual_information_of_weight_sums, weight_log_term,
+    mutual_information_of_weight_sums, specific_information_of_weight_sums, weight_log_term,
 };
 use proptest::prelude::*;
 
@@ -105,5 +105,19 @@ proptest! {
         prop_assert!(close(i, e.mutual_information, 1e-9));
         let h = entropy_of_weight_sums(rows.iter().sum::<f64>(), term(&rows), Base::Bits).unwrap();
         prop_assert!(close(h, entropy_of_weights(&rows, Base::Bits).unwrap(), 1e-9));
+        // Each row's specific information (Part V eq. (7)) against the channel's.
+        let p_x: Vec<f64> = rows.iter().map(|x| x / s).collect();
+        // An unseen row (p(x) = 0) gets any distribution: the channel needs one.
+        let m: Vec<f64> =
+            (0..r * c).map(|k| if rows[k / c] > 0.0 { w[k] / rows[k / c] } else { 1.0 / c as f64 }).collect();
+        let p_y: Vec<f64> = cols.iter().map(|x| x / s).collect();
+        let mut spec = vec![0.0; r];
+        Channel::new(&p_x, &m, c).unwrap().specific_information_into(&p_y, Base::Bits, &mut spec).unwrap();
+        for x in (0..r).filter(|&x| rows[x] > 0.0) {
+            let cross: f64 = (0..c).filter(|&y| w[x * c + y] > 0.0).map(|y| w[x * c + y] * cols[y].ln()).sum();
+            let xl = term(&w[x * c..(x + 1) * c]);
+            let got = specific_information_of_weight_sums(s, rows[x], xl, cross, Base::Bits).unwrap();
+            prop_assert!(close(got, spec[x], 1e-8), "row {x}: {got} vs {}", spec[x]);
+        }
     }
 }

@@ -291,8 +291,11 @@ fn run_in(
     let m = volume_measures(&ch, &dirs, &caster.voxel_opacity, focus.as_ref().map(|f| f.0.as_slice()), weights, base)
         .map_err(err)?;
     let v = &m.views;
+    let t_measures = t0.elapsed().as_secs_f64() - t_channel;
     let best_n = best_views(&m.analysis, v, o.capture, o.best_n, base).map_err(err)?;
-    let tour = exploration(&m.analysis, &ch.neighbours(6), v.best, o.explore, base).map_err(err)?;
+    let neighbours = ch.neighbours(6);
+    let tour = exploration(&m.analysis, &neighbours, v.best, o.explore, base).map_err(err)?;
+    let instability = m.analysis.instability(&neighbours, base).map_err(err)?;
     let seconds = t0.elapsed().as_secs_f64();
 
     let mut r = Report::new();
@@ -334,11 +337,13 @@ fn run_in(
         if let Some(f) = &m.evmi_focus {
             x.real("EVMI_focus", f[k], unit);
         }
+        x.maybe_real("instability", Some(instability[k]).filter(|x| x.is_finite()), unit);
         x.real("visibility", ch.seen(k) / ch.rays_per_viewpoint as f64, None);
         views.push(x);
     }
     r.records("views", views);
-    r.real("channel_seconds", t_channel, Some("s")).real("seconds", seconds, Some("s"));
+    r.real("channel_seconds", t_channel, Some("s")).real("measures_seconds", t_measures, Some("s"));
+    r.real("seconds", seconds, Some("s"));
     r.real("memory_estimate_MiB", need as f64 / f64::from(1u32 << 20), None);
 
     if let Some(dir) = &o.out {
@@ -356,14 +361,14 @@ fn run_in(
         let vmi: Vec<f64> = v.mutual_information.iter().map(|&x| if x.is_finite() { x } else { f64::NAN }).collect();
         let evmi: Vec<f64> = m.evmi_opacity.iter().map(|&x| if x.is_finite() { x } else { f64::NAN }).collect();
         write_png(&sphere_image(&dirs, &[&vmi, &v.entropy, &evmi], dirs[v.best], side / 2), &dir.join(PICTURES[3]))?;
-        // VoMI: the middle y slice, its maximum along y, and the volume shaded by VoMI from the best view.
+        // VoMI: the middle y slice, its p(z)-weighted mean along y, and the volume shaded by VoMI from the best view.
         let (vlo, vhi) = percentile_range(&m.vomi);
         let vomi_tint: Vec<[f32; 3]> = m
             .vomi
             .iter()
             .map(|&x| viridis((x - vlo) / (vhi - vlo)).map(|c| (f32::from(c) / 255.0).powf(2.2)))
             .collect();
-        let slices = vomi_planes(&volume, &m.vomi, side, (vlo, vhi));
+        let slices = vomi_planes(&volume, &m.vomi, &m.analysis.p_o[..volume.voxels()], side, (vlo, vhi));
         write_png(&montage(&[slices.0, slices.1, shot(v.best, Some(&vomi_tint), side)], 3), &dir.join(PICTURES[4]))?;
         // Colour VoMI: each voxel the colour of the viewpoints most informative about it.
         let scale = if vhi > 0.0 { vhi } else { 1.0 };
@@ -379,9 +384,16 @@ fn run_in(
     Ok(r)
 }
 
-/// The middle y slice (x across, z up) of a per-voxel field and its
-/// maximum along y, each `side × side` (nearest voxel), viridis between `range`.
-fn vomi_planes(v: &Volume, field: &[f64], side: u32, range: (f64, f64)) -> (image::RgbImage, image::RgbImage) {
+/// The middle y slice (x across, z up) of a per-voxel field and its mean
+/// along y weighted by `weight` (`p(z)`: the field where the channel looks),
+/// each `side × side` (nearest voxel), viridis between `range`.
+fn vomi_planes(
+    v: &Volume,
+    field: &[f64],
+    weight: &[f64],
+    side: u32,
+    range: (f64, f64),
+) -> (image::RgbImage, image::RgbImage) {
     let [nx, ny, nz] = v.dims;
     let at = |x: u32, y: u32| {
         let i = ((f64::from(x) + 0.5) / f64::from(side) * nx as f64) as usize;
@@ -395,7 +407,9 @@ fn vomi_planes(v: &Volume, field: &[f64], side: u32, range: (f64, f64)) -> (imag
     });
     let mip = image::RgbImage::from_fn(side, side, |x, y| {
         let (i, k) = at(x, y);
-        colour((0..ny).map(|j| field[v.index(i, j, k)]).fold(0.0, f64::max))
+        let (a, w) =
+            (0..ny).map(|j| v.index(i, j, k)).fold((0.0, 0.0), |(a, w), z| (a + weight[z] * field[z], w + weight[z]));
+        if w > 0.0 { colour(a / w) } else { image::Rgb([24, 24, 28]) }
     });
     (slice, mip)
 }

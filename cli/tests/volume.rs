@@ -54,6 +54,8 @@ fn hydrogen_symmetries_and_channel_identities() {
         let d = direction(v);
         let vmi = v["VMI"].as_f64().unwrap();
         assert!(vmi >= 0.0);
+        // Instability: the mean Jensen–Shannon dissimilarity to the 6 nearest views.
+        assert!(v["instability"].as_f64().unwrap() >= 0.0);
         weighted += v["p_v"].as_f64().unwrap() * vmi;
         for axis in 0..3 {
             let mut m = d;

@@ -132,6 +132,19 @@ impl Volume {
         i + self.dims[0] * (j + self.dims[1] * k)
     }
 
+    /// Index of the cell's lowest corner voxel used by [`Volume::corners`]
+    /// at grid point `g` (its other corners are one voxel further along
+    /// each axis, clamped to the grid).
+    #[must_use]
+    pub fn cell(&self, g: DVec3) -> usize {
+        let mut base = [0usize; 3];
+        for (a, b) in base.iter_mut().enumerate() {
+            let n = self.dims[a];
+            *b = (g[a].clamp(0.0, (n - 1) as f64).floor() as usize).min(n.saturating_sub(2));
+        }
+        self.index(base[0], base[1], base[2])
+    }
+
     /// The eight voxels around grid point `g` (clamped to the grid) and their
     /// trilinear weights (summing to 1).
     #[must_use]

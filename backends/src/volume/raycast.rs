@@ -82,6 +82,11 @@ pub struct Caster<'a> {
     /// Opacity of each voxel's own value under the transfer function
     /// (uncorrected), its importance for EVMI.
     pub voxel_opacity: Vec<f64>,
+    /// Per cell (by its lowest corner, [`Volume::cell`]): whether any corner's
+    /// normalised value is above the transparent range, so that a sample in
+    /// it can be seen. Samples in other cells are skipped without changing
+    /// any result: their trilinear value is at most their largest corner's.
+    cell_active: Vec<bool>,
 }
 
 impl<'a> Caster<'a> {
@@ -99,13 +104,16 @@ impl<'a> Caster<'a> {
             })
             .collect();
         let voxel_opacity = volume.data.iter().map(|&v| tf.eval((f64::from(v) - lo) * inv_range).0).collect();
+        let skip_below = tf.transparent_below();
+        let cell_active = active_cells(volume, |v| ((f64::from(v) - lo) * inv_range).clamp(0.0, 1.0) > skip_below);
         Self {
+            cell_active,
             volume,
             lo,
             inv_range,
             step: step_voxels * volume.voxel_size(),
             step_voxels,
-            skip_below: tf.transparent_below(),
+            skip_below,
             table,
             voxel_opacity,
         }
@@ -169,6 +177,10 @@ impl<'a> Caster<'a> {
         let mut t = t0 + 0.5 * self.step;
         while t < t1 {
             let g = self.volume.grid_coords(o + d * t);
+            if !self.cell_active[self.volume.cell(g)] {
+                t += self.step;
+                continue;
+            }
             let corners = self.volume.corners(g);
             let value: f64 = corners.iter().map(|&(i, w)| w * f64::from(self.volume.data[i])).sum();
             if let Some((alpha, colour)) = self.lookup(value)
@@ -251,6 +263,23 @@ impl<'a> Caster<'a> {
     }
 }
 
+/// Cells (by lowest corner) with a corner where `active` holds: a
+/// separable dilation of the active voxels towards lower indices, one voxel
+/// per axis (the corners of [`Volume::corners`], clamped at the far faces).
+fn active_cells(v: &Volume, active: impl Fn(f32) -> bool) -> Vec<bool> {
+    let [nx, ny, nz] = v.dims;
+    let mut m: Vec<bool> = v.data.iter().map(|&x| active(x)).collect();
+    for (stride, n) in [(1, nx), (nx, ny), (nx * ny, nz)] {
+        for i in 0..m.len() {
+            // Ascending order reads m[i + stride] before it is updated.
+            if (i / stride) % n + 1 < n && m[i + stride] {
+                m[i] = true;
+            }
+        }
+    }
+    m
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -272,6 +301,25 @@ mod tests {
         // Only voxels at the cube's surface (value-1 cells near the faces) are seen.
         let inner = v.index(8, 8, 8);
         assert_eq!(vis[inner], 0.0);
+    }
+
+    #[test]
+    fn skipping_empty_cells_changes_nothing() {
+        for spec in ["phantom:12", "hydrogen:3,2,0,12"] {
+            let v = built_in(spec).unwrap();
+            let tf = TransferFunction::preset("ramp").unwrap();
+            let fast = Caster::new(&v, &tf, 0.5);
+            let mut every = Caster::new(&v, &tf, 0.5);
+            every.cell_active.iter_mut().for_each(|c| *c = true);
+            assert!(fast.cell_active.iter().any(|c| !c), "{spec}: nothing to skip");
+            for d in [DVec3::new(0.3, 0.5, 0.8), DVec3::X, DVec3::new(-1.0, 2.0, -0.5)] {
+                let view = View::new(d, 3.0);
+                let (mut a, mut b) = (vec![0.0; v.voxels()], vec![0.0; v.voxels()]);
+                let ba = fast.visibility(&view, 24, &mut a);
+                let bb = every.visibility(&view, 24, &mut b);
+                assert_eq!((a, ba), (b, bb), "{spec} {d}");
+            }
+        }
     }
 
     #[test]

@@ -40,8 +40,8 @@ fn run(cli: Cli) -> Result<String, CliError> {
         }
         Command::Devices(c) => Ok(render(&devices::run()?, c.json)),
         Command::Phantom(o) => Ok(render(&imaging::run_phantom(&o)?, o.json)),
-        Command::Register(o) => Ok(render(&imaging::run_register(&o)?, o.json)),
-        Command::Segment(o) => Ok(render(&imaging::run_segment(&o)?, o.json)),
+        Command::Register(o) => Ok(render(&imaging::run_register(&o)?, o.common.json)),
+        Command::Segment(o) => Ok(render(&imaging::run_segment(&o)?, o.common.json)),
     }
 }
 

@@ -121,8 +121,10 @@ fn piecewise_constant_segmented() {
     assert!(split.windows(2).all(|p| p[1] >= p[0] - 1e-12));
     assert!(merge.windows(2).all(|p| p[1] >= p[0] - 1e-12));
     assert!(merge[2] < hx - 0.05, "three clusters lose information: {merge:?}");
-    let v = json(&itgfx(&["segment", s(&img), "--out", s(&d.join("o2")), "--regions", "2", "--json"]));
+    let v = json(&itgfx(&["segment", s(&img), "--out", s(&d.join("o2")), "--regions", "2", "--base", "e", "--json"]));
     assert_eq!(v["regions"], 2);
+    assert_eq!(v["unit"], "nats");
+    assert!((v["H_X"].as_f64().unwrap() - hx * std::f64::consts::LN_2).abs() < 1e-12);
     assert_eq!(&std::fs::read(d.join("o2/curve.png")).unwrap()[1..4], b"PNG");
     std::fs::remove_dir_all(&d).unwrap();
 }

@@ -151,9 +151,9 @@ pub struct RegisterOptions {
     /// Most Powell iterations per level
     #[arg(long, value_name = "N", default_value = "50", value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub max_iterations: u32,
-    /// One JSON object on stdout
-    #[arg(long)]
-    pub json: bool,
+    /// --json and --base (entropies and information in bits, nats or hartleys)
+    #[command(flatten)]
+    pub common: crate::options::Common,
 }
 
 /// `itgfx segment`.
@@ -181,9 +181,9 @@ pub struct SegmentOptions {
     /// Intensity bins
     #[arg(long, value_name = "N", default_value = "32", value_parser = bins)]
     pub bins: usize,
-    /// One JSON object on stdout
-    #[arg(long)]
-    pub json: bool,
+    /// --json and --base (entropies and information in bits, nats or hartleys)
+    #[command(flatten)]
+    pub common: crate::options::Common,
 }
 
 /// Makes `--out` if missing (remembering that it did) and checks that every

@@ -154,6 +154,11 @@ pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
     let all = r.levels.iter().flat_map(|l| l.trace.iter().copied());
     let (lo, hi) = all.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
     write_rgb(&plot(&curves, (0.0, (at.max(2) - 1) as f64), (lo, hi), (320, 200)), &paths[5])?;
+    // The engine measures in bits; `--base` converts every entropy.
+    let base = o.common.base;
+    let k = std::f64::consts::LN_2 * base.per_nat();
+    let unit = Some(base.unit());
+    let in_base = |v: f64| if metric == Metric::Mi { v * k } else { v };
     let e = &r.entropies;
     let mut rep = Report::new();
     rep.real("angle_deg", t.angle_deg, Some("deg"))
@@ -162,15 +167,16 @@ pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
         .text("metric", metric.name())
         .text("histogram", o.histogram.as_str())
         .count("bins", engine.bins as u64)
-        .real("metric_value", r.metric, None)
-        .real("MI", e.mutual_information, Some("bits"))
+        .text("unit", base.unit())
+        .real("metric_value", in_base(r.metric), None)
+        .real("MI", e.mutual_information * k, unit)
         .real("NMI", e.studholme_nmi(), None)
         .real("ECC", e.entropy_correlation(), None)
         .real("MI_over_joint", e.mi_over_joint(), None)
-        .real("H_fixed", e.h_x, Some("bits"))
-        .real("H_moving", e.h_y, Some("bits"))
-        .real("H_joint", e.h_xy, Some("bits"))
-        .maybe_real("MI_initial", r.initial_entropies.map(|e| e.mutual_information), Some("bits"))
+        .real("H_fixed", e.h_x * k, unit)
+        .real("H_moving", e.h_y * k, unit)
+        .real("H_joint", e.h_xy * k, unit)
+        .maybe_real("MI_initial", r.initial_entropies.map(|e| e.mutual_information * k), unit)
         .real("overlap", r.overlap, None)
         .count("iterations", r.levels.iter().map(|l| l.iterations as u64).sum())
         .count("evaluations", r.levels.iter().map(|l| l.evaluations as u64).sum())
@@ -186,7 +192,7 @@ pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
                 .count("iterations", l.iterations as u64)
                 .count("evaluations", l.evaluations as u64)
                 .reals("transform", l.transform.params().to_vec())
-                .reals("trace", l.trace.clone());
+                .reals("trace", l.trace.iter().map(|v| in_base(*v)).collect());
             x
         })
         .collect();

@@ -63,16 +63,21 @@ pub fn run_segment(o: &SegmentOptions) -> Result<Report, CliError> {
         ),
         &paths[2],
     )?;
+    // The engine measures in bits; `--base` converts every entropy.
+    let base = o.common.base;
+    let k = std::f64::consts::LN_2 * base.per_nat();
+    let unit = Some(base.unit());
     let mut rep = Report::new();
-    rep.real("H_X", s.h_x, Some("bits"))
+    rep.text("unit", base.unit())
+        .real("H_X", s.h_x * k, unit)
         .count("bins", o.bins as u64)
         .count("leaves", s.leaves.len() as u64)
-        .real("I_split", *s.split_curve.last().unwrap_or(&0.0), Some("bits"))
+        .real("I_split", *s.split_curve.last().unwrap_or(&0.0) * k, unit)
         .count("regions", s.regions as u64)
-        .real("I_regions", s.information, Some("bits"))
+        .real("I_regions", s.information * k, unit)
         .real("fraction_of_H", s.information / s.h_x, None)
-        .reals("split_curve", s.split_curve.clone())
-        .reals("merge_curve", s.merge_curve.clone())
+        .reals("split_curve", s.split_curve.iter().map(|v| v * k).collect())
+        .reals("merge_curve", s.merge_curve.iter().map(|v| v * k).collect())
         .reals("region_means", s.means.clone())
         .real("seconds", seconds, Some("s"))
         .texts("files", paths.iter().map(|p| p.display().to_string()).collect());

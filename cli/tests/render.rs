@@ -313,3 +313,22 @@ fn bad_input_is_one_line_exit_2() {
     fails(&["compare", "/nonexistent/a.exr", s(&file)], "/nonexistent/a.exr");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn vulkan_renders_the_cpu_image_where_a_device_exists() {
+    if !itgfx(&["devices"]).status.success() {
+        eprintln!("no Vulkan device: the vulkan render is not compared");
+        return;
+    }
+    let dir = temp("vulkan");
+    let run = |backend: &str| {
+        let out = dir.join(backend);
+        let args =
+            ["render", "cornell-box", "--out", s(&out), "--size", "12x8", "--spp", "2", "--backend", backend, "--json"];
+        json(&itgfx(&args));
+        std::fs::read(out.join("image.exr")).unwrap()
+    };
+    // Both backends return the same closest hits (the seam's conformance), so the same image.
+    assert_eq!(run("vulkan"), run("cpu"), "vulkan and cpu EXRs differ");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

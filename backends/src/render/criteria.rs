@@ -12,7 +12,7 @@
 //! | `ct` | `t_{1−α/2,N−1} s/√N > ε`, α = 0.1 | confidence test, Part IV eq. (5) (tutorial tolerance 0.025) |
 //! | `kl`, `cs`, `hl` | `(1/N) Ȳ D(p, u) ≥ ε`, `p_i = Y_i/ΣY` | f-divergence criteria, III-IV eqs. (14)–(16) |
 //! | `kl-sqrt`, `cs-sqrt`, `hl-sqrt` | `(1/N) Ȳ D^½(p, u) ≥ ε` | III-IV Def. 4 |
-//! | `ec` | `(1/N) Σ_c w^c C^c c̄^c ≥ ε`, `C^c = 1 − H(p^c)/log N` | entropy contrast of each channel weighted by its importance, Part IV eqs. (16), (27) at the pixel level (`q_1 = c̄`), sRGB weights |
+//! | `ec-batch` | `(1/N) Σ_c w^c C^c c̄^c ≥ ε`, `C^c = 1 − H(p^c)/log N` | entropy contrast of each channel weighted by its importance, Part IV eqs. (16), (27) at the pixel level (`q_1 = c̄`), sRGB weights; the tree form `ec` is in [`super::tree`] |
 //!
 //! The `1/N` factor of III-IV eq. (15) makes every criterion but `ct` stop
 //! (`ct`'s interval shrinks as `1/√N` by itself); `ε` is the one parameter
@@ -40,12 +40,13 @@ pub enum Criterion {
     ConfidenceTest,
     /// f-divergence from uniform, optionally its square root (`kl`, `kl-sqrt`, …).
     Divergence(DivergenceKernel, bool),
-    /// Entropy contrast of the channels weighted by their importance (`ec`).
+    /// Entropy contrast of the channels weighted by their importance, in
+    /// batches (`ec-batch`; the tree form is [`super::tree`]).
     EntropyContrast,
 }
 
 /// Every criterion's command-line name, in help order.
-pub const NAMES: &[&str] = &["cc", "ct", "kl", "cs", "hl", "kl-sqrt", "cs-sqrt", "hl-sqrt", "ec"];
+pub const NAMES: &[&str] = &["cc", "ct", "kl", "cs", "hl", "kl-sqrt", "cs-sqrt", "hl-sqrt", "ec-batch"];
 
 impl Criterion {
     /// The criterion called `name` (see [`NAMES`]).
@@ -61,7 +62,7 @@ impl Criterion {
             "kl-sqrt" => Self::Divergence(KullbackLeibler, true),
             "cs-sqrt" => Self::Divergence(ChiSquare, true),
             "hl-sqrt" => Self::Divergence(Hellinger, true),
-            "ec" => Self::EntropyContrast,
+            "ec-batch" => Self::EntropyContrast,
             _ => return None,
         })
     }

@@ -89,6 +89,10 @@ pub trait Policy: Sync {
     fn unbiased(&self) -> bool {
         false
     }
+    /// The refinement tree of Part IV §6 instead of batches.
+    fn tree(&self) -> Option<super::tree::Tree> {
+        None
+    }
 }
 
 /// `a × b` strata of a batch of `n` samples: `a` the largest divisor ≤ √n.
@@ -220,6 +224,9 @@ fn render_pixels(
     policy: &dyn Policy,
     ids: &[u32],
 ) -> Result<Vec<([f64; 3], u32, u32)>, BackendError> {
+    if let Some(t) = policy.tree() {
+        return super::tree::render_tree(pt, view, &t, ids);
+    }
     let unbiased = policy.unbiased();
     let first = policy.first().clamp(1, MAX_PIXEL_SAMPLES);
     let mut pixels: Vec<Pixel> =

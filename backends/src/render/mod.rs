@@ -5,7 +5,8 @@
 //!   mirrors, Russian roulette), traced as a wavefront through the
 //!   [`Tracer`] seam, so every backend renders the same way.
 //! * [`criteria`]: the refinement criteria, each a call into
-//!   `itgfx_core::pixel`; [`tune`]: thresholds for an equal average budget.
+//!   `itgfx_core::pixel`; [`tree`]: the entropy refinement tree of Part IV
+//!   §6; [`tune`]: thresholds for an equal average budget.
 //! * [`frame`]: the image plane, stratified batches per pixel, rows in
 //!   parallel, the same image for any thread count.
 //! * [`lights`]: area lights and materials; [`views`]: default cameras and
@@ -19,6 +20,7 @@ pub mod frame;
 pub mod lights;
 pub mod path;
 pub mod room;
+pub mod tree;
 pub mod tune;
 pub mod views;
 
@@ -31,6 +33,7 @@ pub use criteria::{Adaptive, Criterion};
 pub use frame::{Frame, Policy, Uniform, View};
 pub use lights::{Lights, Surfaces};
 pub use path::PathTracer;
+pub use tree::Tree;
 pub use tune::Tuned;
 
 /// Why a scene cannot be rendered.
@@ -112,6 +115,15 @@ pub enum Sampling {
         /// A given threshold instead of tuning one.
         threshold: Option<f64>,
     },
+    /// The entropy refinement tree of Part IV §6.
+    Tree {
+        /// Average samples per pixel to spend (the threshold is tuned to it).
+        spp: u32,
+        /// Pilot tree decides, fresh leaf samples estimate.
+        unbiased: bool,
+        /// A given threshold instead of tuning one.
+        threshold: Option<f64>,
+    },
 }
 
 /// A rendered frame and how its sampler was set.
@@ -158,6 +170,17 @@ pub fn render(
             let threshold = threshold.or(tuned.map(|t| t.threshold)).unwrap_or(0.0);
             let policy = Adaptive { criterion, threshold, max, unbiased };
             Ok(Rendered { frame: frame::render(&pt, &view, &policy, progress)?, threshold: Some(threshold), tuned })
+        }
+        Sampling::Tree { spp, unbiased, threshold } => {
+            let tuned = match threshold {
+                Some(_) => None,
+                None => Some(tune::tune_policy(&pt, &view, f64::from(spp), &|eps| {
+                    Box::new(Tree { threshold: eps, unbiased: false })
+                })?),
+            };
+            let threshold = threshold.or(tuned.map(|t| t.threshold)).unwrap_or(0.0);
+            let frame = frame::render(&pt, &view, &Tree { threshold, unbiased }, progress)?;
+            Ok(Rendered { frame, threshold: Some(threshold), tuned })
         }
     }
 }

@@ -1,19 +1,19 @@
 //! Thresholds for an equal budget: the tutorial compares criteria at the
 //! same average number of rays per pixel (Part IV Table 2, III-IV Table 3:
 //! 60). The threshold is found by bisection on `log ε` over a pilot: a
-//! regular grid of at most 1,024 pixels of the same view, rendered with a
+//! regular grid of at most 512 pixels of the same view, rendered with a
 //! different seed, so the final image's own samples never tune it and no
 //! reference image is looked at.
 
 use super::criteria::{Adaptive, Criterion};
-use super::frame::{View, sample_counts};
+use super::frame::{Policy, View, sample_counts};
 use super::path::PathTracer;
 use crate::tracer::BackendError;
 
 /// Pixels of the pilot grid, at most.
-const PILOT_PIXELS: u32 = 1024;
+const PILOT_PIXELS: u32 = 512;
 /// Bisection steps on `log ε`.
-const STEPS: u32 = 16;
+const STEPS: u32 = 14;
 
 /// Result of tuning.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -47,11 +47,24 @@ pub fn pilot_pixels(width: u32, height: u32) -> Vec<u32> {
 /// # Errors
 /// Backend failures only.
 pub fn tune(pt: &PathTracer, view: &View, criterion: Criterion, target: f64, max: u32) -> Result<Tuned, BackendError> {
+    tune_policy(pt, view, target, &|eps| Box::new(Adaptive { criterion, threshold: eps, max, unbiased: false }))
+}
+
+/// The threshold at which the policy `make(ε)` spends on average `target`
+/// samples per pixel on the pilot grid (spend must fall as `ε` grows).
+///
+/// # Errors
+/// Backend failures only.
+pub fn tune_policy(
+    pt: &PathTracer,
+    view: &View,
+    target: f64,
+    make: &dyn Fn(f64) -> Box<dyn Policy>,
+) -> Result<Tuned, BackendError> {
     let pilot = View { seed: view.seed ^ 0x005E_ED0F_7E57, ..*view };
     let pixels = pilot_pixels(view.width, view.height);
     let mean = |eps: f64| -> Result<f64, BackendError> {
-        let p = Adaptive { criterion, threshold: eps, max, unbiased: false };
-        let n = sample_counts(pt, &pilot, &p, &pixels)?;
+        let n = sample_counts(pt, &pilot, make(eps).as_ref(), &pixels)?;
         Ok(n.iter().map(|&v| f64::from(v)).sum::<f64>() / n.len().max(1) as f64)
     };
     // Spend falls as ε grows: bracket in log space, then bisect.

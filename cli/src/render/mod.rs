@@ -48,7 +48,7 @@ pub struct RenderOptions {
     pub spp: u32,
     /// Pixel sampler: uniform (stratified), or an adaptive criterion: cc (classic contrast), ct
     /// (confidence test), kl cs hl (f-divergences), kl-sqrt cs-sqrt hl-sqrt (their square roots), ec
-    /// (entropy contrast); see docs/RENDER.md
+    /// (entropy refinement tree, Part IV §6), ec-batch (entropy contrast in batches); see docs/RENDER.md
     #[arg(long, value_name = "NAME", default_value = "uniform", value_parser = sampler_name)]
     pub sampler: String,
     /// Adaptive: most samples one pixel may take (default 16 x --spp)
@@ -116,10 +116,10 @@ fn spp(s: &str) -> Result<u32, String> {
 }
 
 fn sampler_name(s: &str) -> Result<String, String> {
-    if s == "uniform" || Criterion::from_name(s).is_some() {
+    if s == "uniform" || s == "ec" || Criterion::from_name(s).is_some() {
         Ok(s.to_string())
     } else {
-        Err(format!("unknown sampler {s:?}: uniform, {}", criteria::NAMES.join(", ")))
+        Err(format!("unknown sampler {s:?}: uniform, ec, {}", criteria::NAMES.join(", ")))
     }
 }
 
@@ -187,6 +187,11 @@ pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
             "--max-spp, --threshold and --unbiased are for adaptive samplers (--sampler cc, kl, ...)",
         ));
     }
+    if o.sampler == "ec" && o.max_spp.is_some() {
+        return Err(CliError::usage(
+            "--sampler ec: the refinement tree is capped by its depth (4 levels), not --max-spp",
+        ));
+    }
     if let Some(m) = o.max_spp
         && m < o.spp
     {
@@ -228,6 +233,7 @@ fn render_into(o: &RenderOptions, spec: &str, dir: &std::path::Path) -> Result<R
     let tracer = open(o.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
     let camera = o.camera.unwrap_or_else(|| views::default_camera(&scene));
     let sampling = match Criterion::from_name(&o.sampler) {
+        None if o.sampler == "ec" => Sampling::Tree { spp: o.spp, unbiased: o.unbiased, threshold: o.threshold },
         None => Sampling::Uniform(o.spp),
         Some(criterion) => Sampling::Adaptive {
             criterion,
@@ -267,7 +273,10 @@ fn render_into(o: &RenderOptions, spec: &str, dir: &std::path::Path) -> Result<R
         .reals("camera_forward", camera.forward.to_array().to_vec())
         .real("camera_fov_y", camera.fov_y.to_degrees(), Some("deg"));
     if let Sampling::Adaptive { max, unbiased, .. } = sampling {
-        r.maybe_real("threshold", rendered.threshold, None).count("max_spp", u64::from(max)).flag("unbiased", unbiased);
+        r.count("max_spp", u64::from(max)).flag("unbiased", unbiased);
+    }
+    if o.sampler != "uniform" {
+        r.maybe_real("threshold", rendered.threshold, None);
         if let Some(t) = rendered.tuned {
             r.count("pilot_pixels", u64::from(t.pilot_pixels)).real("pilot_spp_mean", t.pilot_mean, None);
         }

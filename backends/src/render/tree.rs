@@ -1,0 +1,225 @@
+//! Entropy-based adaptive sampling with the refinement tree of Part IV §6.
+//!
+//! Every pixel is a 1-node; an `n`-node takes `N_s = 8` stratified samples
+//! (2 in each of its `N_r = 4` quadrants). Its contrast is eq. (27),
+//! `C_n = Σ_c w^c C_n^c q_n^c`: the entropy contrast `C^c = 1 − H(p^c)/log N`
+//! of each channel (eq. (16)) weighted by the sRGB weights and the node's
+//! importance `q_n^c = c̄_n^c / N_r^{n−1}` (Proposition 1, eq. (26)). Colour
+//! only: `δ = 1` in eq. (28). While `C_n ≥ ε` and `n` is below the deepest
+//! level (4, as the tutorial's trees), the node splits into its quadrants,
+//! each sampled anew. A leaf's colour is the mean of its samples; a split
+//! node's is the mean of its children's (eq. (29), the children covering
+//! equal areas). The pixel's value is its 1-node's colour.
+//!
+//! The tree is built level by level for all pixels of a row at once (one
+//! wavefront per level through the tracing seam). Node `k` (breadth-first
+//! within its pixel) uses sample indices `8k..8k+8`, so the image does not
+//! depend on the thread count.
+
+use itgfx_core::pixel::{SRGB_LUMINANCE_WEIGHTS, node_importance, pixel_contrast, tree_colour_contrast};
+
+use super::frame::{PILOT, PixelSamples, Policy, View};
+use super::path::{PathTracer, Start};
+use crate::lines::LineRng;
+use crate::tracer::BackendError;
+
+/// Samples per node, `N_s`.
+pub const NODE_SAMPLES: u32 = 8;
+/// Regions per node, `N_r` (quadrants).
+pub const REGIONS: u32 = 4;
+/// Deepest level of the tree (the pixel is level 1).
+pub const MAX_LEVEL: u32 = 4;
+
+/// The refinement-tree sampler with threshold `ε`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tree {
+    /// Threshold `ε` on the node contrast.
+    pub threshold: f64,
+    /// Build the tree on pilot samples, then sample every leaf afresh for
+    /// its colour (the deciding samples never enter the image).
+    pub unbiased: bool,
+}
+
+impl Policy for Tree {
+    fn first(&self) -> u32 {
+        NODE_SAMPLES
+    }
+    fn more(&self, _: &PixelSamples) -> u32 {
+        0
+    }
+    fn tree(&self) -> Option<Tree> {
+        Some(*self)
+    }
+    fn unbiased(&self) -> bool {
+        self.unbiased
+    }
+}
+
+/// The contrast `C_n` of an `n`-node's samples (eq. (27)); infinite when
+/// the core refuses the samples (non-finite radiance), so the node splits.
+#[must_use]
+pub fn node_contrast(rgb: &[[f64; 3]], level: u32) -> f64 {
+    let n = rgb.len() as f64;
+    let value = || -> Result<f64, itgfx_core::Error> {
+        let mut contrasts = [0.0; 3];
+        let mut importance = [0.0; 3];
+        for c in 0..3 {
+            let ch: Vec<f64> = rgb.iter().map(|s| s[c]).collect();
+            contrasts[c] = pixel_contrast(&ch)?;
+            importance[c] = node_importance(ch.iter().sum::<f64>() / n, REGIONS, level)?;
+        }
+        tree_colour_contrast(&contrasts, &SRGB_LUMINANCE_WEIGHTS, &importance)
+    };
+    value().unwrap_or(f64::INFINITY)
+}
+
+/// Colour of a node from its children (eq. (29)): the mean over the equal-area regions.
+#[must_use]
+pub fn reconstruct(children: &[[f64; 3]]) -> [f64; 3] {
+    let mut acc = [0.0; 3];
+    for c in children {
+        for k in 0..3 {
+            acc[k] += c[k];
+        }
+    }
+    acc.map(|v| v / children.len().max(1) as f64)
+}
+
+struct Node {
+    slot: usize,
+    pixel: u32,
+    serial: u32,
+    level: u32,
+    x: f64,
+    y: f64,
+    size: f64,
+    colour: [f64; 3],
+    children: Option<usize>,
+}
+
+/// Renders the pixels `ids` with the refinement tree: (colour, samples, 0).
+pub(crate) fn render_tree(
+    pt: &PathTracer,
+    view: &View,
+    tree: &Tree,
+    ids: &[u32],
+) -> Result<Vec<([f64; 3], u32, u32)>, BackendError> {
+    let mut nodes: Vec<Node> = ids
+        .iter()
+        .enumerate()
+        .map(|(slot, &pixel)| Node {
+            slot,
+            pixel,
+            serial: 0,
+            level: 1,
+            x: f64::from(pixel % view.width),
+            y: f64::from(pixel / view.width),
+            size: 1.0,
+            colour: [0.0; 3],
+            children: None,
+        })
+        .collect();
+    let mut serials = vec![1u32; ids.len()];
+    let mut counts = vec![0u32; ids.len()];
+    let mut level_start = 0;
+    while level_start < nodes.len() {
+        let level_end = nodes.len();
+        let rgb = pt.radiance(&node_starts(view, &nodes[level_start..level_end], tree.unbiased))?;
+        for k in level_start..level_end {
+            let s = &rgb[(k - level_start) * NODE_SAMPLES as usize..(k - level_start + 1) * NODE_SAMPLES as usize];
+            let (slot, level) = (nodes[k].slot, nodes[k].level);
+            counts[slot] += NODE_SAMPLES;
+            nodes[k].colour = reconstruct(s);
+            if level < MAX_LEVEL && node_contrast(s, level) >= tree.threshold {
+                nodes[k].children = Some(nodes.len());
+                let (x, y, half) = (nodes[k].x, nodes[k].y, nodes[k].size * 0.5);
+                let pixel = nodes[k].pixel;
+                for q in 0..REGIONS {
+                    let serial = serials[slot];
+                    serials[slot] += 1;
+                    nodes.push(Node {
+                        slot,
+                        pixel,
+                        serial,
+                        level: level + 1,
+                        x: x + f64::from(q % 2) * half,
+                        y: y + f64::from(q / 2) * half,
+                        size: half,
+                        colour: [0.0; 3],
+                        children: None,
+                    });
+                }
+            }
+        }
+        level_start = level_end;
+    }
+    let mut pilot = vec![0u32; ids.len()];
+    if tree.unbiased {
+        // The tree's samples only decided: every leaf is sampled afresh.
+        pilot = counts.clone();
+        counts.iter_mut().for_each(|c| *c = 0);
+        let leaves: Vec<usize> = (0..nodes.len()).filter(|&k| nodes[k].children.is_none()).collect();
+        let chosen: Vec<&Node> = leaves.iter().map(|&k| &nodes[k]).collect();
+        let starts: Vec<Start> =
+            chosen.iter().flat_map(|n| node_starts(view, std::slice::from_ref(*n), false)).collect();
+        let rgb = pt.radiance(&starts)?;
+        for (j, &k) in leaves.iter().enumerate() {
+            nodes[k].colour = reconstruct(&rgb[j * NODE_SAMPLES as usize..(j + 1) * NODE_SAMPLES as usize]);
+            counts[nodes[k].slot] += NODE_SAMPLES;
+        }
+    }
+    // Ascent: children were pushed after their parents, so go backwards.
+    for k in (0..nodes.len()).rev() {
+        if let Some(c) = nodes[k].children {
+            let kids: Vec<[f64; 3]> = nodes[c..c + REGIONS as usize].iter().map(|n| n.colour).collect();
+            nodes[k].colour = reconstruct(&kids);
+        }
+    }
+    Ok((0..ids.len()).map(|slot| (nodes[slot].colour, counts[slot], pilot[slot])).collect())
+}
+
+/// The camera rays of `nodes`: 8 each on a 4 × 2 jittered grid of the
+/// node's square (quadrant `(cx / 2, cy)` holds 2 of them); pilot
+/// samples take the [`PILOT`] bit in their index.
+fn node_starts(view: &View, nodes: &[Node], pilot: bool) -> Vec<Start> {
+    let mut starts = Vec::with_capacity(nodes.len() * NODE_SAMPLES as usize);
+    for n in nodes {
+        for i in 0..NODE_SAMPLES {
+            let index = (n.serial * NODE_SAMPLES + i) | if pilot { PILOT } else { 0 };
+            let rng = LineRng::new(view.seed, (u64::from(n.pixel) << 24) | u64::from(index));
+            let (cx, cy) = (f64::from(i % 4), f64::from(i / 4));
+            let sx = n.x + (cx + rng.uniform(0)) / 4.0 * n.size;
+            let sy = n.y + (cy + rng.uniform(1)) / 2.0 * n.size;
+            let direction = view.camera.direction(sx, sy, view.width, view.height);
+            starts.push(Start { origin: view.camera.eye, direction, rng });
+        }
+    }
+    starts
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reconstruction_of_a_hand_made_tree() {
+        // A pixel split once, its first quadrant split again (Fig. 10's shape):
+        // c_1 = mean(c_{2,0..3}), c_{2,0} = mean(c_{3,0..3}).
+        let deep = [[4.0, 0.0, 0.0], [0.0; 3], [0.0; 3], [0.0; 3]];
+        let c20 = reconstruct(&deep);
+        assert_eq!(c20, [1.0, 0.0, 0.0]);
+        let c1 = reconstruct(&[c20, [1.0, 1.0, 1.0], [0.0; 3], [2.0, 3.0, 3.0]]);
+        assert_eq!(c1, [1.0, 1.0, 1.0]);
+    }
+
+    #[test]
+    fn node_contrast_is_eq_27_and_falls_with_depth() {
+        let flat = [[0.5; 3]; 8];
+        assert_eq!(node_contrast(&flat, 1), 0.0, "a flat node never splits");
+        let edge: Vec<[f64; 3]> = (0..8).map(|i| if i < 4 { [1.0; 3] } else { [0.0; 3] }).collect();
+        // Each channel: 4 of 8 samples equal, H = log 4, quality 2/3, contrast 1/3; mean 1/2.
+        let c1 = node_contrast(&edge, 1);
+        assert!((c1 - (1.0 / 3.0) * 0.5).abs() < 1e-12, "{c1}");
+        assert!((node_contrast(&edge, 2) - c1 / 4.0).abs() < 1e-12, "importance falls by N_r a level");
+    }
+}

@@ -165,6 +165,7 @@ struct Simplified {
     label: String,
     mesh: IndexedMesh,
     seconds: f64,
+    cpu_seconds: Option<f64>,
     mi: Option<f64>,
     stalled: Option<String>,
 }
@@ -243,7 +244,7 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
         let label = Path::new(o.evaluate.as_deref().unwrap_or("evaluated"))
             .file_stem()
             .map_or_else(|| "evaluated".into(), |s| s.to_string_lossy().into_owned());
-        results.push(Simplified { label, mesh: m, seconds: 0.0, mi: None, stalled: None });
+        results.push(Simplified { label, mesh: m, seconds: 0.0, cpu_seconds: None, mi: None, stalled: None });
     } else {
         let dirs = icosphere(viewpoint_level(o.viewpoints));
         let settings = Settings {
@@ -274,6 +275,7 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
                 label: s.target.to_string(),
                 mesh: s.mesh,
                 seconds: s.seconds,
+                cpu_seconds: s.cpu_seconds,
                 mi: Some(s.mutual_information),
                 stalled: s.stalled,
             });
@@ -292,13 +294,13 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
     let mut written = results_written;
     written.push(out.join("original.png").display().to_string());
     let mut stages = Vec::new();
-    for Simplified { label, mesh, seconds, mi, stalled } in &results {
+    for Simplified { label, mesh, seconds, cpu_seconds, mi, stalled } in &results {
         let imgs = renders(mesh, o, &eyes)?;
         let err = image_error(&reference, &imgs);
         let dist = surface_distance(&original, mesh, o.samples, 1);
         let mut x = Report::new();
         x.text("name", label.clone()).count("triangles", mesh.triangles() as u64);
-        x.real("seconds", *seconds, Some("s"));
+        x.real("seconds", *seconds, Some("s")).maybe_real("cpu_seconds", *cpu_seconds, Some("s"));
         x.real("image_rmse", err.shading, None).real("silhouette_rmse", err.silhouette, None);
         x.real("hausdorff", dist.hausdorff, None).real("mean_distance", dist.mean, None);
         x.maybe_real("I_VO_bits", *mi, Some("bits"));

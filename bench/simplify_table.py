@@ -47,19 +47,33 @@ def read_obj(path):
 
 
 def write_obj(path, v, idx):
+    """Writes QEM's triangles, leaving out those with no area (itgfx's
+    reader refuses them); returns how many were left out."""
+    tris = idx.reshape(-1, 3)
+    p = v.astype(np.float64)
+    area2 = np.linalg.norm(np.cross(p[tris[:, 1]] - p[tris[:, 0]], p[tris[:, 2]] - p[tris[:, 0]]), axis=1)
+    keep = area2 > 0.0
     with open(path, "w") as f:
         f.write("# meshoptimizer simplify (QEM)\n")
-        for p in v:
-            f.write(f"v {float(p[0])!r} {float(p[1])!r} {float(p[2])!r}\n")
-        used = idx.reshape(-1, 3)
-        for t in used:
+        for q in v:
+            f.write(f"v {float(q[0])!r} {float(q[1])!r} {float(q[2])!r}\n")
+        for t in tris[keep]:
             f.write(f"f {t[0] + 1} {t[1] + 1} {t[2] + 1}\n")
+    return int((~keep).sum())
 
 
-def itgfx(exe, args):
+def itgfx(exe, args, cache=None):
+    """Runs itgfx --json; with `cache`, reuses (or saves) its output there."""
+    if cache and os.path.exists(cache):
+        with open(cache) as f:
+            return json.load(f)
     r = subprocess.run([exe] + args, capture_output=True, text=True)
     if r.returncode != 0:
         sys.exit(f"itgfx {' '.join(args)}: {r.stderr.strip()}")
+    if cache:
+        os.makedirs(os.path.dirname(cache), exist_ok=True)
+        with open(cache, "w") as f:
+            f.write(r.stdout)
     return json.loads(r.stdout)
 
 
@@ -97,6 +111,7 @@ def main():
                 a.itgfx,
                 ["simplify", mesh, "--sweep", a.targets, "--metric", metric, "--viewpoints", a.viewpoints,
                  "--out", d, "--json"],
+                cache=os.path.join(d, "run.json"),
             )
         n = runs["vmi"]["triangles"]
         inp = os.path.join(a.out, name, "vmi", "input.obj")
@@ -105,13 +120,14 @@ def main():
             target = int(res["name"])
             q_idx, q_sec, q_cpu, q_err = qem(v, idx, target)
             qobj = os.path.join(a.out, name, f"qem_{target}.obj")
-            write_obj(qobj, v, q_idx)
+            dropped = write_obj(qobj, v, q_idx)
             q = itgfx(a.itgfx, ["simplify", mesh, "--evaluate", qobj, "--out", os.path.join(a.out, name, "qem"),
                                 "--json"])["results"][0]
             row = {"mesh": name, "triangles_in": n, "target": target}
             for metric in METRICS:
                 row[metric] = runs[metric]["results"][k]
-            row["qem"] = {**q, "seconds": q_sec, "cpu_seconds": q_cpu, "meshopt_error": q_err}
+            row["qem"] = {**q, "seconds": q_sec, "cpu_seconds": q_cpu, "meshopt_error": q_err,
+                          "zero_area_dropped": dropped}
             rows.append(row)
     with open(os.path.join(a.out, "simplify_table.json"), "w") as f:
         json.dump(rows, f, indent=1)

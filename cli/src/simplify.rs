@@ -15,7 +15,6 @@ use itgfx_backends::viewpoint::icosphere;
 use crate::CliError;
 use crate::export::{montage, write_png};
 use crate::options::Common;
-use crate::progress::Progress;
 use crate::report::Report;
 use crate::scene::load_scene;
 use crate::values::{
@@ -160,6 +159,42 @@ fn picture(r: &Render) -> image::RgbImage {
     })
 }
 
+/// A progress bar on stderr counting collapses (runs past a second, when
+/// stderr is a terminal or `ITGFX_PROGRESS=1`, as the other commands').
+struct Collapses {
+    start: Instant,
+    last: f64,
+    enabled: bool,
+}
+
+impl Collapses {
+    fn new() -> Self {
+        use std::io::IsTerminal;
+        let enabled = std::io::stderr().is_terminal() || std::env::var_os("ITGFX_PROGRESS").is_some_and(|v| v == "1");
+        Self { start: Instant::now(), last: 0.0, enabled }
+    }
+
+    fn update(&mut self, done: u64, total: u64) {
+        let el = self.start.elapsed().as_secs_f64();
+        if !self.enabled || el < 1.0 || (el - self.last < 0.2 && done < total) {
+            return;
+        }
+        self.last = el;
+        let frac = done as f64 / total.max(1) as f64;
+        let fill = (frac * 30.0) as usize;
+        let eta = if done > 0 { el * (total - done.min(total)) as f64 / done as f64 } else { 0.0 };
+        eprint!(
+            "\r[{}{}] {:5.1}%  {done}/{total} collapses  eta {eta:.0}s ",
+            "#".repeat(fill),
+            " ".repeat(30 - fill),
+            100.0 * frac
+        );
+        if done >= total {
+            eprintln!();
+        }
+    }
+}
+
 /// One mesh to measure: a stage of the simplification or `--evaluate`'s.
 struct Simplified {
     label: String,
@@ -257,7 +292,7 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
             max_subdivision: o.max_subdivision,
             background: !o.no_background,
         };
-        let mut progress = Progress::new();
+        let mut progress = Collapses::new();
         let outcome = simplify(&original, &wanted, &settings, &mut |d, t| progress.update(d, t))
             .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
         r.text("mode", "simplify")
@@ -294,6 +329,7 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
     let mut written = results_written;
     written.push(out.join("original.png").display().to_string());
     let mut stages = Vec::new();
+    let mut summary = Vec::new();
     for Simplified { label, mesh, seconds, cpu_seconds, mi, stalled } in &results {
         let imgs = renders(mesh, o, &eyes)?;
         let err = image_error(&reference, &imgs);
@@ -307,6 +343,14 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
         if let Some(why) = stalled {
             x.text("stalled", why.clone());
         }
+        summary.push(format!(
+            "{} triangles: image RMSE {:.4}, silhouette RMSE {:.4}, Hausdorff {:.4}, {:.2} s",
+            mesh.triangles(),
+            err.shading,
+            err.silhouette,
+            dist.hausdorff,
+            seconds
+        ));
         let stem = if o.evaluate.is_some() { label.clone() } else { format!("simplified_{label}") };
         if o.evaluate.is_none() {
             let obj = out.join(format!("{stem}.obj"));
@@ -331,6 +375,7 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
     let all: Vec<image::RgbImage> = rows.concat();
     write_png(&montage(&all, SHOWN), &out.join("compare.png"))?;
     written.push(out.join("compare.png").display().to_string());
+    r.texts("summary", summary);
     r.records("results", stages);
     r.texts("wrote", written);
     r.real("seconds", t0.elapsed().as_secs_f64(), Some("s"));

@@ -260,6 +260,9 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
     }
 
     let t0 = Instant::now();
+    let unit = Some(o.common.base.unit());
+    // The simplifier measures in bits; reports follow --base.
+    let in_base = |bits: f64| bits * std::f64::consts::LN_2 * o.common.base.per_nat();
     let eyes: Vec<DVec3> = evaluation_directions(o.eval_views).into_iter().map(|d| d * o.distance).collect();
     let reference = renders(&original, o, &eyes)?;
     let mut r = Report::new();
@@ -299,7 +302,7 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
             .text("metric", o.metric.clone())
             .flag("background", !o.no_background)
             .count("viewpoints", u64::from(o.viewpoints));
-        r.real("I_VO_bits", outcome.initial_mutual_information, Some("bits"));
+        r.real("I_VO", in_base(outcome.initial_mutual_information), unit);
         r.count("collapses", outcome.collapses).count("channel_traces", u64::from(outcome.traces));
         r.real("channel_seconds", outcome.trace_seconds, Some("s"));
         for s in outcome.stages {
@@ -339,7 +342,7 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
         x.real("seconds", *seconds, Some("s")).maybe_real("cpu_seconds", *cpu_seconds, Some("s"));
         x.real("image_rmse", err.shading, None).real("silhouette_rmse", err.silhouette, None);
         x.real("hausdorff", dist.hausdorff, None).real("mean_distance", dist.mean, None);
-        x.maybe_real("I_VO_bits", *mi, Some("bits"));
+        x.maybe_real("I_VO", mi.map(in_base), unit);
         if let Some(why) = stalled {
             x.text("stalled", why.clone());
         }

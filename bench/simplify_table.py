@@ -1,12 +1,12 @@
 #!/usr/bin/env python3
-"""Viewpoint-driven simplification (itgfx simplify, VMI and VE) against QEM
+"""Viewpoint-driven simplification (itgfx simplify: VMI, VE, IVO) against QEM
 (meshoptimizer's simplify, the Python binding) on the shared meshes.
 
 Never run by CI or the Rust tests; meshoptimizer is not a workspace
 dependency. Needs `pip install meshoptimizer numpy` (bench/simplify_table.sh
 makes a virtual environment) and a built `itgfx` (release recommended).
 
-For every mesh and target: itgfx simplifies by VMI and by VE (one --sweep
+For every mesh and target: itgfx simplifies by each metric (one --sweep
 run each, so the time of a target is the time to reach it), writes the
 welded and repaired input it started from (input.obj); meshoptimizer
 simplifies that same input.obj to the same triangle count (target_error 1,
@@ -29,6 +29,9 @@ import time
 import numpy as np
 import meshoptimizer
 
+# itgfx's collapse costs: per-view VMI, viewpoint entropy, the channel's I(V;O).
+METRICS = ["vmi", "ve", "ivo"]
+
 
 def read_obj(path):
     vs, fs = [], []
@@ -44,26 +47,40 @@ def read_obj(path):
 
 
 def write_obj(path, v, idx):
+    """Writes QEM's triangles, leaving out those with no area (itgfx's
+    reader refuses them); returns how many were left out."""
+    tris = idx.reshape(-1, 3)
+    p = v.astype(np.float64)
+    area2 = np.linalg.norm(np.cross(p[tris[:, 1]] - p[tris[:, 0]], p[tris[:, 2]] - p[tris[:, 0]]), axis=1)
+    keep = area2 > 0.0
     with open(path, "w") as f:
         f.write("# meshoptimizer simplify (QEM)\n")
-        for p in v:
-            f.write(f"v {float(p[0])!r} {float(p[1])!r} {float(p[2])!r}\n")
-        used = idx.reshape(-1, 3)
-        for t in used:
+        for q in v:
+            f.write(f"v {float(q[0])!r} {float(q[1])!r} {float(q[2])!r}\n")
+        for t in tris[keep]:
             f.write(f"f {t[0] + 1} {t[1] + 1} {t[2] + 1}\n")
+    return int((~keep).sum())
 
 
-def itgfx(exe, args):
+def itgfx(exe, args, cache=None):
+    """Runs itgfx --json; with `cache`, reuses (or saves) its output there."""
+    if cache and os.path.exists(cache):
+        with open(cache) as f:
+            return json.load(f)
     r = subprocess.run([exe] + args, capture_output=True, text=True)
     if r.returncode != 0:
         sys.exit(f"itgfx {' '.join(args)}: {r.stderr.strip()}")
+    if cache:
+        os.makedirs(os.path.dirname(cache), exist_ok=True)
+        with open(cache, "w") as f:
+            f.write(r.stdout)
     return json.loads(r.stdout)
 
 
 def qem(vertices, indices, target_triangles):
     dest = np.zeros(len(indices), dtype=np.uint32)
     err = np.zeros(1, dtype=np.float32)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     n = meshoptimizer.simplify(
         dest,
         indices,
@@ -72,7 +89,7 @@ def qem(vertices, indices, target_triangles):
         target_error=1.0,
         result_error=err,
     )
-    return dest[:n], time.perf_counter() - t0, float(err[0])
+    return dest[:n], time.perf_counter() - t0, time.process_time() - c0, float(err[0])
 
 
 def main():
@@ -88,44 +105,45 @@ def main():
     for mesh in a.meshes:
         name = os.path.splitext(os.path.basename(mesh))[0]
         runs = {}
-        for metric in ["vmi", "ve"]:
+        for metric in METRICS:
             d = os.path.join(a.out, name, metric)
             runs[metric] = itgfx(
                 a.itgfx,
                 ["simplify", mesh, "--sweep", a.targets, "--metric", metric, "--viewpoints", a.viewpoints,
                  "--out", d, "--json"],
+                cache=os.path.join(d, "run.json"),
             )
         n = runs["vmi"]["triangles"]
         inp = os.path.join(a.out, name, "vmi", "input.obj")
         v, idx = read_obj(inp)
         for k, res in enumerate(runs["vmi"]["results"]):
             target = int(res["name"])
-            q_idx, q_sec, q_err = qem(v, idx, target)
+            q_idx, q_sec, q_cpu, q_err = qem(v, idx, target)
             qobj = os.path.join(a.out, name, f"qem_{target}.obj")
-            write_obj(qobj, v, q_idx)
+            dropped = write_obj(qobj, v, q_idx)
             q = itgfx(a.itgfx, ["simplify", mesh, "--evaluate", qobj, "--out", os.path.join(a.out, name, "qem"),
                                 "--json"])["results"][0]
-            ve = runs["ve"]["results"][k]
-            rows.append({
-                "mesh": name, "triangles_in": n, "target": target,
-                "vmi": res, "ve": ve, "qem": {**q, "seconds": q_sec, "meshopt_error": q_err},
-            })
+            row = {"mesh": name, "triangles_in": n, "target": target}
+            for metric in METRICS:
+                row[metric] = runs[metric]["results"][k]
+            row["qem"] = {**q, "seconds": q_sec, "cpu_seconds": q_cpu, "meshopt_error": q_err,
+                          "zero_area_dropped": dropped}
+            rows.append(row)
     with open(os.path.join(a.out, "simplify_table.json"), "w") as f:
         json.dump(rows, f, indent=1)
-    print("| mesh | tris in → target | image RMSE VMI / VE / QEM | silhouette RMSE VMI / VE / QEM "
-          "| Hausdorff VMI / VE / QEM | mean dist. VMI / VE / QEM | seconds VMI / VE / QEM | VMI ÷ QEM time |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| mesh | triangles in → target | method | triangles | image RMSE | silhouette RMSE | Hausdorff "
+          "| mean distance | wall s | CPU s |")
+    print("|---|---|---|---:|---:|---:|---:|---:|---:|---:|")
     for r in rows:
-        m = [r["vmi"], r["ve"], r["qem"]]
-
-        def three(key, fmt):
-            return " / ".join(format(x[key], fmt) for x in m)
-
-        tris = " / ".join(str(x["triangles"]) for x in m)
-        print(f"| {r['mesh']} | {r['triangles_in']} → {r['target']} ({tris}) | {three('image_rmse', '.4f')} "
-              f"| {three('silhouette_rmse', '.4f')} | {three('hausdorff', '.4f')} | {three('mean_distance', '.5f')} "
-              f"| {m[0]['seconds']:.2f} / {m[1]['seconds']:.2f} / {m[2]['seconds']:.4f} "
-              f"| {m[0]['seconds'] / max(m[2]['seconds'], 1e-9):.0f}× |")
+        for method in METRICS + ["qem"]:
+            x = r[method]
+            best = min(r[m]["image_rmse"] for m in METRICS + ["qem"])
+            rmse = f"{x['image_rmse']:.4f}"
+            if x["image_rmse"] == best:
+                rmse = f"**{rmse}**"
+            print(f"| {r['mesh']} | {r['triangles_in']} → {r['target']} | {method.upper()} | {x['triangles']} | {rmse} "
+                  f"| {x['silhouette_rmse']:.4f} | {x['hausdorff']:.4f} | {x['mean_distance']:.5f} "
+                  f"| {x['seconds']:.3g} | {x.get('cpu_seconds') or 0:.3g} |")
 
 
 if __name__ == "__main__":

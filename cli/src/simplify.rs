@@ -15,7 +15,6 @@ use itgfx_backends::viewpoint::icosphere;
 use crate::CliError;
 use crate::export::{montage, write_png};
 use crate::options::Common;
-use crate::progress::Progress;
 use crate::report::Report;
 use crate::scene::load_scene;
 use crate::values::{
@@ -160,11 +159,48 @@ fn picture(r: &Render) -> image::RgbImage {
     })
 }
 
+/// A progress bar on stderr counting collapses (runs past a second, when
+/// stderr is a terminal or `ITGFX_PROGRESS=1`, as the other commands').
+struct Collapses {
+    start: Instant,
+    last: f64,
+    enabled: bool,
+}
+
+impl Collapses {
+    fn new() -> Self {
+        use std::io::IsTerminal;
+        let enabled = std::io::stderr().is_terminal() || std::env::var_os("ITGFX_PROGRESS").is_some_and(|v| v == "1");
+        Self { start: Instant::now(), last: 0.0, enabled }
+    }
+
+    fn update(&mut self, done: u64, total: u64) {
+        let el = self.start.elapsed().as_secs_f64();
+        if !self.enabled || el < 1.0 || (el - self.last < 0.2 && done < total) {
+            return;
+        }
+        self.last = el;
+        let frac = done as f64 / total.max(1) as f64;
+        let fill = (frac * 30.0) as usize;
+        let eta = if done > 0 { el * (total - done.min(total)) as f64 / done as f64 } else { 0.0 };
+        eprint!(
+            "\r[{}{}] {:5.1}%  {done}/{total} collapses  eta {eta:.0}s ",
+            "#".repeat(fill),
+            " ".repeat(30 - fill),
+            100.0 * frac
+        );
+        if done >= total {
+            eprintln!();
+        }
+    }
+}
+
 /// One mesh to measure: a stage of the simplification or `--evaluate`'s.
 struct Simplified {
     label: String,
     mesh: IndexedMesh,
     seconds: f64,
+    cpu_seconds: Option<f64>,
     mi: Option<f64>,
     stalled: Option<String>,
 }
@@ -224,6 +260,9 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
     }
 
     let t0 = Instant::now();
+    let unit = Some(o.common.base.unit());
+    // The simplifier measures in bits; reports follow --base.
+    let in_base = |bits: f64| bits * std::f64::consts::LN_2 * o.common.base.per_nat();
     let eyes: Vec<DVec3> = evaluation_directions(o.eval_views).into_iter().map(|d| d * o.distance).collect();
     let reference = renders(&original, o, &eyes)?;
     let mut r = Report::new();
@@ -243,7 +282,7 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
         let label = Path::new(o.evaluate.as_deref().unwrap_or("evaluated"))
             .file_stem()
             .map_or_else(|| "evaluated".into(), |s| s.to_string_lossy().into_owned());
-        results.push(Simplified { label, mesh: m, seconds: 0.0, mi: None, stalled: None });
+        results.push(Simplified { label, mesh: m, seconds: 0.0, cpu_seconds: None, mi: None, stalled: None });
     } else {
         let dirs = icosphere(viewpoint_level(o.viewpoints));
         let settings = Settings {
@@ -256,14 +295,14 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
             max_subdivision: o.max_subdivision,
             background: !o.no_background,
         };
-        let mut progress = Progress::new();
+        let mut progress = Collapses::new();
         let outcome = simplify(&original, &wanted, &settings, &mut |d, t| progress.update(d, t))
             .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
         r.text("mode", "simplify")
             .text("metric", o.metric.clone())
             .flag("background", !o.no_background)
             .count("viewpoints", u64::from(o.viewpoints));
-        r.real("I_VO_bits", outcome.initial_mutual_information, Some("bits"));
+        r.real("I_VO", in_base(outcome.initial_mutual_information), unit);
         r.count("collapses", outcome.collapses).count("channel_traces", u64::from(outcome.traces));
         r.real("channel_seconds", outcome.trace_seconds, Some("s"));
         for s in outcome.stages {
@@ -274,6 +313,7 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
                 label: s.target.to_string(),
                 mesh: s.mesh,
                 seconds: s.seconds,
+                cpu_seconds: s.cpu_seconds,
                 mi: Some(s.mutual_information),
                 stalled: s.stalled,
             });
@@ -292,19 +332,28 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
     let mut written = results_written;
     written.push(out.join("original.png").display().to_string());
     let mut stages = Vec::new();
-    for Simplified { label, mesh, seconds, mi, stalled } in &results {
+    let mut summary = Vec::new();
+    for Simplified { label, mesh, seconds, cpu_seconds, mi, stalled } in &results {
         let imgs = renders(mesh, o, &eyes)?;
         let err = image_error(&reference, &imgs);
         let dist = surface_distance(&original, mesh, o.samples, 1);
         let mut x = Report::new();
         x.text("name", label.clone()).count("triangles", mesh.triangles() as u64);
-        x.real("seconds", *seconds, Some("s"));
+        x.real("seconds", *seconds, Some("s")).maybe_real("cpu_seconds", *cpu_seconds, Some("s"));
         x.real("image_rmse", err.shading, None).real("silhouette_rmse", err.silhouette, None);
         x.real("hausdorff", dist.hausdorff, None).real("mean_distance", dist.mean, None);
-        x.maybe_real("I_VO_bits", *mi, Some("bits"));
+        x.maybe_real("I_VO", mi.map(in_base), unit);
         if let Some(why) = stalled {
             x.text("stalled", why.clone());
         }
+        summary.push(format!(
+            "{} triangles: image RMSE {:.4}, silhouette RMSE {:.4}, Hausdorff {:.4}, {:.2} s",
+            mesh.triangles(),
+            err.shading,
+            err.silhouette,
+            dist.hausdorff,
+            seconds
+        ));
         let stem = if o.evaluate.is_some() { label.clone() } else { format!("simplified_{label}") };
         if o.evaluate.is_none() {
             let obj = out.join(format!("{stem}.obj"));
@@ -329,6 +378,7 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
     let all: Vec<image::RgbImage> = rows.concat();
     write_png(&montage(&all, SHOWN), &out.join("compare.png"))?;
     written.push(out.join("compare.png").display().to_string());
+    r.texts("summary", summary);
     r.records("results", stages);
     r.texts("wrote", written);
     r.real("seconds", t0.elapsed().as_secs_f64(), Some("s"));

@@ -136,7 +136,7 @@ fn channel_information_is_the_viewpoint_commands() {
             vec!["viewpoints", ds, "--viewpoints", "12", "--tolerance", "0.05", "--max-subdivision", "8", "--json"];
         args.extend_from_slice(theirs);
         let v = json(&itgfx(&args));
-        let (a, b) = (s["I_VO_bits"].as_f64().unwrap(), v["I_VO"].as_f64().unwrap());
+        let (a, b) = (s["I_VO"].as_f64().unwrap(), v["I_VO"].as_f64().unwrap());
         assert!((a - b).abs() < 1e-9, "{mine:?}: simplify {a} vs viewpoints {b}");
     }
     std::fs::remove_dir_all(&d).unwrap();

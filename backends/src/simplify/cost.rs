@@ -61,7 +61,8 @@ pub struct ViewState {
     pub background: bool,
     /// `a_o(v)` of triangle `o` from viewpoint `v` at `o · V + v`.
     pub a: Vec<f64>,
-    /// Whole solid angle `Ω_o(v)` (visible or not), same layout.
+    /// Whole solid angle `Ω_o(v)` (visible or not), same layout; NaN where
+    /// not yet needed (the triangle is hidden from `v`).
     pub omega: Vec<f64>,
     /// `S_v = Σ_o a_o(v)`, the object's projected solid angle.
     pub object: Vec<f64>,
@@ -90,7 +91,7 @@ pub struct ViewState {
 pub struct Proposal {
     /// `a_o(v)` of each moved triangle (`moved[i]` at `i · V + v`).
     pub a: Vec<f64>,
-    /// `Ω_o(v)`, same layout.
+    /// `Ω_o(v)`, same layout (NaN where hidden).
     pub omega: Vec<f64>,
     /// The cost.
     pub cost: f64,
@@ -125,7 +126,7 @@ impl ViewState {
         let nf = d.faces.len();
         let eyes = ch.positions.clone();
         let mut a = vec![0.0; nf * nv];
-        let mut omega = vec![0.0; nf * nv];
+        let mut omega = vec![f64::NAN; nf * nv];
         for v in 0..nv {
             let (p, w) = ch.row(v);
             for (&i, &x) in p.iter().zip(w) {
@@ -135,7 +136,9 @@ impl ViewState {
         for &f in live {
             let t = d.corners(f);
             for (v, e) in eyes.iter().enumerate() {
-                omega[f as usize * nv + v] = triangle_solid_angle(t[0] - *e, t[1] - *e, t[2] - *e);
+                if a[f as usize * nv + v] > 0.0 {
+                    omega[f as usize * nv + v] = triangle_solid_angle(t[0] - *e, t[1] - *e, t[2] - *e);
+                }
             }
         }
         let bg = if background { ch.background.clone() } else { vec![0.0; nv] };
@@ -277,22 +280,42 @@ impl ViewState {
         let mut ve = 0.0;
         let mut steps = Vec::with_capacity(if metric == Metric::Vmi { nv } else { 0 });
         for (k, eye) in self.eyes.iter().enumerate() {
-            let (mut sa, mut so, mut old_terms) = (0.0, 0.0, 0.0);
+            let (mut sa, mut old_terms) = (0.0, 0.0);
             for f in old() {
                 let x = self.a[f * nv + k];
                 sa += x;
-                so += self.omega[f * nv + k];
                 old_terms += term(x);
             }
-            let fraction = if so > 0.0 { (sa / so).min(1.0) } else { 0.0 };
             let (mut na, mut new_terms) = (0.0, 0.0);
-            for (i, t) in corners.iter().enumerate() {
-                let om = triangle_solid_angle(t[0] - *eye, t[1] - *eye, t[2] - *eye);
-                let x = om * fraction;
-                p.omega[i * nv + k] = om;
-                p.a[i * nv + k] = x;
-                na += x;
-                new_terms += term(x);
+            if sa > 0.0 {
+                // Seen from here: the whole solid angles (cached, or from the
+                // current corners where not yet known) give the visible fraction.
+                let so: f64 = old()
+                    .map(|f| {
+                        let om = self.omega[f * nv + k];
+                        if om.is_nan() {
+                            let t = d.corners(f as u32);
+                            triangle_solid_angle(t[0] - *eye, t[1] - *eye, t[2] - *eye)
+                        } else {
+                            om
+                        }
+                    })
+                    .sum();
+                let fraction = if so > 0.0 { (sa / so).min(1.0) } else { 0.0 };
+                for (i, t) in corners.iter().enumerate() {
+                    let om = triangle_solid_angle(t[0] - *eye, t[1] - *eye, t[2] - *eye);
+                    let x = om * fraction;
+                    p.omega[i * nv + k] = om;
+                    p.a[i * nv + k] = x;
+                    na += x;
+                    new_terms += term(x);
+                }
+            } else {
+                // Hidden from here: it stays hidden; its solid angle is worked
+                // out only if a neighbour's collapse ever needs it.
+                for i in 0..m {
+                    p.omega[i * nv + k] = f64::NAN;
+                }
             }
             let step = self.row_step(k, na - sa, new_terms - old_terms);
             d_total += step.d_total;

@@ -74,6 +74,9 @@ pub struct Stage {
     pub mesh: IndexedMesh,
     /// Seconds since the start (channel tracing included).
     pub seconds: f64,
+    /// CPU seconds of the process (all threads) since the start, where the
+    /// system tells them (Linux): on a loaded machine the fairer time.
+    pub cpu_seconds: Option<f64>,
     /// `I(V;O)` in bits of the channel as updated (inherited visibility).
     pub mutual_information: f64,
     /// Why the target was not reached, if it was not.
@@ -156,6 +159,18 @@ impl Ord for Entry {
     }
 }
 
+/// User and system CPU seconds of this process, all threads (Linux's
+/// `/proc/self/stat`, in its fixed 100 Hz ticks); `None` elsewhere.
+#[must_use]
+pub fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the command name (which may hold spaces) in parentheses.
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let (user, system): (f64, f64) = (f.get(11)?.parse().ok()?, f.get(12)?.parse().ok()?);
+    Some((user + system) / 100.0)
+}
+
 /// Traces the channel of the living triangles.
 pub(crate) fn trace(d: &Dynamic, s: &Settings) -> Result<ViewState, SimplifyError> {
     let live: Vec<u32> = (0..d.faces.len() as u32).filter(|&f| d.alive[f as usize]).collect();
@@ -207,6 +222,8 @@ pub fn simplify(
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<Outcome, SimplifyError> {
     let t0 = Instant::now();
+    let cpu0 = process_cpu_seconds();
+    let cpu = || Some(process_cpu_seconds()? - cpu0?);
     let mut targets = targets.to_vec();
     targets.sort_unstable_by(|a, b| b.cmp(a));
     let mut d = Dynamic::new(mesh);
@@ -231,6 +248,7 @@ pub fn simplify(
                 target: targets[ti],
                 mesh: d.snapshot(),
                 seconds: t0.elapsed().as_secs_f64(),
+                cpu_seconds: cpu(),
                 mutual_information: state.mutual_information(),
                 stalled: None,
             });
@@ -257,6 +275,7 @@ pub fn simplify(
                         target,
                         mesh: d.snapshot(),
                         seconds: t0.elapsed().as_secs_f64(),
+                        cpu_seconds: cpu(),
                         mutual_information: state.mutual_information(),
                         stalled: Some(why.clone()),
                     });

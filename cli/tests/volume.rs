@@ -93,6 +93,22 @@ fn vmi_is_robust_to_resolution_and_ve_is_not() {
 }
 
 #[test]
+fn iso_surface_route_runs_beside_the_voxels() {
+    // Part VI §2.1: the iso-surface, as a mesh, through the polygonal channel.
+    let r = json(&["volume", "hydrogen:3,2,0,16", "--viewpoints", "12", "--size", "32", "--iso", "0.4", "--json"]);
+    assert!(r["iso_triangles"].as_u64().unwrap() > 100);
+    assert!(r["iso_I_VO"].as_f64().unwrap() > 0.0);
+    let rank = r["iso_best_voxel_rank"].as_u64().unwrap();
+    assert!(rank < 12);
+    let best = r["iso_best_view"].as_u64().unwrap() as usize;
+    let iso: Vec<f64> = views(&r).iter().map(|v| v["iso_VMI"].as_f64().unwrap()).collect();
+    assert!(iso.iter().all(|&x| x >= iso[best]));
+    let out = itgfx(&["volume", "sphere:8", "--iso", "1.5"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--iso"));
+}
+
+#[test]
 fn opaque_cube_is_best_seen_from_a_corner() {
     // The volume counterpart of Part V's cube: with a step transfer function
     // the cube is an opaque box; views that show three faces (directions far

@@ -22,11 +22,13 @@
 //!   before any allocation; [`nrrd`]: the single-file raw NRRD subset;
 //! * [`transfer`]: piecewise-linear opacity and colour over the scalar;
 //! * [`raycast`]: cameras on the viewpoint sphere, visibility and pictures;
+//! * [`iso`]: iso-surfaces by marching tetrahedra, for the polygonal route;
 //! * [`channel`]: the channel and its measures.
 
 pub mod builtin;
 pub mod channel;
 pub mod grid;
+pub mod iso;
 pub mod nrrd;
 pub mod raw;
 pub mod raycast;

@@ -14,6 +14,7 @@ use itgfx_backends::volume::builtin::{BUILT_IN, built_in, is_built_in};
 use itgfx_backends::volume::channel::{channel_memory, viewpoint_colour};
 use itgfx_backends::volume::iso::iso_surface;
 use itgfx_backends::volume::nrrd::read_nrrd;
+use itgfx_backends::volume::objects::object_channel;
 use itgfx_backends::volume::raw::{RawType, read_raw};
 use itgfx_backends::volume::raycast::{Caster, View};
 use itgfx_backends::volume::transfer::PRESETS;
@@ -309,6 +310,8 @@ fn run_in(
     let neighbours = ch.neighbours(6);
     let tour = exploration(&m.analysis, &neighbours, v.best, o.explore, base).map_err(err)?;
     let instability = m.analysis.instability(&neighbours, base).map_err(err)?;
+    let objects =
+        volume.labels.as_ref().map(|l| object_measures(&ch, l, &volume.label_names, weights, base)).transpose()?;
     let iso = o.iso.map(|f| iso_route(&volume, f, &dirs, o.distance, rays, base)).transpose()?;
     let seconds = t0.elapsed().as_secs_f64();
 
@@ -356,6 +359,26 @@ fn run_in(
             None,
         );
     }
+    if let Some(ob) = &objects {
+        r.real("object_I_VO", ob.measures.total_mutual_information, unit);
+        r.count("object_best_view", ob.measures.best as u64);
+        r.reals("object_best_direction", dirs[ob.measures.best].to_array().to_vec());
+        let recs = volume
+            .label_names
+            .iter()
+            .enumerate()
+            .map(|(k, name)| {
+                let mut x = Report::new();
+                x.text("name", name.clone()).real("p_o", ob.p_o[k], None).real("I_o_V", ob.information[k], unit);
+                if let Some(c) = ob.characteristic[k] {
+                    x.count("characteristic_view", c as u64)
+                        .reals("characteristic_direction", dirs[c].to_array().to_vec());
+                }
+                x
+            })
+            .collect();
+        r.records("objects", recs);
+    }
     let mut views = Vec::new();
     for (k, d) in dirs.iter().enumerate() {
         let mut x = Report::new();
@@ -371,6 +394,9 @@ fn run_in(
         }
         if let Some(iso) = &iso {
             x.real("iso_VMI", iso.measures.mutual_information[k], unit);
+        }
+        if let Some(ob) = &objects {
+            x.real("object_VMI", ob.measures.mutual_information[k], unit);
         }
         x.maybe_real("instability", Some(instability[k]).filter(|x| x.is_finite()), unit);
         x.real("visibility", ch.seen(k) / ch.rays_per_viewpoint as f64, None);
@@ -464,6 +490,47 @@ fn sphere_palette(dirs: &[DVec3], radius: u32) -> image::RgbImage {
         let p = DVec3::new(u * s, w, s * (1.0 - r2).sqrt());
         let k = (0..dirs.len()).max_by(|&a, &b| p.dot(dirs[a]).total_cmp(&p.dot(dirs[b]))).unwrap_or(0);
         image::Rgb(viewpoint_colour(dirs[k]).map(|c| (c * 255.0).round() as u8))
+    })
+}
+
+/// The object channel's measures (Part VI §3.1).
+struct ObjectMeasures {
+    measures: ViewpointMeasures,
+    p_o: Vec<f64>,
+    /// `I(o;V)` per object.
+    information: Vec<f64>,
+    /// Per object, the viewpoint with the largest `p(v|o) ∝ p(v) p(o|v)`: the one
+    /// that sees most of it relative to the rest.
+    characteristic: Vec<Option<usize>>,
+}
+
+fn object_measures(
+    ch: &ViewpointChannel,
+    labels: &[u8],
+    names: &[String],
+    weights: ViewpointWeights,
+    base: itgfx_core::Base,
+) -> Result<ObjectMeasures, CliError> {
+    let err = |e| core_err("object channel", e);
+    let och = object_channel(ch, labels, names.len());
+    let an = ViewpointAnalysis::new(&och, weights, false).map_err(err)?;
+    let measures = an.measures(&vec![1.0; names.len()], base).map_err(err)?;
+    let information = an.polygonal_information(base).map_err(err)?;
+    let mut best = vec![(0.0, None); names.len()];
+    for (x, &v) in an.seen.iter().enumerate() {
+        let (cols, p) = an.row(x);
+        for (&o, &q) in cols.iter().zip(p) {
+            let w = an.p_v[x] * q;
+            if w > best[o as usize].0 {
+                best[o as usize] = (w, Some(v));
+            }
+        }
+    }
+    Ok(ObjectMeasures {
+        measures,
+        p_o: an.p_o.clone(),
+        information,
+        characteristic: best.into_iter().map(|b| b.1).collect(),
     })
 }
 

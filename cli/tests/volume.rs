@@ -151,6 +151,19 @@ fn phantom_pictures_focus_and_same_numbers_on_one_thread() {
     let f = r["best_focus_view"].as_u64().unwrap() as usize;
     let e = views(&r)[f]["EVMI_focus"].as_f64().unwrap();
     assert!(views(&r).iter().all(|v| v["EVMI_focus"].as_f64().unwrap() >= e));
+    // The object channel V -> O (Part VI §3.1): I(V;O) = Σ p(o) I(o;V), and
+    // each side object is seen best from its own side (left at x = -0.5,
+    // right at x = +0.5, the rod at y = -0.45).
+    let objects = r["objects"].as_array().unwrap();
+    assert_eq!(objects.len(), 5);
+    let by_objects: f64 = objects.iter().map(|o| o["p_o"].as_f64().unwrap() * o["I_o_V"].as_f64().unwrap()).sum();
+    let total = r["object_I_VO"].as_f64().unwrap();
+    assert!(total > 0.0 && (by_objects - total).abs() < 1e-9 * total, "{by_objects} {total}");
+    let side = |name: &str, axis: usize| {
+        let o = objects.iter().find(|o| o["name"] == name).unwrap();
+        o["characteristic_direction"][axis].as_f64().unwrap()
+    };
+    assert!(side("left", 0) < 0.0 && side("right", 0) > 0.0 && side("rod", 1) < 0.0);
     // Same numbers with one thread.
     let mut one = args.to_vec();
     one.extend(["--threads", "1"]);

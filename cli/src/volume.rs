@@ -6,15 +6,20 @@ use std::time::Instant;
 
 use clap::Args;
 use glam::DVec3;
+use itgfx_backends::scene::Scene;
+use itgfx_backends::tracer::Prepared;
 use itgfx_backends::viewpoint::selection::{best_views, exploration};
-use itgfx_backends::viewpoint::{ViewpointWeights, icosphere};
+use itgfx_backends::viewpoint::{ViewpointAnalysis, ViewpointChannel, ViewpointMeasures, ViewpointWeights, icosphere};
 use itgfx_backends::volume::builtin::{BUILT_IN, built_in, is_built_in};
 use itgfx_backends::volume::channel::{channel_memory, viewpoint_colour};
+use itgfx_backends::volume::iso::iso_surface;
 use itgfx_backends::volume::nrrd::read_nrrd;
+use itgfx_backends::volume::objects::object_channel;
 use itgfx_backends::volume::raw::{RawType, read_raw};
 use itgfx_backends::volume::raycast::{Caster, View};
 use itgfx_backends::volume::transfer::PRESETS;
 use itgfx_backends::volume::{TransferFunction, Volume, VolumeChannelOptions, volume_channel, volume_measures};
+use itgfx_backends::{BackendChoice, open};
 
 use crate::export::{montage, percentile_range, sphere_image, viridis, write_png};
 use crate::options::Common;
@@ -80,6 +85,10 @@ pub struct VolumeOptions {
     /// Focus on a labelled object (name or number; phantom): EVMI with its voxels as importance
     #[arg(long, value_name = "LABEL", help_heading = "Channel")]
     pub focus: Option<String>,
+    /// Also extract the iso-surface at this normalised value (0 < F < 1) and run the polygonal
+    /// viewpoint channel on it (Part VI §2.1), to compare its views with the voxels'
+    #[arg(long, value_name = "F", value_parser = iso_value, help_heading = "Channel")]
+    pub iso: Option<f64>,
     /// At most N best views, greedy
     #[arg(long, value_name = "N", default_value = "6", value_parser = best_n, help_heading = "Selection")]
     pub best_n: usize,
@@ -119,6 +128,11 @@ fn image_side(s: &str) -> Result<u32, String> {
 fn step(s: &str) -> Result<f64, String> {
     let x: f64 = s.parse().ok().filter(|x: &f64| x.is_finite()).ok_or("is not a finite number")?;
     if (0.05..=2.0).contains(&x) { Ok(x) } else { Err("must be in 0.05..=2 voxels".into()) }
+}
+
+fn iso_value(s: &str) -> Result<f64, String> {
+    let x: f64 = s.parse().ok().filter(|x: &f64| x.is_finite()).ok_or("is not a finite number")?;
+    if x > 0.0 && x < 1.0 { Ok(x) } else { Err("must be in (0, 1): a value of the scalar normalised to [0, 1]".into()) }
 }
 
 fn triple<T: std::str::FromStr>(s: &str, what: &str) -> Result<[T; 3], String> {
@@ -296,6 +310,9 @@ fn run_in(
     let neighbours = ch.neighbours(6);
     let tour = exploration(&m.analysis, &neighbours, v.best, o.explore, base).map_err(err)?;
     let instability = m.analysis.instability(&neighbours, base).map_err(err)?;
+    let objects =
+        volume.labels.as_ref().map(|l| object_measures(&ch, l, &volume.label_names, weights, base)).transpose()?;
+    let iso = o.iso.map(|f| iso_route(&volume, f, &dirs, o.distance, rays, base)).transpose()?;
     let seconds = t0.elapsed().as_secs_f64();
 
     let mut r = Report::new();
@@ -324,6 +341,44 @@ fn run_in(
     r.counts("best_n_views", best_n.views.iter().map(|&x| x as u64).collect());
     r.reals("best_n_merged_VMI", best_n.merged_information.clone()).reals("best_n_captured", best_n.captured.clone());
     r.counts("exploration_path", tour.path.iter().map(|&x| x as u64).collect());
+    if let Some(iso) = &iso {
+        r.real("iso", iso.value, None).count("iso_triangles", iso.triangles as u64);
+        r.real("iso_I_VO", iso.measures.total_mutual_information, unit);
+        r.count("iso_best_view", iso.measures.best as u64).count("iso_worst_view", iso.measures.worst as u64);
+        r.reals("iso_best_direction", dirs[iso.measures.best].to_array().to_vec());
+        let angle = dirs[iso.measures.best].angle_between(dirs[v.best]).to_degrees();
+        r.real("iso_best_angle_to_voxel_best_deg", angle, None);
+        // Symmetric volumes have many equally good views: the rank of the
+        // iso-surface's best view among the voxel route's VMIs says more than the angle.
+        let b = v.mutual_information[iso.measures.best];
+        let rank = v.mutual_information.iter().filter(|&&x| x < b - 1e-9 * b.abs()).count();
+        r.count("iso_best_voxel_rank", rank as u64);
+        r.maybe_real(
+            "iso_voxel_VMI_correlation",
+            correlation(&iso.measures.mutual_information, &v.mutual_information),
+            None,
+        );
+    }
+    if let Some(ob) = &objects {
+        r.real("object_I_VO", ob.measures.total_mutual_information, unit);
+        r.count("object_best_view", ob.measures.best as u64);
+        r.reals("object_best_direction", dirs[ob.measures.best].to_array().to_vec());
+        let recs = volume
+            .label_names
+            .iter()
+            .enumerate()
+            .map(|(k, name)| {
+                let mut x = Report::new();
+                x.text("name", name.clone()).real("p_o", ob.p_o[k], None).real("I_o_V", ob.information[k], unit);
+                if let Some(c) = ob.characteristic[k] {
+                    x.count("characteristic_view", c as u64)
+                        .reals("characteristic_direction", dirs[c].to_array().to_vec());
+                }
+                x
+            })
+            .collect();
+        r.records("objects", recs);
+    }
     let mut views = Vec::new();
     for (k, d) in dirs.iter().enumerate() {
         let mut x = Report::new();
@@ -336,6 +391,12 @@ fn run_in(
         x.real("EVMI_opacity", m.evmi_opacity[k], unit).real("EVMI_VoMI", m.evmi_vomi[k], unit);
         if let Some(f) = &m.evmi_focus {
             x.real("EVMI_focus", f[k], unit);
+        }
+        if let Some(iso) = &iso {
+            x.real("iso_VMI", iso.measures.mutual_information[k], unit);
+        }
+        if let Some(ob) = &objects {
+            x.real("object_VMI", ob.measures.mutual_information[k], unit);
         }
         x.maybe_real("instability", Some(instability[k]).filter(|x| x.is_finite()), unit);
         x.real("visibility", ch.seen(k) / ch.rays_per_viewpoint as f64, None);
@@ -430,6 +491,110 @@ fn sphere_palette(dirs: &[DVec3], radius: u32) -> image::RgbImage {
         let k = (0..dirs.len()).max_by(|&a, &b| p.dot(dirs[a]).total_cmp(&p.dot(dirs[b]))).unwrap_or(0);
         image::Rgb(viewpoint_colour(dirs[k]).map(|c| (c * 255.0).round() as u8))
     })
+}
+
+/// The object channel's measures (Part VI §3.1).
+struct ObjectMeasures {
+    measures: ViewpointMeasures,
+    p_o: Vec<f64>,
+    /// `I(o;V)` per object.
+    information: Vec<f64>,
+    /// Per object, the viewpoint with the largest `p(v|o) ∝ p(v) p(o|v)`: the one
+    /// that sees most of it relative to the rest.
+    characteristic: Vec<Option<usize>>,
+}
+
+fn object_measures(
+    ch: &ViewpointChannel,
+    labels: &[u8],
+    names: &[String],
+    weights: ViewpointWeights,
+    base: itgfx_core::Base,
+) -> Result<ObjectMeasures, CliError> {
+    let err = |e| core_err("object channel", e);
+    let och = object_channel(ch, labels, names.len());
+    let an = ViewpointAnalysis::new(&och, weights, false).map_err(err)?;
+    let measures = an.measures(&vec![1.0; names.len()], base).map_err(err)?;
+    let information = an.polygonal_information(base).map_err(err)?;
+    let mut best = vec![(0.0, None); names.len()];
+    for (x, &v) in an.seen.iter().enumerate() {
+        let (cols, p) = an.row(x);
+        for (&o, &q) in cols.iter().zip(p) {
+            let w = an.p_v[x] * q;
+            if w > best[o as usize].0 {
+                best[o as usize] = (w, Some(v));
+            }
+        }
+    }
+    Ok(ObjectMeasures {
+        measures,
+        p_o: an.p_o.clone(),
+        information,
+        characteristic: best.into_iter().map(|b| b.1).collect(),
+    })
+}
+
+/// The iso-surface route: the surface and its polygonal viewpoint measures.
+struct IsoRoute {
+    value: f64,
+    triangles: usize,
+    measures: ViewpointMeasures,
+}
+
+/// Most triangles of an iso-surface.
+const MAX_ISO_TRIANGLES: usize = 4_000_000;
+
+/// Extracts the iso-surface at `value`, one patch per triangle, and runs the
+/// viewpoint channel of Part V on it (the ray grid of `rays²` rays per
+/// viewpoint, as many as the voxel route casts).
+fn iso_route(
+    v: &Volume,
+    value: f64,
+    dirs: &[DVec3],
+    distance: f64,
+    rays: u32,
+    base: itgfx_core::Base,
+) -> Result<IsoRoute, CliError> {
+    let tris = iso_surface(v, value, MAX_ISO_TRIANGLES).ok_or_else(|| {
+        CliError::usage(format!("--iso {value}: more than {MAX_ISO_TRIANGLES} triangles; a coarser volume"))
+    })?;
+    if tris.is_empty() {
+        return Err(CliError::usage(format!("--iso {value}: {} has no surface at that value", v.name)));
+    }
+    let mut scene = Scene::named(&format!("{} iso {value}", v.name));
+    for t in &tris {
+        scene.add_triangles(String::new(), std::slice::from_ref(t), 0);
+    }
+    scene.validate().map_err(|e| CliError::usage(format!("--iso {value}: {e}")))?;
+    let prepared = Prepared::new(&scene);
+    let tracer = open(BackendChoice::Cpu, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
+    let mut progress = Progress::new();
+    let ch = ViewpointChannel::build(&prepared, tracer.as_ref(), dirs, distance, rays, &mut |d, t| {
+        progress.update(d, t);
+    })
+    .map_err(|e| CliError::usage(e.to_string()))?;
+    let an = ViewpointAnalysis::new(&ch, ViewpointWeights::ProjectedArea, false)
+        .map_err(|e| core_err("iso-surface channel", e))?;
+    let measures = an.measures(&scene.areas(), base).map_err(|e| core_err("iso-surface channel", e))?;
+    Ok(IsoRoute { value, triangles: tris.len(), measures })
+}
+
+/// Pearson correlation of two per-view series over the views finite in both.
+fn correlation(a: &[f64], b: &[f64]) -> Option<f64> {
+    let pairs: Vec<(f64, f64)> =
+        a.iter().zip(b).filter(|(x, y)| x.is_finite() && y.is_finite()).map(|(x, y)| (*x, *y)).collect();
+    let n = pairs.len() as f64;
+    if n < 3.0 {
+        return None;
+    }
+    let (ma, mb) = (pairs.iter().map(|p| p.0).sum::<f64>() / n, pairs.iter().map(|p| p.1).sum::<f64>() / n);
+    let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
+    for (x, y) in pairs {
+        sab += (x - ma) * (y - mb);
+        saa += (x - ma) * (x - ma);
+        sbb += (y - mb) * (y - mb);
+    }
+    (saa > 0.0 && sbb > 0.0).then(|| sab / (saa * sbb).sqrt())
 }
 
 /// Images of any size side by side, top-aligned, on the dark background.

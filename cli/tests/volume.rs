@@ -93,6 +93,22 @@ fn vmi_is_robust_to_resolution_and_ve_is_not() {
 }
 
 #[test]
+fn iso_surface_route_runs_beside_the_voxels() {
+    // Part VI §2.1: the iso-surface, as a mesh, through the polygonal channel.
+    let r = json(&["volume", "hydrogen:3,2,0,16", "--viewpoints", "12", "--size", "32", "--iso", "0.4", "--json"]);
+    assert!(r["iso_triangles"].as_u64().unwrap() > 100);
+    assert!(r["iso_I_VO"].as_f64().unwrap() > 0.0);
+    let rank = r["iso_best_voxel_rank"].as_u64().unwrap();
+    assert!(rank < 12);
+    let best = r["iso_best_view"].as_u64().unwrap() as usize;
+    let iso: Vec<f64> = views(&r).iter().map(|v| v["iso_VMI"].as_f64().unwrap()).collect();
+    assert!(iso.iter().all(|&x| x >= iso[best]));
+    let out = itgfx(&["volume", "sphere:8", "--iso", "1.5"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--iso"));
+}
+
+#[test]
 fn opaque_cube_is_best_seen_from_a_corner() {
     // The volume counterpart of Part V's cube: with a step transfer function
     // the cube is an opaque box; views that show three faces (directions far
@@ -135,6 +151,19 @@ fn phantom_pictures_focus_and_same_numbers_on_one_thread() {
     let f = r["best_focus_view"].as_u64().unwrap() as usize;
     let e = views(&r)[f]["EVMI_focus"].as_f64().unwrap();
     assert!(views(&r).iter().all(|v| v["EVMI_focus"].as_f64().unwrap() >= e));
+    // The object channel V -> O (Part VI §3.1): I(V;O) = Σ p(o) I(o;V), and
+    // each side object is seen best from its own side (left at x = -0.5,
+    // right at x = +0.5, the rod at y = -0.45).
+    let objects = r["objects"].as_array().unwrap();
+    assert_eq!(objects.len(), 5);
+    let by_objects: f64 = objects.iter().map(|o| o["p_o"].as_f64().unwrap() * o["I_o_V"].as_f64().unwrap()).sum();
+    let total = r["object_I_VO"].as_f64().unwrap();
+    assert!(total > 0.0 && (by_objects - total).abs() < 1e-9 * total, "{by_objects} {total}");
+    let side = |name: &str, axis: usize| {
+        let o = objects.iter().find(|o| o["name"] == name).unwrap();
+        o["characteristic_direction"][axis].as_f64().unwrap()
+    };
+    assert!(side("left", 0) < 0.0 && side("right", 0) > 0.0 && side("rod", 1) < 0.0);
     // Same numbers with one thread.
     let mut one = args.to_vec();
     one.extend(["--threads", "1"]);

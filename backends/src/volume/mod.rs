@@ -22,12 +22,16 @@
 //!   before any allocation; [`nrrd`]: the single-file raw NRRD subset;
 //! * [`transfer`]: piecewise-linear opacity and colour over the scalar;
 //! * [`raycast`]: cameras on the viewpoint sphere, visibility and pictures;
-//! * [`channel`]: the channel and its measures.
+//! * [`iso`]: iso-surfaces by marching tetrahedra, for the polygonal route;
+//! * [`channel`]: the channel and its measures; [`objects`]: the object
+//!   channel of a labelled volume.
 
 pub mod builtin;
 pub mod channel;
 pub mod grid;
+pub mod iso;
 pub mod nrrd;
+pub mod objects;
 pub mod raw;
 pub mod raycast;
 pub mod transfer;

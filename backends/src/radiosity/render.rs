@@ -175,12 +175,7 @@ pub fn vertex_radiosity(h: &Hierarchy, radiosity: &[Rgb]) -> Vertices {
 /// Radiosity at a sight: the leaf's own value (`flat`) or interpolated from
 /// its corners' vertex values (Gouraud: bilinear on quads, linear on triangles).
 #[must_use]
-pub fn shade(
-    h: &Hierarchy,
-    radiosity: &[Rgb],
-    vertices: Option<&Vertices>,
-    s: &Sight,
-) -> (ElementId, Rgb) {
+pub fn shade(h: &Hierarchy, radiosity: &[Rgb], vertices: Option<&Vertices>, s: &Sight) -> (ElementId, Rgb) {
     let e = h.locate(s.root, s.param);
     let el = &h.elements[e as usize];
     let Some(vs) = vertices else { return (e, radiosity[e as usize]) };

@@ -127,41 +127,59 @@ pub fn closest(tracer: &dyn Tracer, lines: &[Line]) -> Result<Vec<Option<Hit>>, 
 }
 
 /// Vertex radiosities: each leaf corner gets the area-weighted mean of the
-/// leaves of its root that share it.
+/// leaves of its patch that share it (by position, so the two triangles of a
+/// non-planar quad are smoothed across their diagonal too).
+#[derive(Clone, Debug)]
+pub struct Vertices {
+    map: HashMap<(u32, [i64; 3]), Rgb>,
+    quantum: f64,
+}
+
+impl Vertices {
+    fn key(&self, patch: u32, p: DVec3) -> (u32, [i64; 3]) {
+        (patch, (p / self.quantum).round().as_i64vec3().to_array())
+    }
+
+    /// The vertex value at corner `k` of leaf `e`, if known.
+    #[must_use]
+    pub fn get(&self, h: &Hierarchy, e: ElementId, k: usize) -> Option<Rgb> {
+        let el = &h.elements[e as usize];
+        self.map.get(&self.key(h.roots[el.root as usize].patch, el.points[k])).copied()
+    }
+}
+
+/// The [`Vertices`] of a solution.
 #[must_use]
-pub fn vertex_radiosity(h: &Hierarchy, radiosity: &[Rgb]) -> HashMap<(u32, i64, i64), Rgb> {
-    let mut acc: HashMap<(u32, i64, i64), (Rgb, f64)> = HashMap::new();
+pub fn vertex_radiosity(h: &Hierarchy, radiosity: &[Rgb]) -> Vertices {
+    let mut size = 0.0f64;
+    for r in &h.roots {
+        size = size.max(h.elements[r.element as usize].points.iter().fold(0.0f64, |m, p| m.max(p.abs().max_element())));
+    }
+    let mut v = Vertices { map: HashMap::new(), quantum: (size * 1e-7).max(f64::MIN_POSITIVE) };
+    let mut acc: HashMap<(u32, [i64; 3]), (Rgb, f64)> = HashMap::new();
     for e in h.leaves() {
         let el = &h.elements[e as usize];
-        for p in &el.param[..usize::from(el.corners)] {
-            let a = acc.entry(key(el.root, *p)).or_insert(([0.0; 3], 0.0));
+        let patch = h.roots[el.root as usize].patch;
+        for p in &el.points[..usize::from(el.corners)] {
+            let a = acc.entry(v.key(patch, *p)).or_insert(([0.0; 3], 0.0));
             for (s, b) in a.0.iter_mut().zip(radiosity[e as usize]) {
                 *s += el.area * b;
             }
             a.1 += el.area;
         }
     }
-    acc.into_iter().map(|(k, (s, a))| (k, if a > 0.0 { s.map(|x| x / a) } else { s })).collect()
-}
-
-fn key(root: u32, p: DVec2) -> (u32, i64, i64) {
-    let q = |x: f64| (x * f64::from(1u32 << 30)).round() as i64;
-    (root, q(p.x), q(p.y))
+    v.map = acc.into_iter().map(|(k, (s, a))| (k, if a > 0.0 { s.map(|x| x / a) } else { s })).collect();
+    v
 }
 
 /// Radiosity at a sight: the leaf's own value (`flat`) or interpolated from
 /// its corners' vertex values (Gouraud: bilinear on quads, linear on triangles).
 #[must_use]
-pub fn shade(
-    h: &Hierarchy,
-    radiosity: &[Rgb],
-    vertices: Option<&HashMap<(u32, i64, i64), Rgb>>,
-    s: &Sight,
-) -> (ElementId, Rgb) {
+pub fn shade(h: &Hierarchy, radiosity: &[Rgb], vertices: Option<&Vertices>, s: &Sight) -> (ElementId, Rgb) {
     let e = h.locate(s.root, s.param);
     let el = &h.elements[e as usize];
     let Some(vs) = vertices else { return (e, radiosity[e as usize]) };
-    let v = |k: usize| vs.get(&key(el.root, el.param[k])).copied().unwrap_or(radiosity[e as usize]);
+    let v = |k: usize| vs.get(h, e, k).unwrap_or(radiosity[e as usize]);
     let p = &el.param;
     let weights: Vec<(usize, f64)> = if el.corners == 4 {
         let (d, q) = (p[2] - p[0], s.param - p[0]);

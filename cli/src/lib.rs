@@ -15,6 +15,7 @@ pub mod report;
 pub mod scene;
 pub mod shard;
 pub mod values;
+pub mod viewpoint_shard;
 pub mod viewpoints;
 
 use std::fmt;

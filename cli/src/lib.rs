@@ -19,6 +19,7 @@ pub mod scene;
 pub mod shard;
 pub mod simplify;
 pub mod values;
+pub mod viewpoint_shard;
 pub mod viewpoints;
 pub mod volume;
 

@@ -229,6 +229,9 @@ pub struct ViewpointsOptions {
     /// I(o;V), saliency and p(o) per polygon in the output
     #[arg(long)]
     pub per_polygon: bool,
+    /// --shard, --save-shard, --merge (boxed: the options stay small)
+    #[command(flatten)]
+    pub shards: Box<crate::viewpoint_shard::ViewpointShardOptions>,
     #[command(flatten)]
     #[allow(missing_docs)]
     pub common: Common,

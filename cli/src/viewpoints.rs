@@ -55,6 +55,7 @@ pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
     if !grid && o.resolution.is_some() {
         return Err(CliError::usage("--resolution sets the ray grid: give it with --estimator grid"));
     }
+    crate::viewpoint_shard::check(o, &pictures(o))?;
     let resolution = o.resolution.unwrap_or(128);
     let (distance, capture, max_views, steps, rounds) = (o.distance, o.capture, o.best_n, o.explore, o.smooth);
     let mut created = None;
@@ -87,19 +88,24 @@ pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
     let dirs = icosphere(level);
     let mut progress = Progress::new();
     let mut tick = |d, t| progress.update(d, t);
-    let (ch, convergence) = if grid {
+    let refine = Refinement {
+        distance,
+        tolerance: o.tolerance,
+        max: o.max_subdivision,
+        first: Refinement::default().first.min(o.max_subdivision),
+        weights,
+        background,
+    };
+    if let Some(s) = o.shards.shard {
+        return crate::viewpoint_shard::save(o, s, &scene.name, &prepared, tracer.as_ref(), &dirs, &refine);
+    }
+    let (ch, convergence) = if !o.shards.merge.is_empty() {
+        crate::viewpoint_shard::merged(o, &scene.name, &prepared, tracer.as_ref(), &dirs, &refine)?
+    } else if grid {
         let ch = ViewpointChannel::build(&prepared, tracer.as_ref(), &dirs, distance, resolution, &mut tick)
             .map_err(|e| CliError::usage(e.to_string()))?;
         (ch, None)
     } else {
-        let refine = Refinement {
-            distance,
-            tolerance: o.tolerance,
-            max: o.max_subdivision,
-            first: Refinement::default().first.min(o.max_subdivision),
-            weights,
-            background,
-        };
         let (ch, c) = ViewpointChannel::build_solid_angle(&prepared, tracer.as_ref(), &dirs, &refine, &mut tick)
             .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
         (ch, Some(c))

@@ -111,3 +111,112 @@ fn bad_shards_are_refused() {
         refused(args, needle);
     }
 }
+
+const MESH: &str = "table-chairs:1";
+
+/// `viewpoints` options of the run under test.
+fn vp(extra: &[&str]) -> Vec<String> {
+    let mut a: Vec<String> = ["viewpoints", MESH, "--viewpoints", "12"].map(String::from).into();
+    a.extend(extra.iter().map(|s| s.to_string()));
+    a
+}
+
+/// Shard `i/n` of the run with options `extra`, saved.
+fn vp_shard(i: u64, n: u64, extra: &[&str], tag: &str) -> String {
+    let p = path(&format!("v{tag}{i}of{n}.json"));
+    let s = format!("{i}/{n}");
+    let mut a = vp(extra);
+    a.extend(["--shard", &s, "--save-shard", &p, "--json"].map(String::from));
+    let v = json_of(&strs(&a));
+    assert_eq!(v["shard"], s.as_str());
+    p
+}
+
+fn vp_merge(files: &[&String], extra: &[&str]) -> Vec<String> {
+    let list = files.iter().map(|f| f.as_str()).collect::<Vec<_>>().join(",");
+    let mut a = vp(extra);
+    a.extend(["--merge", &list, "--json"].map(String::from));
+    a
+}
+
+/// The views channel, without its wall-clock times.
+fn vp_json(args: &[String]) -> Value {
+    let mut v = json_of(&strs(args));
+    v.as_object_mut().unwrap().remove("channel_seconds");
+    v
+}
+
+/// Shards of both estimators merge, in any order, into the single run's
+/// output bit for bit: every measure, the refinement's standard errors,
+/// ray counts and selections. The table and chairs occlude each other, so
+/// the solid-angle refinement passes several levels (the merge replays it).
+#[test]
+fn viewpoint_shards_merge_into_the_single_run_bit_for_bit() {
+    for (tag, extra) in [("s", &[][..]), ("g", &["--estimator", "grid", "--resolution", "24"][..])] {
+        let single = vp_json(&vp(&[extra, &["--json", "--per-polygon"]].concat()));
+        if tag == "s" {
+            assert!(single["max_subdivision_used"].as_u64().unwrap() > 4, "refinement exercised: {single}");
+        }
+        let s: Vec<String> = (0..3).map(|i| vp_shard(i, 3, extra, tag)).collect();
+        for order in [[0, 1, 2], [2, 1, 0]] {
+            let files = order.map(|k| &s[k]);
+            assert_eq!(vp_json(&vp_merge(&files, &[extra, &["--per-polygon"]].concat())), single, "{tag} {order:?}");
+        }
+        // The measures follow the merging command's options (p(V) here), the rows the shards'.
+        let uniform = vp_json(&vp(&[extra, &["--json", "--uniform-input"]].concat()));
+        assert_eq!(vp_json(&vp_merge(&[&s[1], &s[0], &s[2]], &[extra, &["--uniform-input"]].concat())), uniform);
+    }
+}
+
+/// Missing, duplicate and foreign shards (another mesh, distance,
+/// estimator, viewpoint count or shard count) and broken files are refused.
+#[test]
+fn viewpoint_merge_refuses_missing_duplicate_and_foreign_shards() {
+    let s: Vec<String> = (0..3).map(|i| vp_shard(i, 3, &[], "s")).collect();
+    let far = vp_shard(2, 3, &["--distance", "4"], "far");
+    let two = vp_shard(1, 2, &[], "two");
+    let grid = vp_shard(2, 3, &["--estimator", "grid"], "grid");
+    let m = |f: &[&String], e: &[&str]| vp_merge(f, e);
+    refused(&strs(&m(&[&s[0], &s[2]], &[])), "shard 1/3 missing");
+    refused(&strs(&m(&[&s[0], &s[1], &s[1]], &[])), "are both shard 1/3");
+    refused(&strs(&m(&[&s[0], &s[1], &far], &[])), "a shard of another run: this run's --distance 3.0 vs 4.0");
+    refused(&strs(&m(&[&s[0], &s[1], &grid], &[])), "--estimator solid-angle vs grid");
+    refused(&strs(&m(&[&s[0], &s[1], &two], &[])), "shard 1/2 among shards of 3");
+    refused(&strs(&m(&[&s[0], &s[1], &s[2]], &["--max-subdivision", "16"])), "subdivision levels");
+    let other = ["viewpoints", "torus", "--viewpoints", "12", "--merge", &s[0], "--json"];
+    refused(&other, "a shard of another scene (\"table-chairs:1\"");
+    let more = ["viewpoints", MESH, "--viewpoints", "42", "--merge", &s[0]];
+    refused(&more, "--viewpoints 42 vs 12");
+    // Broken and tampered files.
+    let text = std::fs::read_to_string(&s[1]).unwrap();
+    let mut v: Value = serde_json::from_str(&text).unwrap();
+    v["version"] = 9.into();
+    let bad = path("version.json");
+    std::fs::write(&bad, v.to_string()).unwrap();
+    refused(&strs(&m(&[&s[0], &bad, &s[2]], &[])), "viewpoint shard file version 9");
+    let mut v: Value = serde_json::from_str(&text).unwrap();
+    v["first"] = 3.into();
+    std::fs::write(&bad, v.to_string()).unwrap();
+    refused(&strs(&m(&[&s[0], &bad, &s[2]], &[])), "shard 1/3 holds the wrong viewpoint range");
+    std::fs::write(&bad, &text[..text.len() / 2]).unwrap();
+    refused(&strs(&m(&[&s[0], &bad, &s[2]], &[])), "viewpoint shard file");
+    refused(&strs(&m(&[&s[0], &s[1], &"/nonexistent/s.json".to_string()], &[])), "/nonexistent/s.json");
+}
+
+/// Bad shard options of `viewpoints` are refused before any work.
+#[test]
+fn bad_viewpoint_shards_are_refused() {
+    let p = path("x.json");
+    for (args, needle) in [
+        (vec!["--shard", "0/2"], "--save-shard"),
+        (vec!["--save-shard", &p], "--shard"),
+        (vec!["--shard", "0/13", "--save-shard", &p], "give at most 12"),
+        (vec!["--shard", "0/2", "--save-shard", &p, "--best-image", "b.png"], "--best-image: a --shard run"),
+        (vec!["--shard", "0/2", "--save-shard", &p, "--out", "d"], "--out: a --shard run"),
+        (vec!["--shard", "0/2", "--save-shard", &p, "--per-polygon"], "--per-polygon"),
+        (vec!["--shard", "0/2", "--save-shard", &p, "--merge", &p], "--merge"),
+    ] {
+        refused(&strs(&vp(&args)), needle);
+    }
+    assert!(!std::path::Path::new(&p).exists() && !std::path::Path::new("d").exists());
+}

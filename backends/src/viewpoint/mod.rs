@@ -32,6 +32,7 @@
 pub mod analysis;
 pub mod saliency;
 pub mod selection;
+pub mod shard_file;
 pub mod solid_angle;
 
 pub use analysis::{ViewpointAnalysis, ViewpointMeasures, ViewpointWeights};

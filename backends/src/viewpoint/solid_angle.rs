@@ -461,48 +461,9 @@ impl ViewpointChannel {
         refine: &Refinement,
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<(Self, Convergence), ChannelError> {
-        let distance = refine.distance;
-        let adjacency = triangle_adjacency(&prepared.triangles);
+        let views = first_pass(prepared, tracer, directions, refine.distance, refine.first.max(1), progress)?;
         let tris: Vec<[DVec3; 3]> = prepared.triangles.iter().map(as_d).collect();
-        let cos_a = (1.0 - 1.0 / (distance * distance)).max(0.0).sqrt();
-        let cone = std::f64::consts::TAU * (1.0 - cos_a);
-        let n = directions.len() as u64;
-        let wave = (rayon::current_num_threads() * 2).max(2);
-        let mut views: Vec<View> = Vec::with_capacity(directions.len());
-        for dirs in directions.chunks(wave) {
-            let made: Vec<Result<View, BackendError>> = dirs
-                .par_iter()
-                .map(|d| View::new(prepared, tracer, &adjacency, d.normalize() * distance, refine.first.max(1)))
-                .collect();
-            for v in made {
-                views.push(v?);
-            }
-            progress(views.len() as u64, n);
-        }
-        loop {
-            let ch = assemble(prepared, &views, distance, cone);
-            let an = ViewpointAnalysis::new(&ch, refine.weights, refine.background).map_err(ChannelError::Measure)?;
-            let mut p_o = vec![0.0; an.outputs()];
-            an.channel().and_then(|c| c.output_into(&mut p_o)).map_err(ChannelError::Measure)?;
-            // Each seen viewpoint's VMI from the core (nats); unseen ones have none.
-            let mut seen_vmi = vec![0.0; an.rows()];
-            an.channel()
-                .and_then(|c| c.specific_information_into(&p_o, itgfx_core::Base::Nats, &mut seen_vmi))
-                .map_err(ChannelError::Measure)?;
-            let vmi = an.expand(&seen_vmi, 0.0);
-            let se = vmi_stderr(prepared, &ch, &views, &p_o, &vmi);
-            let met: Vec<bool> = (0..views.len()).map(|v| 2.0 * se[v] <= refine.tolerance * vmi[v].abs()).collect();
-            let todo: Vec<usize> = (0..views.len()).filter(|&v| !met[v] && views[v].m < refine.max).collect();
-            if todo.is_empty() {
-                let conv = Convergence {
-                    vmi_stderr: se,
-                    met,
-                    subdivision: views.iter().map(|v| v.m).collect(),
-                    rays: views.iter().map(|v| v.rays).sum(),
-                    boundary_triangles: views.iter().map(|v| v.sampled.len() as u64).sum(),
-                };
-                return Ok((ch, conv));
-            }
+        refine_views(prepared, views, refine, &mut |views, todo| {
             let results: Vec<Result<(), BackendError>> = views
                 .par_iter_mut()
                 .enumerate()
@@ -512,10 +473,197 @@ impl ViewpointChannel {
                     view.sample(tracer, &tris)
                 })
                 .collect();
-            for r in results {
-                r?;
+            results.into_iter().collect::<Result<(), BackendError>>().map_err(ChannelError::Backend)
+        })
+    }
+
+    /// The channel and its convergence from saved ladders (shards of one
+    /// run, in viewpoint order): the same refinement as
+    /// [`ViewpointChannel::build_solid_angle`], each step reading a view's
+    /// next level instead of tracing it, so the result is bit for bit the
+    /// one-process run's. `refine.first` and `refine.max` must be the ones
+    /// the ladders were built with ([`ladder_levels`]).
+    ///
+    /// # Errors
+    /// [`ChannelError::Measure`] when nothing is seen.
+    pub fn from_ladders(
+        prepared: &Prepared,
+        ladders: &[ViewLadder],
+        refine: &Refinement,
+    ) -> Result<(Self, Convergence), ChannelError> {
+        let levels = ladder_levels(refine.first, refine.max);
+        let at = |l: &ViewLadder, k: usize| View {
+            eye: l.eye,
+            whole: l.whole.clone(),
+            sampled: l
+                .sampled
+                .iter()
+                .zip(&l.fractions[k])
+                .map(|(&(tri, omega), &fraction)| Sampled { tri, omega, fraction, points: levels[k] * levels[k] })
+                .collect(),
+            m: levels[k],
+            rays: l.base_rays + levels[..=k].iter().map(|&m| u64::from(m * m)).sum::<u64>() * l.sampled.len() as u64,
+        };
+        let views: Vec<View> = ladders.iter().map(|l| at(l, 0)).collect();
+        refine_views(prepared, views, refine, &mut |views, todo| {
+            for &v in todo {
+                let k = levels.iter().position(|&m| m == views[v].m).map_or(levels.len() - 1, |k| k + 1);
+                views[v] = at(&ladders[v], k.min(levels.len() - 1));
             }
+            Ok(())
+        })
+    }
+
+    /// Every viewpoint's visibility at every level of the refinement
+    /// ([`ladder_levels`]): what a shard of a solid-angle run saves. A
+    /// ladder is a pure function of the scene, the direction, the distance
+    /// and the levels, whatever the other viewpoints, so shards of any
+    /// viewpoint ranges merge exactly ([`ViewpointChannel::from_ladders`]).
+    /// `progress(done, total)` counts viewpoints.
+    ///
+    /// # Errors
+    /// Backend errors.
+    pub fn ladders(
+        prepared: &Prepared,
+        tracer: &dyn Tracer,
+        directions: &[DVec3],
+        refine: &Refinement,
+        progress: &mut dyn FnMut(u64, u64),
+    ) -> Result<Vec<ViewLadder>, BackendError> {
+        let levels = ladder_levels(refine.first, refine.max);
+        let tris: Vec<[DVec3; 3]> = prepared.triangles.iter().map(as_d).collect();
+        let views = first_pass(prepared, tracer, directions, refine.distance, levels[0], &mut |_, _| {})?;
+        let n = views.len() as u64;
+        let mut done = 0u64;
+        let wave = (rayon::current_num_threads() * 2).max(2);
+        let mut out = Vec::with_capacity(views.len());
+        let mut views = views.into_iter();
+        loop {
+            let batch: Vec<View> = views.by_ref().take(wave).collect();
+            if batch.is_empty() {
+                break;
+            }
+            let made: Vec<Result<ViewLadder, BackendError>> = batch
+                .into_par_iter()
+                .map(|mut view| {
+                    let base_rays = view.rays - u64::from(view.m * view.m) * view.sampled.len() as u64;
+                    let mut fractions = vec![view.sampled.iter().map(|s| s.fraction).collect::<Vec<f64>>()];
+                    for &m in &levels[1..] {
+                        view.m = m;
+                        view.sample(tracer, &tris)?;
+                        fractions.push(view.sampled.iter().map(|s| s.fraction).collect());
+                    }
+                    Ok(ViewLadder {
+                        eye: view.eye,
+                        whole: view.whole,
+                        sampled: view.sampled.iter().map(|s| (s.tri, s.omega)).collect(),
+                        base_rays,
+                        fractions,
+                    })
+                })
+                .collect();
+            for l in made {
+                out.push(l?);
+            }
+            done = out.len() as u64;
+            progress(done, n);
         }
+        debug_assert_eq!(done, n);
+        Ok(out)
+    }
+}
+
+/// The subdivisions a viewpoint passes through: `first`, doubled until it
+/// reaches `max` (capped there).
+#[must_use]
+pub fn ladder_levels(first: u32, max: u32) -> Vec<u32> {
+    let mut m = first.max(1);
+    let mut levels = vec![m];
+    while m < max {
+        m = (m * 2).min(max);
+        levels.push(m);
+    }
+    levels
+}
+
+/// One viewpoint's visibility at every level of the refinement.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ViewLadder {
+    /// The eye (normalised scene coordinates).
+    pub eye: DVec3,
+    /// `(patch, Ω)` of every triangle visible at its centroid and not sampled further.
+    pub whole: Vec<(u32, f64)>,
+    /// `(triangle, Ω)` of every triangle sampled beyond its centroid.
+    pub sampled: Vec<(u32, f64)>,
+    /// Rays of the centroid probes and the item buffer.
+    pub base_rays: u64,
+    /// Per level of [`ladder_levels`], the visible fraction of each sampled triangle.
+    pub fractions: Vec<Vec<f64>>,
+}
+
+/// Every viewpoint's first visibility, at subdivision `m`.
+fn first_pass(
+    prepared: &Prepared,
+    tracer: &dyn Tracer,
+    directions: &[DVec3],
+    distance: f64,
+    m: u32,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<Vec<View>, BackendError> {
+    let adjacency = triangle_adjacency(&prepared.triangles);
+    let n = directions.len() as u64;
+    let wave = (rayon::current_num_threads() * 2).max(2);
+    let mut views: Vec<View> = Vec::with_capacity(directions.len());
+    for dirs in directions.chunks(wave) {
+        let made: Vec<Result<View, BackendError>> =
+            dirs.par_iter().map(|d| View::new(prepared, tracer, &adjacency, d.normalize() * distance, m)).collect();
+        for v in made {
+            views.push(v?);
+        }
+        progress(views.len() as u64, n);
+    }
+    Ok(views)
+}
+
+/// Step of the refinement: moves the views listed (increasing) one level up.
+type Advance<'a> = dyn FnMut(&mut [View], &[usize]) -> Result<(), ChannelError> + 'a;
+
+/// Refines `views` until every VMI meets the tolerance or its subdivision
+/// reaches `refine.max`; `advance` moves the views that miss it one level up.
+fn refine_views(
+    prepared: &Prepared,
+    mut views: Vec<View>,
+    refine: &Refinement,
+    advance: &mut Advance<'_>,
+) -> Result<(ViewpointChannel, Convergence), ChannelError> {
+    let distance = refine.distance;
+    let cos_a = (1.0 - 1.0 / (distance * distance)).max(0.0).sqrt();
+    let cone = std::f64::consts::TAU * (1.0 - cos_a);
+    loop {
+        let ch = assemble(prepared, &views, distance, cone);
+        let an = ViewpointAnalysis::new(&ch, refine.weights, refine.background).map_err(ChannelError::Measure)?;
+        let mut p_o = vec![0.0; an.outputs()];
+        an.channel().and_then(|c| c.output_into(&mut p_o)).map_err(ChannelError::Measure)?;
+        // Each seen viewpoint's VMI from the core (nats); unseen ones have none.
+        let mut seen_vmi = vec![0.0; an.rows()];
+        an.channel()
+            .and_then(|c| c.specific_information_into(&p_o, itgfx_core::Base::Nats, &mut seen_vmi))
+            .map_err(ChannelError::Measure)?;
+        let vmi = an.expand(&seen_vmi, 0.0);
+        let se = vmi_stderr(prepared, &ch, &views, &p_o, &vmi);
+        let met: Vec<bool> = (0..views.len()).map(|v| 2.0 * se[v] <= refine.tolerance * vmi[v].abs()).collect();
+        let todo: Vec<usize> = (0..views.len()).filter(|&v| !met[v] && views[v].m < refine.max).collect();
+        if todo.is_empty() {
+            let conv = Convergence {
+                vmi_stderr: se,
+                met,
+                subdivision: views.iter().map(|v| v.m).collect(),
+                rays: views.iter().map(|v| v.rays).sum(),
+                boundary_triangles: views.iter().map(|v| v.sampled.len() as u64).sum(),
+            };
+            return Ok((ch, conv));
+        }
+        advance(&mut views, &todo)?;
     }
 }
 

@@ -14,6 +14,8 @@
 //! * [`meshes`]: built-in objects seen from outside (geodesic sphere, torus,
 //!   table with chairs).
 //! * [`viewpoint`]: the viewpoint channel of Part V.
+//! * [`simplify`]: viewpoint-driven mesh simplification (Part VII).
+//! * [`volume`]: volumes, ray casting and the viewpoint channel over voxels (Part VI).
 //! * [`vulkan`]: the Vulkan compute backend (ash + naga), tracing and reductions.
 //! * [`imaging`]: mutual-information registration and information-channel
 //!   segmentation of images (syllabus Part 8).
@@ -29,11 +31,15 @@ pub mod lines;
 pub mod meshes;
 pub mod obj;
 pub mod preview;
+pub mod radiosity;
+pub mod render;
 pub mod scene;
+pub mod simplify;
 pub mod solids;
 pub mod tracer;
 pub mod viewpoint;
 pub mod visibility;
+pub mod volume;
 pub mod vulkan;
 
 pub use backend::{BackendChoice, BackendError, open};

@@ -24,12 +24,7 @@ pub fn check(o: &ComplexityOptions) -> Result<String, CliError> {
         .clone()
         .ok_or_else(|| CliError::usage("give a scene: a built-in name (e.g. cube-enclosure:10) or an .obj file"))?;
     if o.merge.is_empty() {
-        o.offset.checked_add(o.lines).ok_or_else(|| {
-            CliError::usage(format!(
-                "--offset {} + --lines {} passes the last line index 2^64-1 (line indices are 64-bit)",
-                o.offset, o.lines
-            ))
-        })?;
+        line_range(o)?;
     }
     for (flag, p) in [("--export-ply", &o.export_ply), ("--image", &o.image), ("--save-counts", &o.save_counts)] {
         if let Some(p) = p {
@@ -37,6 +32,61 @@ pub fn check(o: &ComplexityOptions) -> Result<String, CliError> {
         }
     }
     Ok(spec)
+}
+
+/// Lines traced when none are given.
+pub const DEFAULT_LINES: u64 = 1_000_000;
+
+/// The first line index and the number of lines this run traces: `--offset`
+/// and `--lines`, or the `--shard i/n` part of the `--lines` run.
+///
+/// # Errors
+/// A range past the last 64-bit line index, or more shards than lines.
+pub fn line_range(o: &ComplexityOptions) -> Result<(u64, u64), CliError> {
+    let lines = o.lines.unwrap_or(DEFAULT_LINES);
+    if let Some(s) = o.shard {
+        if s.count > lines {
+            return Err(CliError::usage(format!(
+                "--shard {s}: {} shards of {lines} lines leave some shards empty (give at most {lines} shards)",
+                s.count
+            )));
+        }
+        let r = s.range(lines);
+        return Ok((r.start, r.end - r.start));
+    }
+    o.offset.checked_add(lines).ok_or_else(|| {
+        CliError::usage(format!(
+            "--offset {} + --lines {lines} passes the last line index 2^64-1 (line indices are 64-bit)",
+            o.offset
+        ))
+    })?;
+    Ok((o.offset, lines))
+}
+
+/// With `--merge` and `--lines N`: the merged shards must cover exactly
+/// lines `0..N` (a missing shard leaves a gap, a shard of a larger run
+/// passes `N`).
+fn check_coverage(ranges: &[(u64, u64)], lines: u64) -> Result<(), CliError> {
+    if ranges == [(0, lines)] {
+        return Ok(());
+    }
+    let covered = ranges.iter().map(|r| format!("{}..{}", r.0, r.1)).collect::<Vec<_>>().join(", ");
+    let mut at = 0;
+    for r in ranges {
+        if r.0 > at && at < lines {
+            let to = r.0.min(lines);
+            return Err(CliError::usage(format!(
+                "--merge: lines {at}..{to} of --lines {lines} are missing (a shard is missing?); the files cover {covered}"
+            )));
+        }
+        at = at.max(r.1);
+    }
+    if at < lines {
+        return Err(CliError::usage(format!(
+            "--merge: lines {at}..{lines} of --lines {lines} are missing (a shard is missing?); the files cover {covered}"
+        )));
+    }
+    Err(CliError::usage(format!("--merge: the files cover {covered}, past --lines {lines} (a shard of another run?)")))
 }
 
 /// Runs `itgfx complexity`.
@@ -47,12 +97,13 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
     let spec = check(o)?;
     let base = o.common.base;
     let unit = Some(base.unit());
-    let (lines, seed, local) = (o.lines, o.seed, o.local);
+    let (seed, local) = (o.seed, o.local);
+    let (offset, lines) = if o.merge.is_empty() { line_range(o)? } else { (0, 0) };
     let scene = load_scene(&spec, o.subdivide)?;
     let t0 = Instant::now();
     let prepared = Prepared::new(&scene);
     let tracer = open(o.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
-    let opts = LineOptions { lines, seed, local, blocks: o.blocks, offset: o.offset };
+    let opts = LineOptions { lines, seed, local, blocks: o.blocks, offset };
     let counts = if o.merge.is_empty() {
         let mut progress = Progress::new();
         count_visibility(&scene, &prepared, tracer.as_ref(), &opts, &mut |d, t| progress.update(d, t))
@@ -68,7 +119,11 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
                 Some(m) => m.merge(c).map_err(|e| CliError::usage(format!("{f:?}: {e}")))?,
             }
         }
-        merged.ok_or_else(|| CliError::usage("--merge: no files"))?
+        let merged = merged.ok_or_else(|| CliError::usage("--merge: no files"))?;
+        if let Some(n) = o.lines {
+            check_coverage(&merged.ranges, n)?;
+        }
+        merged
     };
     if let Some(p) = &o.save_counts {
         let mut bytes = Vec::new();
@@ -86,6 +141,9 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
         .count("lines", c.lines)
         .count("segments", c.segments)
         .count("seed", counts.seed);
+    if let Some(s) = o.shard {
+        r.text("shard", s.to_string()).count("first_line", offset);
+    }
     r.count("escaped", c.escaped).count("unsampled_patches", m.unsampled_patches as u64);
     r.real("H_P", m.positional_entropy, unit).real("H_S", m.scene_entropy, unit).real("H_J", m.joint_entropy, unit);
     r.real("I_S", m.mutual_information, unit);

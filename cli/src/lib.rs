@@ -12,10 +12,15 @@ pub mod measure_options;
 pub mod options;
 pub mod output;
 pub mod progress;
+pub mod radiosity;
+pub mod render;
 pub mod report;
 pub mod scene;
+pub mod shard;
+pub mod simplify;
 pub mod values;
 pub mod viewpoints;
+pub mod volume;
 
 use std::fmt;
 

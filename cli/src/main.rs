@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use clap::Parser;
 use clap::error::ErrorKind;
 use itgfx_cli::options::{Cli, Command};
-use itgfx_cli::{CliError, complexity, devices, imaging, measure, viewpoints};
+use itgfx_cli::{CliError, complexity, devices, imaging, measure, simplify, viewpoints, volume};
 
 /// One JSON object, or the readable table.
 fn render(report: &itgfx_cli::report::Report, json: bool) -> String {
@@ -38,10 +38,27 @@ fn run(cli: Cli) -> Result<String, CliError> {
             threads(o.threads)?;
             Ok(render(&viewpoints::run(&o)?, o.common.json))
         }
+        Command::Simplify(o) => {
+            threads(o.threads)?;
+            Ok(render(&simplify::run(&o)?, o.common.json))
+        }
+        Command::Volume(o) => {
+            threads(o.threads)?;
+            Ok(render(&volume::run(&o)?, o.common.json))
+        }
         Command::Devices(c) => Ok(render(&devices::run()?, c.json)),
         Command::Phantom(o) => Ok(render(&imaging::run_phantom(&o)?, o.json)),
         Command::Register(o) => Ok(render(&imaging::run_register(&o)?, o.common.json)),
         Command::Segment(o) => Ok(render(&imaging::run_segment(&o)?, o.common.json)),
+        Command::Render(o) => {
+            threads(o.threads)?;
+            Ok(render(&itgfx_cli::render::run(&o)?, o.common.json))
+        }
+        Command::Compare(o) => Ok(render(&itgfx_cli::render::run_compare(&o)?, o.common.json)),
+        Command::Radiosity(o) => {
+            threads(o.threads)?;
+            Ok(render(&itgfx_cli::radiosity::run(&o)?, o.common.json))
+        }
     }
 }
 

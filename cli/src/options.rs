@@ -39,6 +39,10 @@ pub enum Command {
     Measure(MeasureCommand),
     /// Viewpoint channel V -> O: VE, VMI, best views (Part V)
     Viewpoints(ViewpointsOptions),
+    /// Viewpoint-driven mesh simplification by VMI or VE (Part VII)
+    Simplify(crate::simplify::SimplifyOptions),
+    /// Viewpoint channel over voxels V -> Z: VMI, VoMI, EVMI, best views of a volume (Part VI)
+    Volume(crate::volume::VolumeOptions),
     /// Vulkan devices found, and the one --backend vulkan uses
     Devices(Common),
     /// A synthetic two-modality image pair with a known rigid transform (Part 8)
@@ -47,6 +51,12 @@ pub enum Command {
     Register(crate::imaging::RegisterOptions),
     /// Image segmentation by the region-intensity information channel (Part 8)
     Segment(crate::imaging::SegmentOptions),
+    /// Path-traced image with adaptive pixel sampling (Part IV; Part III-IV §5)
+    Render(crate::render::RenderOptions),
+    /// RMSE, PSNR and relMSE of one EXR image against another
+    Compare(crate::render::CompareOptions),
+    /// Hierarchical radiosity refined by the oracles of Part III §9 and Part III-IV §4
+    Radiosity(crate::radiosity::RadiosityOptions),
 }
 
 /// Options every command has.
@@ -77,9 +87,10 @@ pub struct ComplexityOptions {
     /// A built-in scene name (e.g. cube-enclosure:10) or an .obj file
     #[arg(value_name = "SCENE")]
     pub scene: Option<String>,
-    /// Lines to cast (global lines that miss count); 1e7-style counts accepted
-    #[arg(long, value_name = "N", default_value = "1e6", value_parser = lines)]
-    pub lines: u64,
+    /// Lines to cast (global lines that miss count; default 1e6); 1e7-style counts accepted. With
+    /// --shard, the whole run's lines; with --merge, the shards must cover exactly lines 0..N
+    #[arg(long, value_name = "N", value_parser = lines)]
+    pub lines: Option<u64>,
     /// Seed; same seed, same numbers, any thread count
     #[arg(long, value_name = "S", default_value = "1", value_parser = count)]
     pub seed: u64,
@@ -108,11 +119,14 @@ pub struct ComplexityOptions {
     /// First line index (shards of one run: same seed, disjoint ranges)
     #[arg(long, value_name = "K", default_value = "0", value_parser = count)]
     pub offset: u64,
+    /// Shard i of n (0-based) of the --lines run: lines [i*N/n, (i+1)*N/n), for job arrays
+    #[arg(long, value_name = "i/n", value_parser = crate::shard::parse, conflicts_with = "offset")]
+    pub shard: Option<crate::shard::Shard>,
     /// Write the counts to F
     #[arg(long, value_name = "F", value_parser = out_path)]
     pub save_counts: Option<PathBuf>,
-    /// Evaluate saved shards together instead of tracing: F1,F2,...
-    #[arg(long, value_name = "F1,F2,...", value_delimiter = ',', conflicts_with_all = ["lines", "offset", "local"])]
+    /// Evaluate saved shards together instead of tracing: F1,F2,... (with --lines N: they must cover 0..N)
+    #[arg(long, value_name = "F1,F2,...", value_delimiter = ',', conflicts_with_all = ["offset", "local", "shard"])]
     pub merge: Vec<PathBuf>,
     /// Worker threads (default: all cores)
     #[arg(long, value_name = "T", value_parser = threads)]

@@ -43,6 +43,119 @@ pub fn entropy_of_weights<T: Real>(w: &[T], base: Base) -> Result<T, Error> {
     Ok(T::from_f64(h * base.per_nat()))
 }
 
+/// The term `w ln w` (nats, `0 ln 0 = 0`) of which [`entropy_of_weight_sums`]
+/// and [`mutual_information_of_weight_sums`] take running sums, so that a
+/// caller changing a few weights updates `Σ w ln w` by their terms alone.
+///
+/// # Errors
+/// [`Error::NonFinite`] or [`Error::Negative`] for a weight that is not a
+/// finite non-negative number.
+pub fn weight_log_term<T: Real>(w: T) -> Result<f64, Error> {
+    let x = w.to_f64();
+    if !x.is_finite() {
+        return Err(Error::NonFinite { index: 0 });
+    }
+    if x < 0.0 {
+        return Err(Error::Negative { index: 0 });
+    }
+    Ok(xlnx(x))
+}
+
+/// Entropy (Part II eq. (2)) of weights `w` known only by their sum
+/// `S = Σ w` and `X = Σ w ln w` (terms from [`weight_log_term`]):
+///
+/// ```text
+/// H(w / S) = ln S − X / S
+/// ```
+/// the identity behind [`entropy_of_weights`]; a viewpoint entropy `H(O|v)`
+/// (Part V eq. (2)) kept up to date while a mesh's polygons change.
+/// Rounding below 0 is clamped to 0.
+///
+/// # Errors
+/// [`Error::ZeroMass`] when `S ≤ 0`; [`Error::NonFinite`] for a sum that
+/// is not finite.
+pub fn entropy_of_weight_sums<T: Real>(sum: T, xlnx_sum: T, base: Base) -> Result<T, Error> {
+    let (s, x) = (sum.to_f64(), xlnx_sum.to_f64());
+    if !s.is_finite() || !x.is_finite() {
+        return Err(Error::NonFinite { index: usize::from(s.is_finite()) });
+    }
+    if s <= 0.0 {
+        return Err(Error::ZeroMass);
+    }
+    let h = ln(s) - x / s;
+    Ok(T::from_f64(if h < 0.0 { 0.0 } else { h * base.per_nat() }))
+}
+
+/// Mutual information `I(X;Y) = H(X) + H(Y) − H(X,Y)` (Part II eq. (7)) of
+/// the joint `w_xy / S` of non-negative weights known by running sums:
+/// the total `S = Σ w_xy`, `J = Σ w_xy ln w_xy`, `R = Σ_x r_x ln r_x` of the
+/// row sums and `C = Σ_y c_y ln c_y` of the column sums. Each entropy is
+/// `ln S − (sum of w ln w)/S` as in [`entropy_of_weight_sums`], so
+///
+/// ```text
+/// I(X;Y) = ln S + (J − R − C) / S
+/// ```
+/// With rows the viewpoints and columns the polygons, weights the projected
+/// solid angles `a_o(v)`, this is `I(V;O)` (Part V eq. (6)) with `p(v)`
+/// proportional to the projected area, updated by a few terms when a
+/// few polygons change. Rounding below 0 is clamped to 0.
+///
+/// # Errors
+/// [`Error::ZeroMass`] when `S ≤ 0`; [`Error::NonFinite`] (index 0..=3 in
+/// argument order) for a sum that is not finite.
+pub fn mutual_information_of_weight_sums<T: Real>(
+    total: T,
+    joint_xlnx: T,
+    rows_xlnx: T,
+    cols_xlnx: T,
+    base: Base,
+) -> Result<T, Error> {
+    let v = [total.to_f64(), joint_xlnx.to_f64(), rows_xlnx.to_f64(), cols_xlnx.to_f64()];
+    if let Some(index) = v.iter().position(|x| !x.is_finite()) {
+        return Err(Error::NonFinite { index });
+    }
+    let [s, j, r, c] = v;
+    if s <= 0.0 {
+        return Err(Error::ZeroMass);
+    }
+    let i = ln(s) + (j - r - c) / s;
+    Ok(T::from_f64(if i < 0.0 { 0.0 } else { i * base.per_nat() }))
+}
+
+/// Specific information `I(x;Y) = Σ_y p(y|x) ln(p(y|x)/p(y))` of one row
+/// of non-negative joint weights `w_xy` (Part V eq. (7): the viewpoint
+/// mutual information when `x` is a viewpoint), from running sums: the
+/// total `S = Σ w`, the row sum `R = Σ_y w_xy`, `X = Σ_y w_xy ln w_xy` and
+/// the cross term `K = Σ_y w_xy ln c_y` with the column sums `c_y`:
+///
+/// ```text
+/// I(x;Y) = ln S − ln R + (X − K) / R
+/// ```
+/// since `p(y|x) = w_xy / R` and `p(y) = c_y / S`. Rounding below 0 is
+/// clamped to 0.
+///
+/// # Errors
+/// [`Error::ZeroMass`] when `S ≤ 0` or `R ≤ 0`; [`Error::NonFinite`]
+/// (index 0..=3 in argument order) for a sum that is not finite.
+pub fn specific_information_of_weight_sums<T: Real>(
+    total: T,
+    row_sum: T,
+    row_xlnx: T,
+    row_cross: T,
+    base: Base,
+) -> Result<T, Error> {
+    let v = [total.to_f64(), row_sum.to_f64(), row_xlnx.to_f64(), row_cross.to_f64()];
+    if let Some(index) = v.iter().position(|x| !x.is_finite()) {
+        return Err(Error::NonFinite { index });
+    }
+    let [s, r, x, k] = v;
+    if s <= 0.0 || r <= 0.0 {
+        return Err(Error::ZeroMass);
+    }
+    let i = ln(s) - ln(r) + (x - k) / r;
+    Ok(T::from_f64(if i < 0.0 { 0.0 } else { i * base.per_nat() }))
+}
+
 /// Binary entropy `H(p, 1−p)` (Part II eq. (4)).
 ///
 /// # Errors

@@ -86,8 +86,10 @@ pub use divergence::{
     hellinger, jensen_shannon, kl_divergence, l_alpha, log_sum_terms, vasershtein_ornstein,
 };
 pub use entropy::{
-    JointEntropies, binary_entropy, conditional_entropy, differential_entropy_from_bins, entropy, entropy_of_weights,
-    joint_entropies, joint_entropy, mutual_information, renyi_entropy, tsallis_entropy,
+    JointEntropies, binary_entropy, conditional_entropy, differential_entropy_from_bins, entropy,
+    entropy_of_weight_sums, entropy_of_weights, joint_entropies, joint_entropy, mutual_information,
+    mutual_information_of_weight_sums, renyi_entropy, specific_information_of_weight_sums, tsallis_entropy,
+    weight_log_term,
 };
 pub use error::Error;
 pub use fano::{fano_bound, fano_minimum_error, fano_weak_bound};

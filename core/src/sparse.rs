@@ -206,6 +206,51 @@ impl<'a, T: Real> SparseChannel<'a, T> {
         Ok(())
     }
 
+    /// Weighted specific information of each output: the terms of
+    /// [`SparseChannel::output_specific_information_into`] (the Bayes form of
+    /// `I(y;X) = Σ_x p(x|y) log(p(x|y)/p(x))`, Part V's polygonal mutual
+    /// information) each multiplied by a weight of its input,
+    /// `I_w(y;X) = Σ_x w(x) p(x|y) log(p(x|y)/p(x))`. With `w ≡ 1` it is
+    /// `I(y;X)`; it is linear in `w`. One weight vector per colour channel
+    /// gives the colour voxel mutual information of the viewpoint channel
+    /// over voxels (a viewpoint's colour carried to the voxels it informs
+    /// about). Single terms may be negative, so the result is not clamped.
+    /// Outputs with `p(y) = 0` get 0.
+    ///
+    /// # Errors
+    /// [`Error::LengthMismatch`] for wrong buffer lengths; element errors
+    /// (non-finite) for `weights`.
+    pub fn output_specific_information_weighted_into(
+        &self,
+        output: &[T],
+        weights: &[T],
+        base: Base,
+        out: &mut [T],
+    ) -> Result<(), Error> {
+        same_len(self.outputs, output.len())?;
+        same_len(self.outputs, out.len())?;
+        same_len(self.inputs(), weights.len())?;
+        if let Some(index) = weights.iter().position(|w| !w.to_f64().is_finite()) {
+            return Err(Error::NonFinite { index });
+        }
+        out.iter_mut().for_each(|o| *o = T::from_f64(0.0));
+        for (x, px) in self.input.iter().enumerate() {
+            let (c, v) = self.row(x);
+            let wx = px.to_f64() * weights[x].to_f64();
+            for (&j, p) in c.iter().zip(v) {
+                let (p, q) = (p.to_f64(), output[j as usize].to_f64());
+                if p > 0.0 && q > 0.0 {
+                    out[j as usize] = T::from_f64(out[j as usize].to_f64() + wx * p * (ln(p) - ln(q)));
+                }
+            }
+        }
+        for (o, q) in out.iter_mut().zip(output) {
+            let q = q.to_f64();
+            *o = T::from_f64(if q > 0.0 { o.to_f64() / q * base.per_nat() } else { 0.0 });
+        }
+        Ok(())
+    }
+
     /// Every entropy of the channel, with `I(X;Y) = Σ_x p(x) I(x;Y)`
     /// (Part V eq. (6)) and `H(Y|X) = Σ_x p(x) H(Y|x)` (eq. (5)).
     ///

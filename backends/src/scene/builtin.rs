@@ -93,6 +93,12 @@ pub const BUILT_IN: &[BuiltIn] = &[
         description: "cube enclosure 10x10 per face with K cubes of side 0.05, random (K in 1..=1000, default) or clustered (K in 1..=2197); default K = 27, SEED = 1 (Figs. 11, 15, 16)",
         build: cubes_room,
     },
+    BuiltIn {
+        name: "mirror-room",
+        syntax: "mirror-room[:L]",
+        description: "closed 4x3x5 room with a ceiling area light, a mirrored pyramid, a mirrored sphere (geodesic, level L in 1..=6, default 5: 5,120 triangles) and two diffuse blocks (after Part IV Figs. 7, 11)",
+        build: mirror_room,
+    },
 ];
 
 /// A built-in scene by spec, e.g. `"torus:32,16"` (see [`BUILT_IN`]).
@@ -261,4 +267,10 @@ fn cubes_room(a: &Args) -> Result<Scene, SceneError> {
     let k = a.one(0, "K", 1..=max, 27)?;
     a.check(12 * (100 + u64::from(k)), 6 * (100 + u64::from(k)))?;
     crate::solids::cubes_room(a.spec, k, clustered, seed.unwrap_or(1))
+}
+
+fn mirror_room(a: &Args) -> Result<Scene, SceneError> {
+    a.at_most(1)?;
+    let l = a.one(0, "L", 1..=6, 5)?;
+    Ok(crate::render::room::mirror_room(a.spec, l - 1))
 }

@@ -106,10 +106,12 @@ pub(crate) fn test_triangle(
     hits: &mut Vec<Crossing>,
 ) {
     if let Some(t) = shear.hit(&scene.triangles[tri])
-        && t >= l.tmin && t <= l.tmax {
-            let cos = scene.normals[tri].dot(dir);
-            hits.push(Crossing { t, patch: scene.triangle_patch[tri], cos, primitive: tri as u32 });
-        }
+        && t >= l.tmin
+        && t <= l.tmax
+    {
+        let cos = scene.normals[tri].dot(dir);
+        hits.push(Crossing { t, patch: scene.triangle_patch[tri], cos, primitive: tri as u32 });
+    }
 }
 
 /// Whether crossing `(t, primitive)` comes before `(bt, bp)` in a line's

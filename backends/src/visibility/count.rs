@@ -18,7 +18,7 @@ use super::counts_file::SceneFingerprint;
 use super::{BlockCounts, ContinuousSums, CountsError, FixedSum, LineOptions, MAX_BLOCKS, VisibilityCounts};
 use crate::lines::{Line, LineRng, cosine_direction, global_line, sample_cdf};
 use crate::scene::Scene;
-use crate::tracer::{CrossingBuffer, Prepared, Tracer};
+use crate::tracer::{Crossing, CrossingBuffer, Prepared, Tracer};
 
 /// Lines per work unit.
 pub const CHUNK: u64 = 16_384;
@@ -282,7 +282,14 @@ fn process_chunk(
         }
     }
     let mut buf = CrossingBuffer::default();
-    tracer.trace_all(&lines, &mut buf)?;
+    // Local lines need only the first crossing past the origin: a closest-hit
+    // query from just short of that threshold (see `first_past_origin`).
+    let mut nearest: Vec<Option<Crossing>> = Vec::new();
+    if sampler.is_some() {
+        nearest = first_past_origin(tracer, &lines, &origins)?;
+    } else {
+        tracer.trace_all(&lines, &mut buf)?;
+    }
     let mut keys = Vec::new();
     let mut background = Vec::new();
     let mut endpoint = Endpoints::new(p.patches);
@@ -301,12 +308,10 @@ fn process_chunk(
     };
     let (mut segments, mut escaped) = (0, 0);
     for (li, line) in lines.iter().enumerate() {
-        let hits = buf.line(li);
         if let Some(&(from, _x, n)) = origins.get(li) {
             // Local line: the nearest crossing past the origin, not on it.
             let d = DVec3::from(line.direction.map(f64::from));
-            let next = hits.iter().find(|h| f64::from(h.t) > BACKOFF * (1.0 + 1e-4) && h.patch != from);
-            match next {
+            match nearest[li] {
                 Some(h) if h.cos < 0.0 => {
                     keys.push(key(from, h.patch));
                     let r = f64::from(h.t) - BACKOFF;
@@ -320,6 +325,7 @@ fn process_chunk(
             }
             continue;
         }
+        let hits = buf.line(li);
         // Global line. Crossings less than 1e-6 apart that face both ways are
         // a touch (the line grazes an edge or clips a corner by < 1e-6):
         // whether it was in free space or not, it still is; drop the cluster.
@@ -377,6 +383,58 @@ fn process_chunk(
         return Err(CountsError::Overflow("the I_S^c sum of a chunk".into()));
     }
     Ok(ChunkResult { keys: runs, background, cont, endpoint, segments, escaped })
+}
+
+/// Whether crossing `h` of a local line from patch `from` is where the line
+/// lands: past the origin (which the line starts [`BACKOFF`] behind) and on
+/// another patch.
+fn lands(h: &Crossing, from: u32) -> bool {
+    f64::from(h.t) > BACKOFF * (1.0 + 1e-4) && h.patch != from
+}
+
+/// For each local line, the first of its crossings that [`lands`], exactly
+/// as a scan of every crossing ([`Tracer::trace_all`]) finds it, but by a
+/// closest-hit query: the query starts at the largest `f32` not above the
+/// threshold, so every landing crossing lies in its range. When its hit
+/// lands, nothing before it did (it is the first crossing in range); when it
+/// does not (the origin patch again), or lies within 1e-5 of the threshold,
+/// that line falls back to the full scan.
+fn first_past_origin(
+    tracer: &dyn Tracer,
+    lines: &[Line],
+    origins: &[(u32, DVec3, DVec3)],
+) -> Result<Vec<Option<Crossing>>, CountsError> {
+    let threshold = BACKOFF * (1.0 + 1e-4);
+    let mut start = threshold as f32;
+    if f64::from(start) > threshold {
+        start = start.next_down();
+    }
+    let probes: Vec<Line> = lines.iter().map(|l| Line { tmin: start.max(l.tmin), ..*l }).collect();
+    let mut hits = Vec::new();
+    tracer.closest_hit(&probes, &mut hits)?;
+    let mut out = Vec::with_capacity(lines.len());
+    let mut retrace = Vec::new();
+    for (li, (hit, &(from, _, _))) in hits.iter().zip(origins).enumerate() {
+        let c = hit.map(|h| Crossing { t: h.t, patch: h.patch, cos: h.cos, primitive: h.primitive });
+        match c {
+            // Within 1e-5 of the threshold a scan could have merged the
+            // crossing into an earlier one (crossings 1e-6 apart are one).
+            Some(c) if !lands(&c, from) || f64::from(c.t) <= threshold + 1e-5 => {
+                retrace.push(li);
+                out.push(None);
+            }
+            c => out.push(c),
+        }
+    }
+    if !retrace.is_empty() {
+        let again: Vec<Line> = retrace.iter().map(|&li| lines[li]).collect();
+        let mut buf = CrossingBuffer::default();
+        tracer.trace_all(&again, &mut buf)?;
+        for (k, &li) in retrace.iter().enumerate() {
+            out[li] = buf.line(k).iter().find(|h| lands(h, origins[li].0)).copied();
+        }
+    }
+    Ok(out)
 }
 
 /// The lines of block `b` of `blocks` in `[start, end)`: the first index
@@ -492,4 +550,42 @@ pub fn count_visibility(
         endpoints,
         endpoint_log,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::built_in;
+    use crate::tracer::CpuTracer;
+
+    /// The closest-hit query finds, for every local line, the crossing a scan
+    /// of all crossings finds (the same patch, `t` and cosine), on scenes with
+    /// occluders, open edges, non-planar patches (the sphere's cells) and
+    /// patches meeting at edges.
+    #[test]
+    fn local_lines_land_where_the_full_scan_says() {
+        for spec in ["cubes-room:64", "cornell-box", "sphere", "dodecahedron", "table-chairs:2", "cube-enclosure:4"] {
+            let scene = built_in(spec).unwrap();
+            let p = Prepared::new(&scene);
+            let tracer = CpuTracer::new(&p);
+            let sampler = Sampler::new(&p);
+            let (mut lines, mut origins) = (Vec::new(), Vec::new());
+            for i in 0..20_000 {
+                let (patch, x, n, l) = sampler.line(&p, 7, i);
+                lines.push(l);
+                origins.push((patch, x, n));
+            }
+            let fast = first_past_origin(&tracer, &lines, &origins).unwrap();
+            let mut buf = CrossingBuffer::default();
+            tracer.trace_all(&lines, &mut buf).unwrap();
+            let mut landed = 0;
+            for (li, f) in fast.iter().enumerate() {
+                let scan = buf.line(li).iter().find(|h| lands(h, origins[li].0)).copied();
+                assert_eq!(f.map(|c| (c.t, c.patch, c.cos)), scan.map(|c| (c.t, c.patch, c.cos)), "{spec} line {li}");
+                landed += usize::from(scan.is_some());
+            }
+            // Closed scenes land nearly every line; table-chairs is open.
+            assert!(landed > 2_000, "{spec}: only {landed} of 20000 lines landed");
+        }
+    }
 }

@@ -199,13 +199,14 @@ impl VisibilityCounts {
                 return Err(invalid(format!("line range {} is empty or reversed", fmt_ranges(*r))));
             }
             if let Some(next) = self.ranges.get(k + 1)
-                && next.0 < r.1 {
-                    return Err(CountsError::Mismatch(format!(
-                        "line ranges {} and {} overlap or are out of order",
-                        fmt_ranges(*r),
-                        fmt_ranges(*next)
-                    )));
-                }
+                && next.0 < r.1
+            {
+                return Err(CountsError::Mismatch(format!(
+                    "line ranges {} and {} overlap or are out of order",
+                    fmt_ranges(*r),
+                    fmt_ranges(*next)
+                )));
+            }
         }
         let per_pair = if self.local { 1 } else { 2 };
         let mut grand = 0u64;
@@ -405,9 +406,10 @@ impl VisibilityCounts {
         let len = std::fs::metadata(path).map_err(io)?.len();
         let needed = len.saturating_mul(BYTES_PER_FILE_BYTE);
         if let Some(available) = available_memory()
-            && needed > available {
-                return Err(CountsError::TooLarge { needed, available });
-            }
+            && needed > available
+        {
+            return Err(CountsError::TooLarge { needed, available });
+        }
         let text = std::fs::read_to_string(path).map_err(io)?;
         Self::load(&text)
     }

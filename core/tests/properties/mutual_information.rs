@@ -1,4 +1,7 @@
-use itgfx_core::{Base, Channel, jensen_shannon, joint_entropies, kl_divergence};
+use itgfx_core::{
+    Base, Channel, entropy_of_weight_sums, entropy_of_weights, jensen_shannon, joint_entropies, kl_divergence,
+    mutual_information_of_weight_sums, specific_information_of_weight_sums, weight_log_term,
+};
 use proptest::prelude::*;
 
 use crate::strategies::*;
@@ -85,5 +88,36 @@ proptest! {
         for i in 0..r { same[i * row.len()..(i + 1) * row.len()].copy_from_slice(&row); }
         let z = Channel::new(&input, &same, row.len()).unwrap().measures(Base::Bits);
         prop_assert!(z.mutual_information < 1e-12);
+    }
+
+    /// I(X;Y) and H from running sums of unnormalised weights (Part II
+    /// eqs. (2), (7)) equal the normalised joint's, at any scale of the
+    /// weights (the simplifier's incremental I(V;O), Part V eq. (6)).
+    #[test]
+    fn mi_from_weight_sums((j, r, c) in joint(10), scale in 1e-4..1e4f64) {
+        let w: Vec<f64> = j.iter().map(|x| x * scale).collect();
+        let rows: Vec<f64> = (0..r).map(|i| w[i * c..(i + 1) * c].iter().sum()).collect();
+        let cols: Vec<f64> = (0..c).map(|k| (0..r).map(|i| w[i * c + k]).sum()).collect();
+        let term = |v: &[f64]| v.iter().map(|&x| weight_log_term(x).unwrap()).sum::<f64>();
+        let s: f64 = w.iter().sum();
+        let i = mutual_information_of_weight_sums(s, term(&w), term(&rows), term(&cols), Base::Bits).unwrap();
+        let e = joint_entropies(&j, r, c, Base::Bits).unwrap();
+        prop_assert!(close(i, e.mutual_information, 1e-9));
+        let h = entropy_of_weight_sums(rows.iter().sum::<f64>(), term(&rows), Base::Bits).unwrap();
+        prop_assert!(close(h, entropy_of_weights(&rows, Base::Bits).unwrap(), 1e-9));
+        // Each row's specific information (Part V eq. (7)) against the channel's.
+        let p_x: Vec<f64> = rows.iter().map(|x| x / s).collect();
+        // An unseen row (p(x) = 0) gets any distribution: the channel needs one.
+        let m: Vec<f64> =
+            (0..r * c).map(|k| if rows[k / c] > 0.0 { w[k] / rows[k / c] } else { 1.0 / c as f64 }).collect();
+        let p_y: Vec<f64> = cols.iter().map(|x| x / s).collect();
+        let mut spec = vec![0.0; r];
+        Channel::new(&p_x, &m, c).unwrap().specific_information_into(&p_y, Base::Bits, &mut spec).unwrap();
+        for x in (0..r).filter(|&x| rows[x] > 0.0) {
+            let cross: f64 = (0..c).filter(|&y| w[x * c + y] > 0.0).map(|y| w[x * c + y] * cols[y].ln()).sum();
+            let xl = term(&w[x * c..(x + 1) * c]);
+            let got = specific_information_of_weight_sums(s, rows[x], xl, cross, Base::Bits).unwrap();
+            prop_assert!(close(got, spec[x], 1e-8), "row {x}: {got} vs {}", spec[x]);
+        }
     }
 }

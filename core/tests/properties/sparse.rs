@@ -65,6 +65,30 @@ proptest! {
         prop_assert!(close(h, sm.h_y_given_x, 1e-9));
     }
 
+    /// Weighted output specific information: `w ≡ 1` gives `I(y;X)`, and it
+    /// is linear in the weights (colour VoMI, one weight vector per channel).
+    #[test]
+    fn weighted_output_information((input, m, r, c) in channel(10), seed in 0u64..1000) {
+        let (starts, idx, val) = compress(&m, c);
+        let sparse = SparseChannel::new(&input, &starts, &idx, &val, c).unwrap();
+        let mut po = vec![0.0; c];
+        sparse.output_into(&mut po).unwrap();
+        let (mut plain, mut ones) = (vec![0.0; c], vec![0.0; c]);
+        sparse.output_specific_information_into(&po, Base::Bits, &mut plain).unwrap();
+        sparse.output_specific_information_weighted_into(&po, &vec![1.0; r], Base::Bits, &mut ones).unwrap();
+        for (a, b) in plain.iter().zip(&ones) {
+            prop_assert!(close(*a, b.max(0.0), 1e-9), "{a} {b}");
+        }
+        let w1: Vec<f64> = (0..r).map(|x| ((x as u64 * 7 + seed) % 5) as f64 / 4.0).collect();
+        let w2: Vec<f64> = w1.iter().map(|w| 1.0 - w).collect();
+        let (mut a, mut b) = (vec![0.0; c], vec![0.0; c]);
+        sparse.output_specific_information_weighted_into(&po, &w1, Base::Bits, &mut a).unwrap();
+        sparse.output_specific_information_weighted_into(&po, &w2, Base::Bits, &mut b).unwrap();
+        for ((x, y), z) in a.iter().zip(&b).zip(&ones) {
+            prop_assert!(close(x + y, *z, 1e-9), "{x} + {y} != {z}");
+        }
+    }
+
     /// Sparse Jensen–Shannon equals the dense one (Part II eq. (17)).
     #[test]
     fn sparse_js_equals_dense((a, b) in pmf_pair(12), w in 0.0f64..=1.0) {

@@ -1,0 +1,348 @@
+//! The solver: initial links between facing polygons, then passes of
+//! oracle-driven link refinement, each followed by gathering to
+//! convergence, until no link refines.
+//!
+//! A link `j → i` is refined while
+//! `oracle(ρ_i = B_j = 1) · max_c(ρ_i,c B_j,c) / norm ≥ ε`, where `norm` is
+//! the emitted power `Σ A E` for the power-valued oracles (power, MI, KL,
+//! CS, HL) and the largest emittance for the radiosity-valued ones (KS,
+//! VT), so `ε` is dimensionless. The larger of the two elements is split
+//! (as RenderPark does), unless its children would be smaller than the
+//! minimum area; the link is replaced by four links to the children.
+
+use std::fmt;
+
+use super::Oracle;
+use super::element::{ElementId, Hierarchy};
+use super::gather::{self, Rgb, Surfaces};
+use super::link::{Link, Sampler};
+use crate::backend::BackendError;
+use crate::scene::Scene;
+use crate::tracer::{Prepared, Tracer};
+
+/// Solver settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// The refinement oracle.
+    pub oracle: Oracle,
+    /// Refinement threshold (dimensionless; see the module docs).
+    pub epsilon: f64,
+    /// Random point pairs per link evaluation, `N_s` (10 in the tutorial).
+    pub samples: u32,
+    /// Seed of every random point pair.
+    pub seed: u64,
+    /// Smallest element area as a fraction of the total (RenderPark: 1e-6).
+    pub min_area: f64,
+    /// Stop splitting once this many leaves exist.
+    pub max_elements: usize,
+    /// Gathering stops when the largest change is below this fraction of the largest radiosity.
+    pub tolerance: f64,
+    /// Most gathering sweeps per solve.
+    pub max_sweeps: u32,
+    /// Most refinement passes.
+    pub max_passes: u32,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            oracle: Oracle::Power,
+            epsilon: 1e-3,
+            samples: 10,
+            seed: 1,
+            min_area: 1e-6,
+            max_elements: 2_000_000,
+            tolerance: 1e-6,
+            max_sweeps: 1000,
+            max_passes: 16,
+        }
+    }
+}
+
+/// A converged hierarchical solution.
+#[derive(Clone, Debug)]
+pub struct Solution {
+    /// The elements.
+    pub hierarchy: Hierarchy,
+    /// The final links.
+    pub links: Vec<Link>,
+    /// Radiosity of every element (leaves and interior, push-pulled).
+    pub radiosity: Vec<Rgb>,
+    /// Irradiance `H` of every element (`B = E + ρ H` at the leaves).
+    pub irradiance: Vec<Rgb>,
+    /// Reflectance per root.
+    pub reflectance: Vec<Rgb>,
+    /// Emittance per root.
+    pub emission: Vec<Rgb>,
+    /// Gathering sweeps, over all solves.
+    pub sweeps: u32,
+    /// Refinement passes made.
+    pub passes: u32,
+    /// Link evaluations (each `N_s` point pairs).
+    pub evaluations: u64,
+    /// Visibility rays cast, over all evaluations.
+    pub rays: u64,
+    /// Rays behind the final links' form factors.
+    pub transport_rays: u64,
+    /// Whether `max_elements` stopped refinement early.
+    pub capped: bool,
+    /// The settings used.
+    pub settings: Settings,
+}
+
+impl Solution {
+    /// Leaves (the mesh's elements).
+    #[must_use]
+    pub fn leaves(&self) -> Vec<ElementId> {
+        self.hierarchy.leaves()
+    }
+
+    /// Emitted power `Σ_leaves A E` and absorbed power `Σ_leaves A (1 − ρ) H`, RGB.
+    #[must_use]
+    pub fn power_balance(&self) -> (Rgb, Rgb) {
+        let (mut emitted, mut absorbed) = ([0.0; 3], [0.0; 3]);
+        for e in self.leaves() {
+            let el = &self.hierarchy.elements[e as usize];
+            let (em, rho, h) =
+                (self.emission[el.root as usize], self.reflectance[el.root as usize], self.irradiance[e as usize]);
+            for c in 0..3 {
+                emitted[c] += el.area * em[c];
+                absorbed[c] += el.area * (1.0 - rho[c]) * h[c];
+            }
+        }
+        (emitted, absorbed)
+    }
+}
+
+/// Why the solver cannot run.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RadiosityError {
+    /// The scene cannot be solved (no emitter, a bad material).
+    Scene(String),
+    /// Tracing failed.
+    Backend(BackendError),
+}
+
+impl fmt::Display for RadiosityError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            RadiosityError::Scene(s) => f.write_str(s),
+            RadiosityError::Backend(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for RadiosityError {}
+
+impl From<BackendError> for RadiosityError {
+    fn from(e: BackendError) -> Self {
+        RadiosityError::Backend(e)
+    }
+}
+
+/// Checks the scene's materials: reflectance in `[0, 1)` (strictly below
+/// 1 so gathering converges), finite non-negative emittance, at least one
+/// emitter; an analytic sphere has no polygons to mesh.
+///
+/// # Errors
+/// [`RadiosityError::Scene`] naming the material.
+pub fn check_scene(scene: &Scene) -> Result<(), RadiosityError> {
+    if scene.sphere.is_some() {
+        return Err(RadiosityError::Scene(format!("{}: an analytic sphere has no polygons to mesh", scene.name)));
+    }
+    for m in &scene.materials {
+        if m.reflectance.iter().any(|r| !(0.0..1.0).contains(r)) {
+            return Err(RadiosityError::Scene(format!(
+                "{}: material {:?} has reflectance {:?}: each must be in [0, 1)",
+                scene.name, m.name, m.reflectance
+            )));
+        }
+        if m.emittance.iter().any(|e| !(e.is_finite() && *e >= 0.0)) {
+            return Err(RadiosityError::Scene(format!(
+                "{}: material {:?} has emittance {:?}: each must be finite and >= 0",
+                scene.name, m.name, m.emittance
+            )));
+        }
+    }
+    let emits =
+        scene.patches.iter().any(|p| p.area > 0.0 && scene.materials[p.material].emittance.iter().any(|&e| e > 0.0));
+    if !emits {
+        return Err(RadiosityError::Scene(format!(
+            "{}: no patch emits light (give a material an emittance, MTL Ke)",
+            scene.name
+        )));
+    }
+    Ok(())
+}
+
+/// Whether some corner of `b` lies in front of `a`'s plane.
+fn in_front(h: &Hierarchy, a: ElementId, b: ElementId) -> bool {
+    let (ea, eb) = (&h.elements[a as usize], &h.elements[b as usize]);
+    let c = ea.centre();
+    let size = ea.area.sqrt().max(eb.area.sqrt());
+    eb.points[..usize::from(eb.corners)].iter().any(|p| (*p - c).dot(ea.normal) > 1e-9 * size)
+}
+
+/// Solves `scene` with `settings`: the whole pipeline.
+///
+/// # Errors
+/// [`RadiosityError::Scene`] from [`check_scene`], tracing errors.
+pub fn solve(
+    scene: &Scene,
+    prepared: &Prepared,
+    tracer: &dyn Tracer,
+    settings: &Settings,
+) -> Result<Solution, RadiosityError> {
+    check_scene(scene)?;
+    let mut h = Hierarchy::new(scene);
+    let material = |r: &super::element::Root| &scene.materials[scene.patches[r.patch as usize].material];
+    let surfaces = Surfaces {
+        reflectance: h.roots.iter().map(|r| material(r).reflectance).collect(),
+        emission: h.roots.iter().map(|r| material(r).emittance).collect(),
+    };
+    let total_area: f64 = h.roots.iter().map(|r| h.elements[r.element as usize].area).sum();
+    let norm = if settings.oracle.is_radiosity() {
+        surfaces.emission.iter().flatten().fold(0.0f64, |m, &e| m.max(e))
+    } else {
+        h.roots
+            .iter()
+            .zip(&surfaces.emission)
+            .map(|(r, e)| h.elements[r.element as usize].area * e.iter().fold(0.0f64, |m, &x| m.max(x)))
+            .sum()
+    };
+    let sampler = Sampler {
+        prepared,
+        tracer,
+        oracle: settings.oracle,
+        samples: settings.samples,
+        seed: settings.seed,
+        total_area,
+    };
+    let roots: Vec<ElementId> = h.roots.iter().map(|r| r.element).collect();
+    let pairs: Vec<(ElementId, ElementId)> = roots
+        .iter()
+        .flat_map(|&i| roots.iter().map(move |&j| (i, j)))
+        .filter(|&(i, j)| i != j && in_front(&h, i, j) && in_front(&h, j, i))
+        .collect();
+    let (mut links, mut rays) = sampler.evaluate(&h, &pairs)?;
+    let mut evaluations = pairs.len() as u64;
+    let (mut b, mut irradiance) = (Vec::new(), Vec::new());
+    let mut sweeps =
+        gather::solve(&h, &links, &surfaces, &mut b, &mut irradiance, settings.tolerance, settings.max_sweeps);
+    let min_area = settings.min_area * total_area;
+    let mut leaves = h.roots.len();
+    let mut capped = false;
+    let mut passes = 0;
+    while passes < settings.max_passes {
+        passes += 1;
+        let mut work = std::mem::take(&mut links);
+        let mut changed = false;
+        loop {
+            let mut pairs = Vec::new();
+            for l in work {
+                let rho = surfaces.reflectance[h.elements[l.receiver as usize].root as usize];
+                let bj = b[l.source as usize];
+                let scale = (0..3).fold(0.0f64, |m, c| m.max(rho[c] * bj[c])) / norm;
+                let (ai, aj) = (h.elements[l.receiver as usize].area, h.elements[l.source as usize].area);
+                let split = if ai >= aj { l.receiver } else { l.source };
+                let can = h.elements[split as usize].area / 4.0 >= min_area;
+                // Once capped, nothing refines any more: links between
+                // existing elements could otherwise multiply without bound.
+                if capped || l.oracle * scale < settings.epsilon || !can {
+                    links.push(l);
+                    continue;
+                }
+                if h.elements[split as usize].children.is_none() {
+                    if leaves + 3 > settings.max_elements {
+                        capped = true;
+                        links.push(l);
+                        continue;
+                    }
+                    leaves += 3;
+                }
+                let parent_b = b[split as usize];
+                let first = h.split(split);
+                if b.len() < h.elements.len() {
+                    b.resize(h.elements.len(), parent_b);
+                }
+                for k in first..first + 4 {
+                    pairs.push(if split == l.receiver { (k, l.source) } else { (l.receiver, k) });
+                }
+            }
+            if pairs.is_empty() {
+                break;
+            }
+            changed = true;
+            // Links can multiply between elements already split: bound the
+            // work (and memory) at 64 evaluations per allowed element.
+            if evaluations + pairs.len() as u64 > 64 * settings.max_elements as u64 {
+                capped = true;
+            }
+            let (new, r) = sampler.evaluate(&h, &pairs)?;
+            rays += r;
+            evaluations += pairs.len() as u64;
+            work = new;
+        }
+        sweeps +=
+            gather::solve(&h, &links, &surfaces, &mut b, &mut irradiance, settings.tolerance, settings.max_sweeps);
+        if !changed || capped {
+            break;
+        }
+    }
+    let transport_rays = links.iter().map(|l| u64::from(l.rays)).sum();
+    Ok(Solution {
+        hierarchy: h,
+        links,
+        radiosity: b,
+        irradiance,
+        reflectance: surfaces.reflectance,
+        emission: surfaces.emission,
+        sweeps,
+        passes,
+        evaluations,
+        rays,
+        transport_rays,
+        capped,
+        settings: *settings,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::*;
+    use crate::scene::Material;
+    use crate::tracer::CpuTracer;
+
+    /// The closed unit cube, faces inward, split `n × n`, one material.
+    pub(crate) fn glowing_cube(n: u32, rho: f64, e: f64) -> Scene {
+        let mut s = Scene::named("glow");
+        s.materials = vec![Material { name: "glow".into(), reflectance: [rho; 3], emittance: [e; 3], mirror: false }];
+        s.add_box("cube", DVec3::ZERO, DVec3::ONE, n, true, 0);
+        s
+    }
+
+    #[test]
+    fn uniform_enclosure_converges_to_e_over_one_minus_rho() {
+        // rho = 0.5, E = 1: B = 2 everywhere; Monte Carlo form factors
+        // scatter each leaf's row sum by a few per cent at 256 samples.
+        let scene = glowing_cube(1, 0.5, 1.0);
+        let p = Prepared::new(&scene);
+        let t = CpuTracer::new(&p);
+        let s = solve(&scene, &p, &t, &Settings { epsilon: 1e-2, samples: 256, ..Settings::default() }).unwrap();
+        let leaves = s.leaves();
+        assert!(leaves.len() > 6, "the power oracle refined something");
+        let (mut ab, mut a) = (0.0, 0.0);
+        for &e in &leaves {
+            let el = &s.hierarchy.elements[e as usize];
+            let b = s.radiosity[e as usize][0];
+            assert!((b - 2.0).abs() < 0.2, "B = {b}, expected 2");
+            ab += el.area * b;
+            a += el.area;
+        }
+        assert!((ab / a - 2.0).abs() < 0.03, "mean B = {}, expected 2", ab / a);
+        let (emitted, absorbed) = s.power_balance();
+        assert!((absorbed[0] / emitted[0] - 1.0).abs() < 0.03, "{absorbed:?} vs {emitted:?}");
+    }
+}

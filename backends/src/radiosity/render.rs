@@ -1,0 +1,247 @@
+//! Pictures of a solution: what each pixel of a camera sees (first
+//! front-facing surface, through [`Tracer::closest_hit`]), the
+//! Gouraud-shaded radiosity there, and the mesh drawn as element edges.
+
+use std::collections::HashMap;
+
+use glam::{DVec2, DVec3};
+use rayon::prelude::*;
+
+use super::Rgb;
+use super::element::{ElementId, Hierarchy};
+use crate::backend::BackendError;
+use crate::camera::Camera;
+use crate::lines::Line;
+use crate::scene::Scene;
+use crate::tracer::{Hit, Prepared, Tracer};
+
+/// The surface point a pixel sees.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sight {
+    /// Root polygon hit.
+    pub root: u32,
+    /// Parameter of the point in its root.
+    pub param: DVec2,
+    /// Scene-space point.
+    pub point: DVec3,
+    /// Unit front normal.
+    pub normal: DVec3,
+    /// Scene patch.
+    pub patch: u32,
+}
+
+/// What every pixel of a `width × height` camera image sees (row-major, top row first).
+#[derive(Clone, Debug)]
+pub struct View {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// The surface each pixel centre sees, if any.
+    pub sights: Vec<Option<Sight>>,
+}
+
+/// The camera pictures use: the Cornell box's published camera (eye
+/// (278, 273, −800) looking down +z, 39.3°; its closed front wall faces away
+/// and is looked through), otherwise a view from a corner of the bounding
+/// box's front-right-top, framing the scene.
+#[must_use]
+pub fn default_camera(scene: &Scene) -> Camera {
+    if scene.name == "cornell-box" {
+        let d = DVec3::new;
+        if let Ok(c) = Camera::look_at(d(278.0, 273.0, -800.0), d(278.0, 273.0, 0.0), DVec3::Y, 39.3) {
+            return c;
+        }
+    }
+    let (lo, hi) = scene.bounds();
+    let centre = (lo + hi) * 0.5;
+    let radius = ((hi - lo) * 0.5).length().max(f64::MIN_POSITIVE);
+    let eye = centre + DVec3::new(0.9, 0.7, 1.6).normalize() * radius * 2.6;
+    let up = if (eye - centre).cross(DVec3::Y).length() < 1e-9 * radius { DVec3::Z } else { DVec3::Y };
+    Camera::look_at(eye, centre, up, 2.0 * (1.1 / 2.6f64).asin().to_degrees())
+        .unwrap_or_else(|_| Camera::framing_unit_sphere(DVec3::new(0.9, 0.7, 1.6).normalize() * 2.6))
+}
+
+/// Traces the view: pixel centres, back faces looked through (a few rounds).
+///
+/// # Errors
+/// Tracing errors.
+pub fn view(
+    scene: &Scene,
+    prepared: &Prepared,
+    tracer: &dyn Tracer,
+    h: &Hierarchy,
+    camera: &Camera,
+    size: (u32, u32),
+) -> Result<View, BackendError> {
+    let (w, hgt) = size;
+    let cam = camera.normalised(prepared);
+    let reach = cam.eye.length() + 2.0;
+    let mut lines: Vec<Line> = (0..hgt)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| cam.ray(f64::from(x) + 0.5, f64::from(y) + 0.5, w, hgt, reach))
+        .collect();
+    let mut hits = closest(tracer, &lines)?;
+    for _ in 0..8 {
+        let pending: Vec<usize> = (0..hits.len()).filter(|&i| hits[i].is_some_and(|c| c.cos >= 0.0)).collect();
+        if pending.is_empty() {
+            break;
+        }
+        let batch: Vec<Line> =
+            pending.iter().map(|&i| Line { tmin: hits[i].map_or(0.0, |c| c.t) + 1e-6, ..lines[i] }).collect();
+        let again = closest(tracer, &batch)?;
+        for (k, &i) in pending.iter().enumerate() {
+            lines[i] = batch[k];
+            hits[i] = again[k];
+        }
+    }
+    let sights = hits.iter().map(|hit| hit.filter(|c| c.cos < 0.0).map(|c| sight(scene, h, &c))).collect();
+    Ok(View { width: w, height: hgt, sights })
+}
+
+/// The scene point, root and parameter of a hit.
+#[must_use]
+pub fn sight(scene: &Scene, h: &Hierarchy, c: &Hit) -> Sight {
+    let t = scene.triangles[c.primitive as usize];
+    let (b1, b2) = (f64::from(c.barycentric[0]), f64::from(c.barycentric[1]));
+    let point = t[0] * (1.0 - b1 - b2) + t[1] * b1 + t[2] * b2;
+    let root = h.triangle_root[c.primitive as usize];
+    let param = h.roots[root as usize].shape.parameter(point);
+    let normal = DVec3::new(f64::from(c.normal[0]), f64::from(c.normal[1]), f64::from(c.normal[2]));
+    Sight { root, param, point, normal, patch: c.patch }
+}
+
+/// Closest hits of many lines, in parallel batches.
+///
+/// # Errors
+/// Tracing errors.
+pub fn closest(tracer: &dyn Tracer, lines: &[Line]) -> Result<Vec<Option<Hit>>, BackendError> {
+    let parts: Vec<Vec<Option<Hit>>> = lines
+        .par_chunks(4096)
+        .map(|c| {
+            let mut out = Vec::new();
+            tracer.closest_hit(c, &mut out).map(|()| out)
+        })
+        .collect::<Result<_, _>>()?;
+    Ok(parts.into_iter().flatten().collect())
+}
+
+/// Vertex radiosities: each leaf corner gets the area-weighted mean of the
+/// leaves of its root that share it.
+#[must_use]
+pub fn vertex_radiosity(h: &Hierarchy, radiosity: &[Rgb]) -> HashMap<(u32, i64, i64), Rgb> {
+    let mut acc: HashMap<(u32, i64, i64), (Rgb, f64)> = HashMap::new();
+    for e in h.leaves() {
+        let el = &h.elements[e as usize];
+        for p in &el.param[..usize::from(el.corners)] {
+            let a = acc.entry(key(el.root, *p)).or_insert(([0.0; 3], 0.0));
+            for (s, b) in a.0.iter_mut().zip(radiosity[e as usize]) {
+                *s += el.area * b;
+            }
+            a.1 += el.area;
+        }
+    }
+    acc.into_iter().map(|(k, (s, a))| (k, if a > 0.0 { s.map(|x| x / a) } else { s })).collect()
+}
+
+fn key(root: u32, p: DVec2) -> (u32, i64, i64) {
+    let q = |x: f64| (x * f64::from(1u32 << 30)).round() as i64;
+    (root, q(p.x), q(p.y))
+}
+
+/// Radiosity at a sight: the leaf's own value (`flat`) or interpolated from
+/// its corners' vertex values (Gouraud: bilinear on quads, linear on triangles).
+#[must_use]
+pub fn shade(
+    h: &Hierarchy,
+    radiosity: &[Rgb],
+    vertices: Option<&HashMap<(u32, i64, i64), Rgb>>,
+    s: &Sight,
+) -> (ElementId, Rgb) {
+    let e = h.locate(s.root, s.param);
+    let el = &h.elements[e as usize];
+    let Some(vs) = vertices else { return (e, radiosity[e as usize]) };
+    let v = |k: usize| vs.get(&key(el.root, el.param[k])).copied().unwrap_or(radiosity[e as usize]);
+    let p = &el.param;
+    let weights: Vec<(usize, f64)> = if el.corners == 4 {
+        let (d, q) = (p[2] - p[0], s.param - p[0]);
+        let (u, w) = ((q.x / d.x).clamp(0.0, 1.0), (q.y / d.y).clamp(0.0, 1.0));
+        vec![(0, (1.0 - u) * (1.0 - w)), (1, u * (1.0 - w)), (2, u * w), (3, (1.0 - u) * w)]
+    } else {
+        let area = (p[1] - p[0]).perp_dot(p[2] - p[0]);
+        let q = s.param - p[0];
+        let (l1, l2) = if area == 0.0 {
+            (0.0, 0.0)
+        } else {
+            ((q.perp_dot(p[2] - p[0]) / area).clamp(0.0, 1.0), ((p[1] - p[0]).perp_dot(q) / area).clamp(0.0, 1.0))
+        };
+        vec![(0, (1.0 - l1 - l2).max(0.0)), (1, l1), (2, l2)]
+    };
+    let mut out = [0.0; 3];
+    for (k, wk) in weights {
+        let vk = v(k);
+        for c in 0..3 {
+            out[c] += wk * vk[c];
+        }
+    }
+    (e, out)
+}
+
+/// The solution seen by `view`: radiosity per pixel (`None`: background)
+/// and the leaf each pixel shows.
+#[must_use]
+pub fn picture(
+    h: &Hierarchy,
+    radiosity: &[Rgb],
+    view: &View,
+    gouraud: bool,
+) -> (Vec<Option<Rgb>>, Vec<Option<ElementId>>) {
+    let vs = gouraud.then(|| vertex_radiosity(h, radiosity));
+    view.sights
+        .par_iter()
+        .map(|s| match s {
+            Some(s) => {
+                let (e, b) = shade(h, radiosity, vs.as_ref(), s);
+                (Some(b), Some(e))
+            }
+            None => (None, None),
+        })
+        .unzip()
+}
+
+/// Display value of a linear radiosity: `(x / white)^(1/2.2)`, clamped, in 0..=255.
+#[must_use]
+pub fn tonemap(x: Rgb, white: f64) -> [u8; 3] {
+    x.map(|v| (255.0 * (v / white).clamp(0.0, 1.0).powf(1.0 / 2.2)).round() as u8)
+}
+
+/// The white point of a picture: the 95th percentile of the largest channel.
+#[must_use]
+pub fn white_point(px: &[Option<Rgb>]) -> f64 {
+    let mut v: Vec<f64> = px.iter().flatten().map(|c| c[0].max(c[1]).max(c[2])).collect();
+    if v.is_empty() {
+        return 1.0;
+    }
+    v.sort_by(f64::total_cmp);
+    let w = v[((v.len() - 1) as f64 * 0.95) as usize];
+    if w > 0.0 { w } else { 1.0 }
+}
+
+/// The mesh: each leaf in its flat radiosity, its edges (where the leaf
+/// shown changes between neighbouring pixels) dark.
+#[must_use]
+pub fn mesh_picture(flat: &[Option<Rgb>], leaf: &[Option<ElementId>], width: u32, white: f64) -> Vec<[u8; 3]> {
+    let w = width as usize;
+    (0..leaf.len())
+        .map(|i| {
+            let Some(e) = leaf[i] else { return [24, 24, 28] };
+            let edge = (i % w + 1 < w && leaf[i + 1] != Some(e)) || (i + w < leaf.len() && leaf[i + w] != Some(e));
+            if edge {
+                [20, 20, 20]
+            } else {
+                let c = tonemap(flat[i].unwrap_or([0.0; 3]), white);
+                c.map(|x| (u16::from(x) * 3 / 4 + 60) as u8)
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,314 @@
+//! The image plane: pixels sampled in stratified batches, rows in parallel.
+//!
+//! Sample `i` of pixel `p` draws its random numbers from
+//! `LineRng::new(seed, p · 2^24 + i)`, and a pixel's samples are summed in
+//! index order: the same seed gives the same image bit for bit on any number
+//! of threads. A batch of `n` samples is stratified over the pixel on an
+//! `a × b` jittered grid (`a` the largest divisor of `n` not above `√n`), so
+//! a uniform run of 64 spp is 8 × 8 jittered and each adaptive batch of 8 is
+//! 4 × 2 (alternating with 2 × 4).
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::path::{PathTracer, Start};
+use crate::camera::Camera;
+use crate::lines::LineRng;
+use crate::tracer::BackendError;
+
+/// Most samples one pixel may take (the sample index has 23 bits; the 24th
+/// marks the pilot samples of unbiased adaptive runs).
+pub const MAX_PIXEL_SAMPLES: u32 = 1 << 23;
+/// Bit of the sample index set on pilot samples (decisions only).
+pub const PILOT: u32 = 1 << 23;
+/// Paths traced per call of the seam.
+const CHUNK: usize = 8192;
+
+/// Where and how an image is taken.
+#[derive(Clone, Copy, Debug)]
+pub struct View {
+    /// The camera in the tracer's normalised coordinates.
+    pub camera: Camera,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Seed of every random draw.
+    pub seed: u64,
+}
+
+/// A rendered image: mean radiance per pixel (linear RGB, row-major from the
+/// top-left) and the samples each pixel took.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Mean radiance of each pixel.
+    pub rgb: Vec<[f64; 3]>,
+    /// Samples that went into each pixel's value.
+    pub samples: Vec<u32>,
+    /// Further samples traced to take decisions only (unbiased adaptive runs).
+    pub pilot_samples: Vec<u32>,
+}
+
+impl Frame {
+    /// Average samples per pixel in the image values.
+    #[must_use]
+    pub fn mean_samples(&self) -> f64 {
+        self.samples.iter().map(|&s| f64::from(s)).sum::<f64>() / self.samples.len().max(1) as f64
+    }
+
+    /// Average samples per pixel traced in all (image and pilot).
+    #[must_use]
+    pub fn mean_traced(&self) -> f64 {
+        let p: f64 = self.pilot_samples.iter().map(|&s| f64::from(s)).sum();
+        self.mean_samples() + p / self.samples.len().max(1) as f64
+    }
+}
+
+/// The radiance samples of one pixel so far, in index order.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PixelSamples {
+    /// RGB of each sample.
+    pub rgb: Vec<[f64; 3]>,
+}
+
+/// How many samples a pixel takes: a first batch, then more while the
+/// policy asks for them.
+pub trait Policy: Sync {
+    /// Samples of the first batch.
+    fn first(&self) -> u32;
+    /// Samples of the next batch given those so far; 0 to stop.
+    fn more(&self, so_far: &PixelSamples) -> u32;
+    /// Whether decisions are taken on a separate pilot set: the pixel's value
+    /// is then the mean of as many fresh samples as the pilot run took.
+    fn unbiased(&self) -> bool {
+        false
+    }
+}
+
+/// `a × b` strata of a batch of `n` samples: `a` the largest divisor ≤ √n.
+#[must_use]
+pub fn strata(n: u32) -> (u32, u32) {
+    let mut a = (f64::from(n).sqrt() as u32).max(1);
+    while a > 1 && !n.is_multiple_of(a) {
+        a -= 1;
+    }
+    (a, n / a.max(1))
+}
+
+/// Image-plane position of sample `i` of pixel `(x, y)`, which is sample
+/// `i - first` of a batch of `n` starting at `first`.
+fn position(x: u32, y: u32, i: u32, first: u32, n: u32, rng: &LineRng, odd: bool) -> (f64, f64) {
+    let (mut a, mut b) = strata(n);
+    if odd {
+        std::mem::swap(&mut a, &mut b);
+    }
+    let c = i - first;
+    let (cx, cy) = (c % a, c / a);
+    let sx = f64::from(x) + (f64::from(cx) + rng.uniform(0)) / f64::from(a);
+    let sy = f64::from(y) + (f64::from(cy) + rng.uniform(1)) / f64::from(b);
+    (sx, sy)
+}
+
+/// One pending batch: pixel, first sample index, batch size, parity.
+#[derive(Clone, Copy)]
+struct Batch {
+    pixel: u32,
+    slot: u32,
+    first: u32,
+    n: u32,
+    odd: bool,
+    pilot: bool,
+}
+
+/// Traces the batches of a row; returns the RGB of every sample in order.
+fn trace(pt: &PathTracer, view: &View, batches: &[Batch]) -> Result<Vec<[f64; 3]>, BackendError> {
+    let mut starts = Vec::new();
+    let mut out = Vec::new();
+    let flush = |starts: &mut Vec<Start>, out: &mut Vec<[f64; 3]>| -> Result<(), BackendError> {
+        out.extend(pt.radiance(starts)?);
+        starts.clear();
+        Ok(())
+    };
+    for b in batches {
+        let (x, y) = (b.pixel % view.width, b.pixel / view.width);
+        for i in b.first..b.first + b.n {
+            let index = if b.pilot { i | PILOT } else { i };
+            let rng = LineRng::new(view.seed, (u64::from(b.pixel) << 24) | u64::from(index));
+            let (sx, sy) = position(x, y, i, b.first, b.n, &rng, b.odd);
+            let direction = view.camera.direction(sx, sy, view.width, view.height);
+            starts.push(Start { origin: view.camera.eye, direction, rng });
+            if starts.len() >= CHUNK {
+                flush(&mut starts, &mut out)?;
+            }
+        }
+    }
+    flush(&mut starts, &mut out)?;
+    Ok(out)
+}
+
+/// Sampled state of one pixel of the row being rendered.
+struct Pixel {
+    samples: PixelSamples,
+    batches: u32,
+    next: u32,
+    image: u32,
+}
+
+/// Renders `view` with `policy` deciding each pixel's samples; `progress`
+/// is called with (rows done, rows).
+///
+/// # Errors
+/// Backend failures only.
+pub fn render(
+    pt: &PathTracer,
+    view: &View,
+    policy: &dyn Policy,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<Frame, BackendError> {
+    let (w, h) = (view.width, view.height);
+    let done = AtomicU64::new(0);
+    let rows: Vec<Vec<([f64; 3], u32, u32)>> = (0..h)
+        .into_par_iter()
+        .map(|y| {
+            let pixels: Vec<u32> = (y * w..(y + 1) * w).collect();
+            let row = render_pixels(pt, view, policy, &pixels);
+            progress(done.fetch_add(1, Ordering::Relaxed) + 1, u64::from(h));
+            row
+        })
+        .collect::<Result<_, _>>()?;
+    let mut frame = Frame {
+        width: w,
+        height: h,
+        rgb: Vec::with_capacity((w * h) as usize),
+        samples: Vec::with_capacity((w * h) as usize),
+        pilot_samples: Vec::with_capacity((w * h) as usize),
+    };
+    for (rgb, n, pilot) in rows.into_iter().flatten() {
+        frame.rgb.push(rgb);
+        frame.samples.push(n);
+        frame.pilot_samples.push(pilot);
+    }
+    Ok(frame)
+}
+
+/// Samples taken by each of `pixels` (indices `y · width + x`) under
+/// `policy`: what [`render`] would spend there (the pixels of a pilot run).
+///
+/// # Errors
+/// Backend failures only.
+pub fn sample_counts(
+    pt: &PathTracer,
+    view: &View,
+    policy: &dyn Policy,
+    pixels: &[u32],
+) -> Result<Vec<u32>, BackendError> {
+    let parts: Vec<Vec<([f64; 3], u32, u32)>> =
+        pixels.par_chunks(64).map(|c| render_pixels(pt, view, policy, c)).collect::<Result<_, _>>()?;
+    Ok(parts.into_iter().flatten().map(|(_, n, pilot)| n.max(pilot)).collect())
+}
+
+/// Renders the given pixels (indices `y · width + x`): (mean, image samples, pilot samples).
+fn render_pixels(
+    pt: &PathTracer,
+    view: &View,
+    policy: &dyn Policy,
+    ids: &[u32],
+) -> Result<Vec<([f64; 3], u32, u32)>, BackendError> {
+    let unbiased = policy.unbiased();
+    let first = policy.first().clamp(1, MAX_PIXEL_SAMPLES);
+    let mut pixels: Vec<Pixel> =
+        ids.iter().map(|_| Pixel { samples: PixelSamples::default(), batches: 0, next: first, image: 0 }).collect();
+    // Decision rounds: every pixel still asking gets its next batch.
+    loop {
+        let batches: Vec<Batch> = pixels
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.next > 0)
+            .map(|(k, p)| Batch {
+                pixel: ids[k],
+                slot: k as u32,
+                first: p.samples.rgb.len() as u32,
+                n: p.next,
+                odd: p.batches % 2 == 1,
+                pilot: unbiased,
+            })
+            .collect();
+        if batches.is_empty() {
+            break;
+        }
+        let rgb = trace(pt, view, &batches)?;
+        let mut k = 0;
+        for b in &batches {
+            let p = &mut pixels[b.slot as usize];
+            p.samples.rgb.extend_from_slice(&rgb[k..k + b.n as usize]);
+            k += b.n as usize;
+            p.batches += 1;
+            let room = MAX_PIXEL_SAMPLES - p.samples.rgb.len() as u32;
+            p.next = policy.more(&p.samples).min(room);
+        }
+    }
+    if !unbiased {
+        return Ok(pixels.into_iter().map(|p| (mean(&p.samples.rgb), p.samples.rgb.len() as u32, 0)).collect());
+    }
+    // Unbiased: as many fresh samples as the pilot took, in one stratified batch.
+    let batches: Vec<Batch> = pixels
+        .iter_mut()
+        .enumerate()
+        .map(|(k, p)| {
+            p.image = p.samples.rgb.len() as u32;
+            Batch { pixel: ids[k], slot: k as u32, first: 0, n: p.image, odd: false, pilot: false }
+        })
+        .collect();
+    let rgb = trace(pt, view, &batches)?;
+    let mut k = 0;
+    Ok(pixels
+        .into_iter()
+        .map(|p| {
+            let n = p.image as usize;
+            let m = mean(&rgb[k..k + n]);
+            k += n;
+            (m, p.image, p.samples.rgb.len() as u32)
+        })
+        .collect())
+}
+
+fn mean(s: &[[f64; 3]]) -> [f64; 3] {
+    let mut acc = DVec3::ZERO;
+    for c in s {
+        acc += DVec3::from_array(*c);
+    }
+    (acc / s.len().max(1) as f64).to_array()
+}
+
+/// A fixed number of samples per pixel in one stratified batch.
+#[derive(Clone, Copy, Debug)]
+pub struct Uniform(pub u32);
+
+impl Policy for Uniform {
+    fn first(&self) -> u32 {
+        self.0
+    }
+    fn more(&self, _: &PixelSamples) -> u32 {
+        0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strata_are_near_square() {
+        assert_eq!(strata(64), (8, 8));
+        assert_eq!(strata(8), (2, 4));
+        assert_eq!(strata(60), (6, 10));
+        assert_eq!(strata(7), (1, 7));
+        assert_eq!(strata(1), (1, 1));
+    }
+}

@@ -1,0 +1,163 @@
+//! A path tracer driven by the pixel criteria of Part IV (adaptive
+//! sampling) and Part III-IV §5 (f-divergence criteria).
+//!
+//! * [`path`]: the path tracer itself (next-event estimation with MIS,
+//!   mirrors, Russian roulette), traced as a wavefront through the
+//!   [`Tracer`] seam, so every backend renders the same way.
+//! * [`criteria`]: the refinement criteria, each a call into
+//!   `itgfx_core::pixel`; [`tune`]: thresholds for an equal average budget.
+//! * [`frame`]: the image plane, stratified batches per pixel, rows in
+//!   parallel, the same image for any thread count.
+//! * [`lights`]: area lights and materials; [`views`]: default cameras and
+//!   the camera-inside-an-object check; [`room`]: the `mirror-room` scene.
+//!
+//! Radiance is linear RGB in f64; the criteria read the luminance `Y` of
+//! linear sRGB (Part III-IV §5.1) or the channels.
+
+pub mod criteria;
+pub mod frame;
+pub mod lights;
+pub mod path;
+pub mod room;
+pub mod tune;
+pub mod views;
+
+use std::fmt;
+
+use crate::camera::Camera;
+use crate::scene::Scene;
+use crate::tracer::{BackendError, Prepared, Tracer};
+pub use criteria::{Adaptive, Criterion};
+pub use frame::{Frame, Policy, Uniform, View};
+pub use lights::{Lights, Surfaces};
+pub use path::PathTracer;
+pub use tune::Tuned;
+
+/// Why a scene cannot be rendered.
+#[derive(Debug)]
+pub enum RenderError {
+    /// No material emits.
+    NoLights(String),
+    /// The analytic sphere has no triangles to shade.
+    Unsupported(String),
+    /// The camera is inside a closed object.
+    CameraInside(String),
+    /// A backend failure.
+    Backend(BackendError),
+}
+
+impl fmt::Display for RenderError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::NoLights(s) | Self::Unsupported(s) | Self::CameraInside(s) => f.write_str(s),
+            Self::Backend(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for RenderError {}
+
+impl From<BackendError> for RenderError {
+    fn from(e: BackendError) -> Self {
+        Self::Backend(e)
+    }
+}
+
+/// A scene's materials and lights, checked for rendering.
+pub struct Shading {
+    /// Materials by triangle.
+    pub surfaces: Surfaces,
+    /// Area lights.
+    pub lights: Lights,
+}
+
+impl Shading {
+    /// Materials and lights of `scene`.
+    ///
+    /// # Errors
+    /// [`RenderError::NoLights`] when nothing emits,
+    /// [`RenderError::Unsupported`] for the analytic sphere.
+    pub fn new(scene: &Scene, prepared: &Prepared) -> Result<Self, RenderError> {
+        if scene.sphere.is_some() {
+            return Err(RenderError::Unsupported(format!(
+                "{}: the analytic sphere cannot be rendered (use geosphere or a mesh)",
+                scene.name
+            )));
+        }
+        let lights = Lights::new(scene, prepared).ok_or_else(|| {
+            RenderError::NoLights(format!(
+                "{}: no light: no material emits (give one a non-zero Ke in the MTL file)",
+                scene.name
+            ))
+        })?;
+        Ok(Self { surfaces: Surfaces::new(scene), lights })
+    }
+}
+
+/// How pixels are sampled.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Sampling {
+    /// The same number of stratified samples in every pixel.
+    Uniform(u32),
+    /// Batches of 8 while a criterion asks for more.
+    Adaptive {
+        /// The criterion.
+        criterion: Criterion,
+        /// Average samples per pixel to spend (the threshold is tuned to it).
+        spp: u32,
+        /// Most samples one pixel takes.
+        max: u32,
+        /// Decide on a separate pilot set, estimate from fresh samples.
+        unbiased: bool,
+        /// A given threshold instead of tuning one.
+        threshold: Option<f64>,
+    },
+}
+
+/// A rendered frame and how its sampler was set.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Rendered {
+    /// The image.
+    pub frame: Frame,
+    /// The threshold used by an adaptive sampler.
+    pub threshold: Option<f64>,
+    /// The tuning pilot, when the threshold was tuned.
+    pub tuned: Option<Tuned>,
+}
+
+/// Renders `scene` seen by `camera` (scene units): checks the camera, tunes
+/// an adaptive sampler's threshold to its budget, then traces. `progress`
+/// gets (rows done, rows).
+///
+/// # Errors
+/// [`RenderError`].
+#[allow(clippy::too_many_arguments)]
+pub fn render(
+    tracer: &dyn Tracer,
+    scene: &Scene,
+    prepared: &Prepared,
+    shading: &Shading,
+    camera: &Camera,
+    size: (u32, u32),
+    seed: u64,
+    sampling: &Sampling,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<Rendered, RenderError> {
+    let camera = views::check_camera(tracer, scene, prepared, camera)?;
+    let pt = PathTracer { tracer, prepared, surfaces: &shading.surfaces, lights: &shading.lights, max_depth: 256 };
+    let view = View { camera, width: size.0, height: size.1, seed };
+    match *sampling {
+        Sampling::Uniform(n) => {
+            Ok(Rendered { frame: frame::render(&pt, &view, &Uniform(n), progress)?, threshold: None, tuned: None })
+        }
+        Sampling::Adaptive { criterion, spp, max, unbiased, threshold } => {
+            let tuned = match threshold {
+                Some(_) => None,
+                None => Some(tune::tune(&pt, &view, criterion, f64::from(spp), max)?),
+            };
+            let threshold = threshold.or(tuned.map(|t| t.threshold)).unwrap_or(0.0);
+            let policy = Adaptive { criterion, threshold, max, unbiased };
+            Ok(Rendered { frame: frame::render(&pt, &view, &policy, progress)?, threshold: Some(threshold), tuned })
+        }
+    }
+}

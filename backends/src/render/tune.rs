@@ -1,0 +1,69 @@
+//! Thresholds for an equal budget: the tutorial compares criteria at the
+//! same average number of rays per pixel (Part IV Table 2, III-IV Table 3:
+//! 60). The threshold is found by bisection on `log ε` over a pilot: a
+//! regular grid of at most 1,024 pixels of the same view, rendered with a
+//! different seed, so the final image's own samples never tune it and no
+//! reference image is looked at.
+
+use super::criteria::{Adaptive, Criterion};
+use super::frame::{View, sample_counts};
+use super::path::PathTracer;
+use crate::tracer::BackendError;
+
+/// Pixels of the pilot grid, at most.
+const PILOT_PIXELS: u32 = 1024;
+/// Bisection steps on `log ε`.
+const STEPS: u32 = 16;
+
+/// Result of tuning.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tuned {
+    /// The threshold found.
+    pub threshold: f64,
+    /// Average samples per pixel it spends on the pilot.
+    pub pilot_mean: f64,
+    /// Pilot pixels.
+    pub pilot_pixels: u32,
+}
+
+/// The pilot pixels: a regular grid over the image.
+#[must_use]
+pub fn pilot_pixels(width: u32, height: u32) -> Vec<u32> {
+    let total = u64::from(width) * u64::from(height);
+    let stride = ((total as f64 / f64::from(PILOT_PIXELS)).sqrt().ceil() as u32).max(1);
+    let mut out = Vec::new();
+    for y in (stride / 2..height).step_by(stride as usize) {
+        for x in (stride / 2..width).step_by(stride as usize) {
+            out.push(y * width + x);
+        }
+    }
+    out
+}
+
+/// The threshold at which `criterion` spends on average `target` samples
+/// per pixel (capped at `max` per pixel) on the pilot grid. An unbiased
+/// run spends the same: its pilot decides exactly as a plain run would.
+///
+/// # Errors
+/// Backend failures only.
+pub fn tune(pt: &PathTracer, view: &View, criterion: Criterion, target: f64, max: u32) -> Result<Tuned, BackendError> {
+    let pilot = View { seed: view.seed ^ 0x005E_ED0F_7E57, ..*view };
+    let pixels = pilot_pixels(view.width, view.height);
+    let mean = |eps: f64| -> Result<f64, BackendError> {
+        let p = Adaptive { criterion, threshold: eps, max, unbiased: false };
+        let n = sample_counts(pt, &pilot, &p, &pixels)?;
+        Ok(n.iter().map(|&v| f64::from(v)).sum::<f64>() / n.len().max(1) as f64)
+    };
+    // Spend falls as ε grows: bracket in log space, then bisect.
+    let (mut lo, mut hi) = (-32.0f64, 6.0f64);
+    let (mut best, mut best_mean) = (hi.exp(), f64::NAN);
+    for _ in 0..STEPS {
+        let mid = 0.5 * (lo + hi);
+        let m = mean(mid.exp())?;
+        if best_mean.is_nan() || (m - target).abs() < (best_mean - target).abs() {
+            (best, best_mean) = (mid.exp(), m);
+        }
+        if m > target { lo = mid } else { hi = mid }
+    }
+    Ok(Tuned { threshold: best, pilot_mean: best_mean, pilot_pixels: pixels.len() as u32 })
+}

@@ -1,0 +1,111 @@
+//! Cameras for rendering: the default view of each scene and the check that
+//! a camera is not inside a closed object.
+
+use glam::DVec3;
+
+use crate::camera::Camera;
+use crate::lines::Line;
+use crate::scene::Scene;
+use crate::tracer::{BackendError, Prepared, Tracer};
+
+/// Probe rays cast from the eye by [`eye_place`].
+const PROBES: u32 = 64;
+
+/// The default camera of a scene, in scene units: the built-ins' own views
+/// (`cornell-box` from just inside its closed front wall, `mirror-room` from
+/// its front wall), else a view from outside framing the bounding box.
+#[must_use]
+pub fn default_camera(scene: &Scene) -> Camera {
+    let d = DVec3::new;
+    let base = scene.name.split(['/', ':']).next().unwrap_or_default();
+    let (eye, target, fov) = match base {
+        "cornell-box" => (d(278.0, 273.0, 15.0), d(278.0, 273.0, 559.2), 54.0),
+        "mirror-room" => (d(2.0, 1.45, 0.25), d(2.0, 1.05, 5.0), 62.0),
+        _ => {
+            let (lo, hi) = scene.bounds();
+            let (c, r) = ((lo + hi) * 0.5, ((hi - lo) * 0.5).length().max(f64::MIN_POSITIVE));
+            (c + d(0.35, 0.45, 2.6).normalize() * (2.8 * r), c, 45.0)
+        }
+    };
+    Camera::look_at(eye, target, DVec3::Y, fov).expect("built-in cameras are valid")
+}
+
+/// Where a camera's eye is, as 64 probe rays spread over the sphere see it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum EyePlace {
+    /// Most probes meet the front of a surface, or nothing.
+    Clear,
+    /// At least 90% of the probes hit something and most of those meet the
+    /// back of a surface: the eye is inside a closed object.
+    Inside {
+        /// Share of the hits on back faces.
+        share: f64,
+        /// First back-face patch met.
+        patch: u32,
+    },
+    /// Some probes escape and most hits are on back faces: the eye is
+    /// outside a closed scene (a room seen from outside its walls).
+    Outside {
+        /// Share of the hits on back faces.
+        share: f64,
+        /// First back-face patch met.
+        patch: u32,
+    },
+}
+
+/// Where the eye of `camera` (normalised coordinates) is.
+///
+/// # Errors
+/// Backend failures only.
+pub fn eye_place(tracer: &dyn Tracer, camera: &Camera) -> Result<EyePlace, BackendError> {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let lines: Vec<Line> = (0..PROBES)
+        .map(|i| {
+            let z = 1.0 - (f64::from(i) + 0.5) * 2.0 / f64::from(PROBES);
+            let r = (1.0 - z * z).sqrt();
+            let phi = golden * f64::from(i);
+            Line::ray(camera.eye, DVec3::new(r * phi.cos(), r * phi.sin(), z), 0.0, 1e5)
+        })
+        .collect();
+    let mut hits = Vec::new();
+    tracer.closest_hit(&lines, &mut hits)?;
+    let met: Vec<_> = hits.iter().flatten().collect();
+    let back: Vec<u32> = met.iter().filter(|h| h.cos > 0.0).map(|h| h.patch).collect();
+    if met.is_empty() || 2 * back.len() <= met.len() {
+        return Ok(EyePlace::Clear);
+    }
+    let share = back.len() as f64 / met.len() as f64;
+    Ok(if 10 * met.len() >= 9 * PROBES as usize {
+        EyePlace::Inside { share, patch: back[0] }
+    } else {
+        EyePlace::Outside { share, patch: back[0] }
+    })
+}
+
+/// The camera in normalised coordinates, refused when its eye is inside a
+/// closed object or outside a closed scene (see [`eye_place`]).
+///
+/// # Errors
+/// A one-line reason.
+pub fn check_camera(
+    tracer: &dyn Tracer,
+    scene: &Scene,
+    prepared: &Prepared,
+    camera: &Camera,
+) -> Result<Camera, super::RenderError> {
+    let c = camera.normalised(prepared);
+    let e = camera.eye;
+    let (what, share, patch) = match eye_place(tracer, &c).map_err(super::RenderError::Backend)? {
+        EyePlace::Clear => return Ok(c),
+        EyePlace::Inside { share, patch } => ("is inside a closed object", share, patch),
+        EyePlace::Outside { share, patch } => ("is outside the closed scene", share, patch),
+    };
+    Err(super::RenderError::CameraInside(format!(
+        "camera eye ({}, {}, {}) {what}: {:.0}% of the surfaces seen from it are seen from behind (first: patch {:?})",
+        e.x,
+        e.y,
+        e.z,
+        share * 100.0,
+        scene.patches[patch as usize].name
+    )))
+}

@@ -1,0 +1,269 @@
+//! Built-in volumes that need no download.
+//!
+//! * `hydrogen[:n,l,m[,N]]`: the electron density `|ψ_nlm|²` of the hydrogen
+//!   atom (atomic units), sampled on `N³` voxels (like the classic 128³
+//!   "hydrogen" data set of Part VI Fig. 1). With complex orbitals the
+//!   density is `R_nl(r)² P_l^|m|(cos θ)²`: symmetric about the z axis and
+//!   under `z → −z`, which the tests use. The value stored is the amplitude
+//!   `√(ρ/ρ_max)` in `[0, 1]`, which compresses the density's range as the
+//!   classic 8-bit data set does.
+//! * `phantom[:N]`: five labelled objects in `N³` voxels: an ellipsoidal
+//!   shell (0.3), a central sphere (0.6), a sphere (0.9) and a cube (0.8)
+//!   side by side, and a rod (1.0).
+//! * `cube[:N]`: a solid cube filling the middle half of each axis (value
+//!   1, else 0): with a step transfer function, the volume counterpart of the
+//!   polygonal cube of Part V.
+//! * `sphere[:N]`: a radial Gaussian, value `exp(−8 r²)`: every direction is
+//!   equivalent.
+//!
+//! Every built-in spans [`REFERENCE_SIZE`] world units whatever `N`, so its
+//! voxel spacing is `64/N`: opacity being per world unit, `hydrogen` at
+//! `N = 32` and at `N = 64` are the same semi-transparent object sampled
+//! twice as finely (the resolution test of VMI against VE needs that).
+
+use glam::DVec3;
+
+use super::{Volume, VolumeError};
+
+/// One built-in volume: its syntax and what it is.
+#[derive(Clone, Copy, Debug)]
+pub struct BuiltInVolume {
+    /// How to write it.
+    pub syntax: &'static str,
+    /// What it is.
+    pub description: &'static str,
+}
+
+/// The built-in volumes.
+pub const BUILT_IN: &[BuiltInVolume] = &[
+    BuiltInVolume {
+        syntax: "hydrogen[:n,l,m[,N]]",
+        description: "hydrogen orbital |psi_nlm|^2 on N^3 voxels (default 3,2,0,64), stored as sqrt(rho/max)",
+    },
+    BuiltInVolume { syntax: "phantom[:N]", description: "five labelled objects on N^3 voxels (default 64)" },
+    BuiltInVolume { syntax: "cube[:N]", description: "a solid cube, the middle half of each axis (default 32)" },
+    BuiltInVolume { syntax: "sphere[:N]", description: "a radial Gaussian exp(-8 r^2) (default 32)" },
+];
+
+/// Extent of every built-in in world units: a voxel of a built-in at
+/// `N = 64` is one unit wide.
+pub const REFERENCE_SIZE: f64 = 64.0;
+
+/// Smallest and largest `N` of a built-in.
+pub const SIZES: (usize, usize) = (4, 512);
+
+fn numbers(name: &str, args: Option<&str>) -> Result<Vec<i64>, VolumeError> {
+    let Some(a) = args else { return Ok(Vec::new()) };
+    a.split(',')
+        .map(|s| s.trim().parse::<i64>().map_err(|_| VolumeError::new(format!("{name}: {s:?} is not an integer"))))
+        .collect()
+}
+
+fn size(name: &str, n: i64) -> Result<usize, VolumeError> {
+    if n < SIZES.0 as i64 || n > SIZES.1 as i64 {
+        return Err(VolumeError::new(format!("{name}: N = {n} must be in {}..={}", SIZES.0, SIZES.1)));
+    }
+    Ok(n as usize)
+}
+
+/// Whether `spec` names a built-in volume (by its name before `:`).
+#[must_use]
+pub fn is_built_in(spec: &str) -> bool {
+    let name = spec.split(':').next().unwrap_or("");
+    BUILT_IN.iter().any(|b| b.syntax.split(['[', ':']).next() == Some(name))
+}
+
+/// Builds a built-in volume from its specification.
+///
+/// # Errors
+/// An unknown name, bad arguments or sizes, one line.
+pub fn built_in(spec: &str) -> Result<Volume, VolumeError> {
+    let (name, args) = match spec.split_once(':') {
+        Some((n, a)) => (n, Some(a)),
+        None => (spec, None),
+    };
+    let a = numbers(name, args)?;
+    match name {
+        "hydrogen" => {
+            let (n, l, m, size_n) = match a.as_slice() {
+                [] => (3, 2, 0, 64),
+                [n, l, m] => (*n, *l, *m, 64),
+                [n, l, m, s] => (*n, *l, *m, *s),
+                _ => return Err(VolumeError::new("hydrogen: give n,l,m or n,l,m,N")),
+            };
+            if !(1..=8).contains(&n) || l < 0 || l >= n || m.abs() > l {
+                return Err(VolumeError::new(format!("hydrogen:{n},{l},{m}: need 1 <= n <= 8, 0 <= l < n, |m| <= l")));
+            }
+            Ok(hydrogen(n as u32, l as u32, m.unsigned_abs() as u32, size("hydrogen", size_n)?))
+        }
+        "phantom" | "cube" | "sphere" => {
+            let default = if name == "phantom" { 64 } else { 32 };
+            let s = match a.as_slice() {
+                [] => default,
+                [s] => *s,
+                _ => return Err(VolumeError::new(format!("{name}: give one size N"))),
+            };
+            let s = size(name, s)?;
+            Ok(match name {
+                "phantom" => phantom(s),
+                "cube" => field(&format!("cube:{s}"), s, |p| {
+                    if p.x.abs() < 0.5 && p.y.abs() < 0.5 && p.z.abs() < 0.5 { 1.0 } else { 0.0 }
+                }),
+                _ => field(&format!("sphere:{s}"), s, |p| (-8.0 * p.length_squared()).exp()),
+            })
+        }
+        _ => Err(VolumeError::new(format!(
+            "{spec:?}: not a built-in volume ({}) nor a volume file",
+            BUILT_IN.iter().map(|b| b.syntax).collect::<Vec<_>>().join(", ")
+        ))),
+    }
+}
+
+/// A field over `[-1, 1]³` sampled at the centres of `n³` voxels.
+fn field(name: &str, n: usize, mut f: impl FnMut(DVec3) -> f64) -> Volume {
+    let mut data = Vec::with_capacity(n * n * n);
+    let c = |i: usize| (i as f64 + 0.5) / n as f64 * 2.0 - 1.0;
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                data.push(f(DVec3::new(c(i), c(j), c(k))) as f32);
+            }
+        }
+    }
+    // 64 world units across whatever the resolution: opacity is per world
+    // unit (see `raycast`), so a built-in resampled keeps its optical depth.
+    let h = REFERENCE_SIZE / n as f64;
+    Volume { name: name.into(), dims: [n; 3], spacing: [h; 3], data, labels: None, label_names: Vec::new() }
+}
+
+/// Generalised Laguerre polynomial `L_k^(α)(x)` by its three-term recurrence.
+fn laguerre(k: u32, alpha: f64, x: f64) -> f64 {
+    let (mut a, mut b) = (1.0, 1.0 + alpha - x);
+    if k == 0 {
+        return a;
+    }
+    for i in 1..k {
+        let i = f64::from(i);
+        let c = ((2.0 * i + 1.0 + alpha - x) * b - (i + alpha) * a) / (i + 1.0);
+        a = b;
+        b = c;
+    }
+    b
+}
+
+/// Associated Legendre function `P_l^m(x)` (`m ≥ 0`, up to sign).
+fn legendre(l: u32, m: u32, x: f64) -> f64 {
+    let s = (1.0 - x * x).max(0.0).sqrt();
+    let mut pmm = 1.0;
+    for i in 0..m {
+        pmm *= f64::from(2 * i + 1) * s;
+    }
+    if l == m {
+        return pmm;
+    }
+    let mut pm1 = x * f64::from(2 * m + 1) * pmm;
+    for ll in m + 2..=l {
+        let p = (f64::from(2 * ll - 1) * x * pm1 - f64::from(ll + m - 1) * pmm) / f64::from(ll - m);
+        pmm = pm1;
+        pm1 = p;
+    }
+    pm1
+}
+
+/// `|ψ_nlm|²` (up to a constant) at `p` in Bohr radii.
+fn density(n: u32, l: u32, m: u32, p: DVec3) -> f64 {
+    let r = p.length();
+    let rho = 2.0 * r / f64::from(n);
+    let radial = (-rho / 2.0).exp() * rho.powi(l as i32) * laguerre(n - l - 1, f64::from(2 * l + 1), rho);
+    let ct = if r > 0.0 { p.z / r } else { 1.0 };
+    let angular = legendre(l, m, ct);
+    (radial * angular).powi(2)
+}
+
+/// The hydrogen orbital `n, l, m` on `size³` voxels over a cube of half
+/// width `1.5 n² + 3n + 2` Bohr radii (where the density has fallen to
+/// about 10⁻³ of its peak or less).
+fn hydrogen(n: u32, l: u32, m: u32, size: usize) -> Volume {
+    let half = 1.5 * f64::from(n * n) + 3.0 * f64::from(n) + 2.0;
+    let mut v = field(&format!("hydrogen:{n},{l},{m},{size}"), size, |p| density(n, l, m, p * half));
+    let max = v.data.iter().copied().fold(0.0f32, f32::max);
+    if max > 0.0 {
+        v.data.iter_mut().for_each(|x| *x = (*x / max).sqrt());
+    }
+    v
+}
+
+/// The labelled phantom: (label name, value, inside test) per object, in
+/// order of precedence (later objects overwrite earlier ones).
+type Object = (&'static str, f32, fn(DVec3) -> bool);
+
+const OBJECTS: [Object; 5] = [
+    ("shell", 0.3, |p| {
+        let e = |a: f64, b: f64, c: f64| (p.x / a).powi(2) + (p.y / b).powi(2) + (p.z / c).powi(2);
+        e(0.9, 0.75, 0.6) <= 1.0 && e(0.8, 0.65, 0.5) > 1.0
+    }),
+    ("core", 0.6, |p| p.length() <= 0.3),
+    ("left", 0.9, |p| (p - DVec3::new(-0.5, 0.15, 0.0)).length() <= 0.15),
+    ("right", 0.8, |p| {
+        let d = p - DVec3::new(0.5, 0.15, 0.0);
+        d.x.abs() <= 0.12 && d.y.abs() <= 0.12 && d.z.abs() <= 0.12
+    }),
+    ("rod", 1.0, |p| ((p.x).powi(2) + (p.y + 0.45).powi(2)).sqrt() <= 0.07 && p.z.abs() <= 0.45),
+];
+
+fn phantom(n: usize) -> Volume {
+    let mut labels = Vec::with_capacity(n * n * n);
+    let mut v = field(&format!("phantom:{n}"), n, |p| {
+        let mut value = 0.0;
+        let mut label = 0u8;
+        for (k, (_, val, inside)) in OBJECTS.iter().enumerate() {
+            if inside(p) {
+                value = *val;
+                label = k as u8 + 1;
+            }
+        }
+        labels.push(label);
+        f64::from(value)
+    });
+    v.labels = Some(labels);
+    v.label_names = OBJECTS.iter().map(|o| o.0.to_string()).collect();
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hydrogen_ground_state_is_radial() {
+        // 1s: ρ ∝ e^{-2r}.
+        let a = density(1, 0, 0, DVec3::new(1.0, 0.0, 0.0));
+        let b = density(1, 0, 0, DVec3::new(0.0, 0.0, 2.0));
+        assert!((b / a - (-2.0f64).exp()).abs() < 1e-12);
+        // 2p_z (n=2, l=1, m=0): node in the xy plane, ρ ∝ r² e^{-r} cos²θ.
+        assert!(density(2, 1, 0, DVec3::new(1.0, 1.0, 0.0)).abs() < 1e-20);
+        let (p, q) = (DVec3::new(0.0, 0.0, 1.0), DVec3::new(0.0, 0.0, 2.0));
+        let ratio = density(2, 1, 0, q) / density(2, 1, 0, p);
+        assert!((ratio - 4.0 * (-1.0f64).exp()).abs() < 1e-12, "{ratio}");
+        // 2s has a radial node at r = 2 (L_1^1(ρ) = 2 − ρ, ρ = r).
+        assert!(density(2, 0, 0, DVec3::new(2.0, 0.0, 0.0)).abs() < 1e-20);
+    }
+
+    #[test]
+    fn specs() {
+        let v = built_in("hydrogen:2,1,1,8").unwrap();
+        assert_eq!(v.dims, [8; 3]);
+        assert!((v.range().1 - 1.0).abs() < 1e-6);
+        assert!(built_in("hydrogen:2,2,0").is_err());
+        assert!(built_in("hydrogen:2,1,2").is_err());
+        assert!(built_in("phantom:3").is_err());
+        assert!(built_in("phantom:x").is_err());
+        assert!(built_in("nothing").is_err());
+        let p = built_in("phantom:16").unwrap();
+        let labels = p.labels.as_ref().unwrap();
+        for l in 1..=5u8 {
+            assert!(labels.contains(&l), "label {l} missing at 16^3");
+        }
+        assert!(is_built_in("cube:8") && !is_built_in("x.raw"));
+    }
+}

@@ -1,0 +1,258 @@
+//! The viewpoint channel over voxels `V → Z` and its measures (Part VI §2.2
+//! with the measures of Part V §3).
+//!
+//! Row `v` holds `vis(z|v)` from [`Caster::visibility`]; it is stored in the
+//! polygonal code's [`ViewpointChannel`] (voxels as patches) and normalised
+//! by [`ViewpointAnalysis`], so `p(z|v)`, `p(v)`, `p(z)`, `H(Z|v)`, VMI and
+//! `I(V;Z)` are the very functions used for meshes. Added here, from the
+//! same sparse channel of the core:
+//! * `H(V)`, the entropy of `p(V)`;
+//! * VoMI, the voxel mutual information `I(z;V) = Σ_v p(v|z) log(p(v|z)/p(v))`
+//!   (the output specific information, as polygonal mutual information);
+//! * colour VoMI: the terms of VoMI weighted by a colour per viewpoint
+//!   ([`viewpoint_colour`]), so a voxel takes the colours of the viewpoints
+//!   that tell most about it;
+//! * EVMI: VMI against a target `p'(Z)` that weights `p(z)` by an
+//!   importance, the voxel's opacity or its VoMI (or a focus object,
+//!   Viola et al. 2006), through the viewpoint code's
+//!   [`importance_information`] (with its 1% floor of `p(z)`).
+
+use glam::DVec3;
+use itgfx_core::{Base, Error, entropy};
+use rayon::prelude::*;
+
+use super::raycast::{Caster, View};
+use crate::viewpoint::selection::importance_information;
+use crate::viewpoint::{ViewpointAnalysis, ViewpointChannel, ViewpointMeasures, ViewpointWeights};
+
+/// How the channel is sampled.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VolumeChannelOptions {
+    /// Viewpoint directions (unit).
+    pub directions: Vec<DVec3>,
+    /// Viewpoint distance in bounding-sphere radii (> 1).
+    pub distance: f64,
+    /// Image side: `size²` rays per viewpoint.
+    pub size: u32,
+}
+
+/// Voxels that can receive visibility: those within one voxel (in each
+/// axis) of a voxel of positive opacity, since a sample of positive opacity
+/// lies in a cell with such a corner and shares its visibility among that
+/// cell's eight corners. Counted by a separable 3×3×3 dilation.
+#[must_use]
+pub fn seeable_voxels(caster: &Caster<'_>) -> usize {
+    let [nx, ny, nz] = caster.volume.dims;
+    let mut m: Vec<bool> = caster.voxel_opacity.iter().map(|&a| a > 0.0).collect();
+    let strides = [(1, nx), (nx, ny), (nx * ny, nz)];
+    for (stride, n) in strides {
+        let src = m.clone();
+        for (i, out) in m.iter_mut().enumerate() {
+            let c = (i / stride) % n;
+            *out = src[i] || (c > 0 && src[i - stride]) || (c + 1 < n && src[i + stride]);
+        }
+    }
+    m.iter().filter(|&&x| x).count()
+}
+
+/// Bytes of memory the channel may need at most: one entry (index and
+/// value, twice: the channel and its normalised copy) per viewpoint and
+/// seeable voxel ([`seeable_voxels`]), plus a dense row per viewpoint in
+/// flight (two per worker thread).
+#[must_use]
+pub fn channel_memory(caster: &Caster<'_>, viewpoints: usize) -> u64 {
+    let candidates = seeable_voxels(caster) as u64;
+    let threads = rayon::current_num_threads() as u64 * 2;
+    viewpoints as u64 * candidates * 2 * 12 + threads * caster.volume.voxels() as u64 * 8
+}
+
+/// Casts `size²` rays from every viewpoint and gathers `vis(z|v)`.
+/// Viewpoints are cast in parallel, each by one thread in a fixed order, so
+/// the numbers do not depend on the thread count. `progress(done, total)`
+/// counts viewpoints.
+#[must_use]
+pub fn volume_channel(
+    caster: &Caster<'_>,
+    o: &VolumeChannelOptions,
+    progress: &mut dyn FnMut(u64, u64),
+) -> ViewpointChannel {
+    let voxels = caster.volume.voxels();
+    let total = o.directions.len() as u64;
+    let wave = (rayon::current_num_threads() * 2).max(2);
+    let mut starts = vec![0];
+    let (mut patch, mut solid_angle, mut background) = (Vec::new(), Vec::new(), Vec::new());
+    for (w, dirs) in o.directions.chunks(wave).enumerate() {
+        let rows: Vec<(Vec<u32>, Vec<f64>, f64)> = dirs
+            .par_iter()
+            .map(|&d| {
+                let mut vis = vec![0.0; voxels];
+                let bg = caster.visibility(&View::new(d, o.distance), o.size, &mut vis);
+                let (mut idx, mut val) = (Vec::new(), Vec::new());
+                for (i, &x) in vis.iter().enumerate() {
+                    if x > 0.0 {
+                        idx.push(i as u32);
+                        val.push(x);
+                    }
+                }
+                (idx, val, bg)
+            })
+            .collect();
+        for (idx, val, bg) in rows {
+            patch.extend(idx);
+            solid_angle.extend(val);
+            background.push(bg);
+            starts.push(patch.len());
+        }
+        progress((w * wave + dirs.len()) as u64, total);
+    }
+    ViewpointChannel {
+        positions: o.directions.iter().map(|d| d.normalize() * o.distance).collect(),
+        starts,
+        patch,
+        solid_angle,
+        background,
+        patches: voxels,
+        rays_per_viewpoint: u64::from(o.size) * u64::from(o.size),
+    }
+}
+
+/// A colour for a viewpoint direction, each channel in `[0, 1]`:
+/// `(d + 1) / 2`, so opposite viewpoints get complementary colours.
+#[must_use]
+pub fn viewpoint_colour(d: DVec3) -> [f64; 3] {
+    let d = d.normalize();
+    [(d.x + 1.0) / 2.0, (d.y + 1.0) / 2.0, (d.z + 1.0) / 2.0]
+}
+
+/// The measures of the channel over voxels, in one unit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VolumeMeasures {
+    /// The normalised channel (rows: viewpoints that see something).
+    pub analysis: ViewpointAnalysis,
+    /// Per-viewpoint measures of Part V: `p(v)`, `H(Z|v)`, VMI, `I(V;Z)`,
+    /// `H(Z|V)`, `H(Z)`, best and worst.
+    pub views: ViewpointMeasures,
+    /// `H(V)`.
+    pub h_v: f64,
+    /// VoMI `I(z;V)` per voxel (0 where no viewpoint sees it).
+    pub vomi: Vec<f64>,
+    /// Colour VoMI per voxel (viewpoint colours from [`viewpoint_colour`]).
+    pub colour_vomi: Vec<[f64; 3]>,
+    /// EVMI with the voxels' opacity as importance, per viewpoint.
+    pub evmi_opacity: Vec<f64>,
+    /// EVMI with VoMI as importance, per viewpoint.
+    pub evmi_vomi: Vec<f64>,
+    /// EVMI with a focus importance, per viewpoint, when one is given.
+    pub evmi_focus: Option<Vec<f64>>,
+}
+
+/// Every measure of the channel: `directions` are the viewpoints'
+/// (for colour VoMI), `opacity` the voxels' transfer-function opacity,
+/// `focus` an optional importance per voxel.
+///
+/// # Errors
+/// [`Error::ZeroMass`] when no viewpoint sees anything; core errors.
+pub fn volume_measures(
+    ch: &ViewpointChannel,
+    directions: &[DVec3],
+    opacity: &[f64],
+    focus: Option<&[f64]>,
+    weights: ViewpointWeights,
+    base: Base,
+) -> Result<VolumeMeasures, Error> {
+    let an = ViewpointAnalysis::new(ch, weights, false)?;
+    let views = an.measures(&vec![1.0; ch.patches], base)?;
+    let h_v = entropy(&an.p_v, base)?;
+    let vomi = an.polygonal_information(base)?;
+    let sparse = an.channel()?;
+    let mut colour_vomi = vec![[0.0; 3]; ch.patches];
+    let mut part = vec![0.0; ch.patches];
+    for c in 0..3 {
+        let w: Vec<f64> = an.seen.iter().map(|&v| viewpoint_colour(directions[v])[c]).collect();
+        sparse.output_specific_information_weighted_into(&an.p_o, &w, base, &mut part)?;
+        for (cv, p) in colour_vomi.iter_mut().zip(&part) {
+            cv[c] = *p;
+        }
+    }
+    let evmi_opacity = importance_information(&an, opacity, base)?;
+    let evmi_vomi = importance_information(&an, &vomi, base)?;
+    let evmi_focus = focus.map(|f| importance_information(&an, f, base)).transpose()?;
+    Ok(VolumeMeasures { analysis: an, views, h_v, vomi, colour_vomi, evmi_opacity, evmi_vomi, evmi_focus })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::viewpoint::icosphere;
+    use crate::volume::TransferFunction;
+    use crate::volume::builtin::built_in;
+
+    fn measures(spec: &str, tf: &str, level: u32, size: u32) -> (Vec<DVec3>, VolumeMeasures) {
+        let v = built_in(spec).unwrap();
+        let tf = TransferFunction::preset(tf).unwrap();
+        let c = Caster::new(&v, &tf, 0.5);
+        let dirs = icosphere(level);
+        let o = VolumeChannelOptions { directions: dirs.clone(), distance: 3.0, size };
+        let ch = volume_channel(&c, &o, &mut |_, _| {});
+        let m =
+            volume_measures(&ch, &dirs, &c.voxel_opacity, None, ViewpointWeights::ProjectedArea, Base::Bits).unwrap();
+        (dirs, m)
+    }
+
+    #[test]
+    fn channel_identities() {
+        let (dirs, m) = measures("phantom:12", "ramp", 0, 24);
+        let an = &m.analysis;
+        // I(V;Z) = Σ p(v) VMI(v) = Σ p(z) VoMI(z) (Part V eq. (6) both ways).
+        let by_views: f64 = an.seen.iter().zip(&an.p_v).map(|(&v, p)| p * m.views.mutual_information[v]).sum();
+        let by_voxels: f64 = m.vomi.iter().zip(&an.p_o).map(|(i, p)| i * p).sum();
+        let i = m.views.total_mutual_information;
+        assert!(i > 0.0);
+        assert!((by_views - i).abs() < 1e-9 * i.max(1.0), "{by_views} {i}");
+        assert!((by_voxels - i).abs() < 1e-9 * i.max(1.0), "{by_voxels} {i}");
+        // I(V;Z) <= H(V) and <= H(Z); H(Z|V) = H(Z) - I(V;Z).
+        assert!(i <= m.h_v + 1e-9 && i <= m.views.object_entropy + 1e-9);
+        assert!((m.views.conditional_entropy - (m.views.object_entropy - i)).abs() < 1e-9);
+        // Every VMI and VoMI is >= 0.
+        assert!(m.vomi.iter().all(|&x| x >= 0.0));
+        assert!(m.views.mutual_information.iter().all(|&x| x >= 0.0));
+        // Colour VoMI averages to the colour-weighted VMI: for each channel c,
+        // Σ_z p(z) CVoMI_c(z) = Σ_v p(v) c(v) VMI(v).
+        for c in 0..3 {
+            let z: f64 = m.colour_vomi.iter().zip(&an.p_o).map(|(cv, p)| cv[c] * p).sum();
+            let v: f64 = an
+                .seen
+                .iter()
+                .zip(&an.p_v)
+                .map(|(&v, p)| p * viewpoint_colour(dirs[v])[c] * m.views.mutual_information[v])
+                .sum();
+            assert!((z - v).abs() < 1e-9 * i.max(1.0), "channel {c}: {z} {v}");
+        }
+    }
+
+    #[test]
+    fn seeable_voxels_bound_the_rows() {
+        let v = built_in("phantom:12").unwrap();
+        let tf = TransferFunction::preset("ramp").unwrap();
+        let c = Caster::new(&v, &tf, 0.5);
+        let o = VolumeChannelOptions { directions: icosphere(1), distance: 3.0, size: 32 };
+        let ch = volume_channel(&c, &o, &mut |_, _| {});
+        let seeable = seeable_voxels(&c);
+        let visible = c.voxel_opacity.iter().filter(|&&a| a > 0.0).count();
+        assert!(seeable >= visible && seeable < v.voxels());
+        for k in 0..ch.viewpoints() {
+            assert!(ch.row(k).0.len() <= seeable);
+        }
+    }
+
+    #[test]
+    fn radial_density_gives_equal_views() {
+        // A spherically symmetric density: every viewpoint sees the same up
+        // to the voxel grid's orientation.
+        let (_, m) = measures("sphere:16", "ramp", 1, 24);
+        let vmi = &m.views.mutual_information;
+        let mean = vmi.iter().sum::<f64>() / vmi.len() as f64;
+        let spread = vmi.iter().map(|x| (x - mean).abs()).fold(0.0, f64::max);
+        assert!(spread < 0.05 * mean, "spread {spread} mean {mean}");
+    }
+}

@@ -1,0 +1,477 @@
+//! `itgfx radiosity SCENE`: hierarchical Monte Carlo radiosity refined by
+//! the tutorial's oracles, its pictures, and an independent path-traced
+//! reference to score them against (RMSE/PSNR of Part III-IV Table 2).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use clap::Args;
+use itgfx_backends::radiosity::reference::{Reference, path_traced};
+use itgfx_backends::radiosity::refine::check_scene;
+use itgfx_backends::radiosity::render::{View, default_camera, mesh_picture, picture, tonemap, view, white_point};
+use itgfx_backends::radiosity::search::search_epsilon;
+use itgfx_backends::radiosity::{Oracle, Rgb, Settings, Solution, element::Hierarchy, solve};
+use itgfx_backends::tracer::Prepared;
+use itgfx_backends::{BackendChoice, open};
+use itgfx_core::pixel::{SRGB_LUMINANCE_WEIGHTS, image_error};
+
+use crate::CliError;
+use crate::options::Common;
+use crate::progress::Progress;
+use crate::report::Report;
+use crate::scene::load_scene;
+use crate::values::{backend, count, out_path, threads};
+
+/// `itgfx radiosity SCENE`.
+#[derive(Debug, Args)]
+#[command(after_help = "SCENE is an .obj file (with MTL Kd/Ke) or a built-in (see itgfx complexity --help); \
+                        cornell-box's light emits.\n\
+                        --out DIR gets radiosity.png (Gouraud), mesh.png, radiosity.pfm (linear), elements.csv \
+                        and radiosity.json; with --path-trace W it gets reference.pfm (+ -even/-odd halves), \
+                        reference.png and reference.json instead.")]
+pub struct RadiosityOptions {
+    /// A built-in scene name (e.g. cornell-box) or an .obj file
+    #[arg(value_name = "SCENE")]
+    pub scene: Option<String>,
+    /// Refinement oracle: power, ks, ks-avg, mi, kl, cs, hl or variance (vt)
+    #[arg(long, value_name = "NAME", default_value = "power", value_parser = oracle)]
+    pub oracle: Oracle,
+    /// Bisect epsilon until the mesh has about N elements (equal-element-count protocol)
+    #[arg(long, value_name = "N", value_parser = elements, conflicts_with = "epsilon")]
+    pub elements: Option<usize>,
+    /// Refinement threshold (dimensionless; default 1e-3 without --elements)
+    #[arg(long, value_name = "E", value_parser = epsilon)]
+    pub epsilon: Option<f64>,
+    /// Relative tolerance on the element count of --elements
+    #[arg(long, value_name = "F", default_value = "0.03", value_parser = fraction)]
+    pub count_tolerance: f64,
+    /// Most solves of the epsilon search
+    #[arg(long, value_name = "K", default_value = "30", value_parser = trials)]
+    pub max_trials: u32,
+    /// Random point pairs (lines) per link evaluation, N_s (tutorial: 10)
+    #[arg(long, value_name = "N", default_value = "10", value_parser = samples)]
+    pub samples: u32,
+    /// Smallest element as a fraction of the total area (RenderPark: 1e-6)
+    #[arg(long, value_name = "F", default_value = "1e-6", value_parser = min_area)]
+    pub min_area: f64,
+    /// Stop refining at this many elements (memory: about 2 KB each with links)
+    #[arg(long, value_name = "N", default_value = "1000000", value_parser = max_elements)]
+    pub max_elements: usize,
+    /// Seed; same seed, same mesh and numbers, any thread count
+    #[arg(long, value_name = "S", default_value = "1", value_parser = count)]
+    pub seed: u64,
+    /// Split every patch into K x K cells first
+    #[arg(long, value_name = "K", default_value = "1", value_parser = subdivide)]
+    pub subdivide: u32,
+    /// Picture width and height in pixels
+    #[arg(long, value_name = "W", default_value = "256", value_parser = size)]
+    pub size: u32,
+    /// Score the solution against a path-traced reference (reference.pfm of --path-trace)
+    #[arg(long, value_name = "R.pfm", value_parser = out_path, conflicts_with = "path_trace")]
+    pub reference: Option<PathBuf>,
+    /// Make the reference instead: W random walks per pixel (no mesh, no oracle)
+    #[arg(long, value_name = "W", value_parser = walks)]
+    pub path_trace: Option<u32>,
+    /// Write the pictures and files into DIR
+    #[arg(long, value_name = "DIR", value_parser = out_path)]
+    pub out: Option<PathBuf>,
+    /// Tracing backend: cpu, reference or vulkan
+    #[arg(long, value_name = "cpu|reference|vulkan", default_value = "cpu", value_parser = backend)]
+    pub backend: BackendChoice,
+    /// Worker threads (default: all cores)
+    #[arg(long, value_name = "T", value_parser = threads)]
+    pub threads: Option<usize>,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub common: Common,
+}
+
+fn real(s: &str) -> Result<f64, String> {
+    s.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| "is not a finite number".to_string())
+}
+
+fn ranged(s: &str, lo: u64, hi: u64) -> Result<u64, String> {
+    let v = count(s)?;
+    if (lo..=hi).contains(&v) { Ok(v) } else { Err(format!("must be in {lo}..={hi}")) }
+}
+
+fn oracle(s: &str) -> Result<Oracle, String> {
+    s.parse().map_err(|e: itgfx_backends::radiosity::UnknownOracle| e.to_string())
+}
+
+fn elements(s: &str) -> Result<usize, String> {
+    ranged(s, 1, 2_000_000).map(|v| v as usize)
+}
+
+fn max_elements(s: &str) -> Result<usize, String> {
+    ranged(s, 16, 2_000_000).map(|v| v as usize)
+}
+
+fn epsilon(s: &str) -> Result<f64, String> {
+    let e = real(s)?;
+    if e > 0.0 && e <= 1e6 { Ok(e) } else { Err("must be in (0, 1e6]".into()) }
+}
+
+fn fraction(s: &str) -> Result<f64, String> {
+    let e = real(s)?;
+    if (1e-4..=0.5).contains(&e) { Ok(e) } else { Err("must be in 1e-4..=0.5".into()) }
+}
+
+fn min_area(s: &str) -> Result<f64, String> {
+    let e = real(s)?;
+    if (1e-12..=0.25).contains(&e) { Ok(e) } else { Err("must be in 1e-12..=0.25 of the total area".into()) }
+}
+
+fn trials(s: &str) -> Result<u32, String> {
+    ranged(s, 1, 200).map(|v| v as u32)
+}
+
+fn samples(s: &str) -> Result<u32, String> {
+    ranged(s, 2, 1000).map(|v| v as u32)
+}
+
+fn subdivide(s: &str) -> Result<u32, String> {
+    ranged(s, 1, 64).map(|v| v as u32)
+}
+
+fn size(s: &str) -> Result<u32, String> {
+    ranged(s, 8, 4096).map(|v| v as u32)
+}
+
+fn walks(s: &str) -> Result<u32, String> {
+    ranged(s, 2, 1 << 20).map(|v| v as u32)
+}
+
+fn usage(e: impl std::fmt::Display) -> CliError {
+    CliError::usage(e.to_string())
+}
+
+/// The output files of a run, checked before any work.
+fn outputs(o: &RadiosityOptions) -> Result<Vec<(&'static str, PathBuf)>, CliError> {
+    let Some(dir) = &o.out else { return Ok(Vec::new()) };
+    if std::fs::metadata(dir).is_ok_and(|m| !m.is_dir()) {
+        return Err(CliError::usage(format!("--out {dir:?}: not a directory")));
+    }
+    let names: &[&'static str] = if o.path_trace.is_some() {
+        &["reference.pfm", "reference-even.pfm", "reference-odd.pfm", "reference.png", "reference.json"]
+    } else {
+        &["radiosity.png", "mesh.png", "radiosity.pfm", "elements.csv", "radiosity.json"]
+    };
+    let created = !dir.exists();
+    if created {
+        std::fs::create_dir_all(dir).map_err(|e| CliError::usage(format!("--out {dir:?}: {e}")))?;
+    }
+    let list: Vec<(&'static str, PathBuf)> = names.iter().map(|n| (*n, dir.join(n))).collect();
+    for (_, p) in &list {
+        if let Err(e) = crate::output::check("--out", p) {
+            if created {
+                let _ = std::fs::remove_dir(dir);
+            }
+            return Err(e);
+        }
+    }
+    Ok(list)
+}
+
+/// A linear RGB picture as PFM (little-endian, bottom row first).
+fn pfm(px: &[Rgb], width: u32, height: u32) -> Vec<u8> {
+    let mut out = format!("PF\n{width} {height}\n-1.0\n").into_bytes();
+    for y in (0..height as usize).rev() {
+        for x in 0..width as usize {
+            for c in px[y * width as usize + x] {
+                out.extend_from_slice(&(c as f32).to_le_bytes());
+            }
+        }
+    }
+    out
+}
+
+/// Reads a PFM written by [`pfm`] (colour, little-endian).
+fn read_pfm(path: &Path) -> Result<(u32, u32, Vec<Rgb>), CliError> {
+    let bad = |why: &str| CliError::usage(format!("--reference {path:?}: {why}"));
+    let bytes = std::fs::read(path).map_err(|e| bad(&e.to_string()))?;
+    let mut fields = Vec::new();
+    let mut at = 0;
+    while fields.len() < 4 && at < bytes.len().min(256) {
+        while at < bytes.len() && bytes[at].is_ascii_whitespace() {
+            at += 1;
+        }
+        let start = at;
+        while at < bytes.len() && !bytes[at].is_ascii_whitespace() {
+            at += 1;
+        }
+        fields.push(String::from_utf8_lossy(&bytes[start..at]).into_owned());
+    }
+    at += 1;
+    if fields.len() < 4 || fields[0] != "PF" {
+        return Err(bad("not a colour PFM (PF header)"));
+    }
+    let (w, h) = (fields[1].parse::<u32>(), fields[2].parse::<u32>());
+    let (Ok(w), Ok(h)) = (w, h) else { return Err(bad("bad size in the PFM header")) };
+    if fields[3].parse::<f64>().map_or(true, |s| s >= 0.0) {
+        return Err(bad("only little-endian PFM (negative scale) is read"));
+    }
+    let n = w as usize * h as usize;
+    if bytes.len().saturating_sub(at) != n * 12 {
+        return Err(bad(&format!("{w} x {h} pixels need {} bytes of data", n * 12)));
+    }
+    let mut px = vec![[0.0; 3]; n];
+    for (k, chunk) in bytes[at..].chunks_exact(12).enumerate() {
+        let (y, x) = (h as usize - 1 - k / w as usize, k % w as usize);
+        for c in 0..3 {
+            let v = f64::from(f32::from_le_bytes(chunk[4 * c..4 * c + 4].try_into().unwrap_or_default()));
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(bad("a pixel is negative or not finite"));
+            }
+            px[y * w as usize + x][c] = v;
+        }
+    }
+    Ok((w, h, px))
+}
+
+fn png(px: &[[u8; 3]], w: u32, h: u32, path: &Path) -> Result<(), CliError> {
+    let img = image::RgbImage::from_fn(w, h, |x, y| image::Rgb(px[(y * w + x) as usize]));
+    crate::export::write_png(&img, path)
+}
+
+fn dense(px: &[Option<Rgb>]) -> Vec<Rgb> {
+    px.iter().map(|p| p.unwrap_or([0.0; 3])).collect()
+}
+
+/// 8-bit display values, interleaved, as the tables score them.
+fn display(px: &[Rgb], white: f64) -> Vec<f64> {
+    px.iter().flat_map(|p| tonemap(*p, white).map(f64::from)).collect()
+}
+
+/// RMSE_a, RMSE_p, PSNR_a, PSNR_p of `a` against `b` (8-bit, Part IV §6.4).
+fn scores(a: &[f64], b: &[f64]) -> Result<[f64; 4], CliError> {
+    let err = |e| crate::core_err("image error", e);
+    let ea = image_error(a, b, 3, &[1.0; 3], 255.0).map_err(err)?;
+    let ep = image_error(a, b, 3, &SRGB_LUMINANCE_WEIGHTS, 255.0).map_err(err)?;
+    Ok([ea.rmse, ep.rmse, ea.psnr, ep.psnr])
+}
+
+/// Runs `itgfx radiosity`.
+///
+/// # Errors
+/// Usage, scene, backend and output errors, one line.
+pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
+    let spec = o.scene.clone().ok_or_else(|| CliError::usage("give a scene: an .obj file or a built-in scene name"))?;
+    if let Some(n) = o.elements
+        && n > o.max_elements
+    {
+        return Err(CliError::usage(format!("--elements {n} is above --max-elements {}", o.max_elements)));
+    }
+    if let Some(r) = &o.reference
+        && !r.is_file()
+    {
+        return Err(CliError::usage(format!("--reference {r:?}: no such file")));
+    }
+    let scene = load_scene(&spec, o.subdivide)?;
+    check_scene(&scene).map_err(usage)?;
+    let h0 = Hierarchy::new(&scene);
+    if let Some(n) = o.elements
+        && n < h0.roots.len()
+    {
+        return Err(CliError::usage(format!(
+            "--elements {n}: {spec} already has {} polygons (the coarsest mesh)",
+            h0.roots.len()
+        )));
+    }
+    let reference = o.reference.as_ref().map(|p| read_pfm(p)).transpose()?;
+    if let Some((w, hh, _)) = &reference
+        && (*w != o.size || *hh != o.size)
+    {
+        return Err(CliError::usage(format!(
+            "--reference is {w} x {hh} pixels but --size is {}: make both with the same --size",
+            o.size
+        )));
+    }
+    let files = outputs(o)?;
+    let file = |name: &str| files.iter().find(|f| f.0 == name).map(|f| f.1.clone());
+    let t0 = Instant::now();
+    let prepared = Prepared::new(&scene);
+    let tracer = open(o.backend, &prepared).map_err(usage)?;
+    let camera = default_camera(&scene);
+    let mut r = Report::new();
+    r.text("scene", scene.name.clone()).text("backend", tracer.name());
+    r.count("polygons", h0.roots.len() as u64).count("pixels", u64::from(o.size) * u64::from(o.size));
+
+    if let Some(walks) = o.path_trace {
+        let v = view(&scene, &prepared, tracer.as_ref(), &h0, &camera, (o.size, o.size)).map_err(usage)?;
+        let mut progress = Progress::new();
+        let reference =
+            path_traced(&scene, &prepared, tracer.as_ref(), &h0, &v, walks, o.seed, &mut |d, t| progress.update(d, t))
+                .map_err(usage)?;
+        return reference_report(r, &reference, &v, o, walks, t0, &file);
+    }
+
+    let settings = Settings {
+        oracle: o.oracle,
+        epsilon: o.epsilon.unwrap_or(1e-3),
+        samples: o.samples,
+        seed: o.seed,
+        min_area: o.min_area,
+        max_elements: o.max_elements,
+        ..Settings::default()
+    };
+    let mut trials = Vec::new();
+    let solution: Solution = if let Some(n) = o.elements {
+        let s = search_epsilon(
+            &scene,
+            &prepared,
+            tracer.as_ref(),
+            &settings,
+            n,
+            o.count_tolerance,
+            o.max_trials,
+            &mut |t, e, k| {
+                if std::env::var_os("ITGFX_PROGRESS").is_some_and(|v| v == "1") {
+                    eprintln!("itgfx: trial {t}: epsilon {e:.4e} -> {k} elements");
+                }
+            },
+        )
+        .map_err(usage)?;
+        trials = s.trials;
+        s.solution
+    } else {
+        solve(&scene, &prepared, tracer.as_ref(), &settings).map_err(usage)?
+    };
+    let solve_seconds = t0.elapsed().as_secs_f64();
+    let h = &solution.hierarchy;
+    let leaves = solution.leaves();
+    let (emitted, absorbed) = solution.power_balance();
+    r.text("oracle", o.oracle.name()).real("epsilon", solution.settings.epsilon, None);
+    r.count("elements", leaves.len() as u64).count("links", solution.links.len() as u64);
+    r.count("samples_per_link", u64::from(o.samples)).count("link_evaluations", solution.evaluations);
+    r.count("rays", solution.rays).count("transport_rays", solution.transport_rays);
+    r.count("oracle_only_rays", solution.rays - solution.transport_rays);
+    r.count("passes", u64::from(solution.passes)).count("iterations", u64::from(solution.sweeps));
+    r.flag("capped", solution.capped);
+    if !trials.is_empty() {
+        r.count("search_trials", trials.len() as u64);
+    }
+    let lum = |x: Rgb| SRGB_LUMINANCE_WEIGHTS.iter().zip(x).map(|(w, v)| w * v).sum::<f64>();
+    r.real("power_emitted", lum(emitted), None).real("power_absorbed", lum(absorbed), None);
+    r.real("balance", if lum(emitted) > 0.0 { lum(absorbed) / lum(emitted) } else { 0.0 }, None);
+    r.real("solve_seconds", solve_seconds, Some("s"));
+
+    let v = view(&scene, &prepared, tracer.as_ref(), h, &camera, (o.size, o.size)).map_err(usage)?;
+    let (gouraud, leaf) = picture(h, &solution.radiosity, &v, true);
+    let (flat, _) = picture(h, &solution.radiosity, &v, false);
+    let reference_white = reference.as_ref().map(|(_, _, px)| {
+        white_point(&px.iter().map(|p| (p.iter().sum::<f64>() > 0.0).then_some(*p)).collect::<Vec<_>>())
+    });
+    let white = reference_white.unwrap_or_else(|| white_point(&gouraud));
+    r.real("white", white, None);
+    if let Some((_, _, ref_px)) = &reference {
+        let a = display(&dense(&gouraud), white);
+        let b = display(ref_px, white);
+        let [ra, rp, pa, pp] = scores(&a, &b)?;
+        r.real("RMSE_a", ra, None).real("RMSE_p", rp, None).real("PSNR_a", pa, Some("dB")).real(
+            "PSNR_p",
+            pp,
+            Some("dB"),
+        );
+        let fl = display(&dense(&flat), white);
+        let [fa, _, fpa, _] = scores(&fl, &b)?;
+        r.real("RMSE_a_flat", fa, None).real("PSNR_a_flat", fpa, Some("dB"));
+    }
+    if let Some(p) = file("radiosity.png") {
+        let px: Vec<[u8; 3]> = gouraud.iter().map(|c| c.map_or([24, 24, 28], |c| tonemap(c, white))).collect();
+        png(&px, o.size, o.size, &p)?;
+    }
+    if let Some(p) = file("mesh.png") {
+        png(&mesh_picture(&flat, &leaf, o.size, white), o.size, o.size, &p)?;
+    }
+    if let Some(p) = file("radiosity.pfm") {
+        crate::output::write(&p, &pfm(&dense(&gouraud), o.size, o.size))?;
+    }
+    if let Some(p) = file("elements.csv") {
+        let mut s = String::from("element,patch,level,area,x,y,z,B_r,B_g,B_b\n");
+        for &e in &leaves {
+            let el = &h.elements[e as usize];
+            let c = el.centre();
+            let b = solution.radiosity[e as usize];
+            s.push_str(&format!(
+                "{e},{},{},{:e},{},{},{},{:e},{:e},{:e}\n",
+                h.patch(e),
+                el.level,
+                el.area,
+                c.x,
+                c.y,
+                c.z,
+                b[0],
+                b[1],
+                b[2]
+            ));
+        }
+        crate::output::write(&p, s.as_bytes())?;
+    }
+    r.real("seconds", t0.elapsed().as_secs_f64(), Some("s"));
+    if let Some(p) = file("radiosity.json") {
+        crate::output::write(&p, format!("{}\n", r.to_json()).as_bytes())?;
+    }
+    if !files.is_empty() {
+        r.texts("files", files.iter().map(|f| f.1.display().to_string()).collect());
+    }
+    Ok(r)
+}
+
+fn reference_report(
+    mut r: Report,
+    reference: &Reference,
+    v: &View,
+    o: &RadiosityOptions,
+    walks: u32,
+    t0: Instant,
+    file: &dyn Fn(&str) -> Option<PathBuf>,
+) -> Result<Report, CliError> {
+    let white = white_point(&reference.mean);
+    let mean = dense(&reference.mean);
+    let [na, np, _, _] = scores(&display(&reference.halves[0], white), &display(&reference.halves[1], white))?;
+    // The halves differ by twice the variance of one half; the full mean
+    // has half a half's variance: its own RMSE is about RMSE(halves) / 2.
+    let seen: Vec<&Rgb> =
+        reference.mean.iter().zip(&reference.stderr).filter(|(m, _)| m.is_some()).map(|x| x.1).collect();
+    let mean_rel = {
+        let mut acc = 0.0;
+        let mut n = 0.0;
+        for (m, s) in reference.mean.iter().zip(&reference.stderr) {
+            if let Some(m) = m {
+                for c in 0..3 {
+                    if m[c] > 0.0 {
+                        acc += s[c] / m[c];
+                        n += 1.0;
+                    }
+                }
+            }
+        }
+        if n > 0.0 { acc / n } else { 0.0 }
+    };
+    r.text("method", "path-traced reference (random walks, Russian roulette)");
+    r.count("walks_per_pixel", u64::from(walks)).count("rays", reference.rays).count("seen_pixels", seen.len() as u64);
+    r.real("white", white, None);
+    r.real("mean_relative_stderr", mean_rel, None);
+    r.real("noise_RMSE_a", na / 2.0, None).real("noise_RMSE_p", np / 2.0, None);
+    r.real("seconds", t0.elapsed().as_secs_f64(), Some("s"));
+    let (w, h) = (v.width, v.height);
+    if let Some(p) = file("reference.pfm") {
+        crate::output::write(&p, &pfm(&mean, w, h))?;
+    }
+    if let Some(p) = file("reference-even.pfm") {
+        crate::output::write(&p, &pfm(&reference.halves[0], w, h))?;
+    }
+    if let Some(p) = file("reference-odd.pfm") {
+        crate::output::write(&p, &pfm(&reference.halves[1], w, h))?;
+    }
+    if let Some(p) = file("reference.png") {
+        let px: Vec<[u8; 3]> = reference.mean.iter().map(|c| c.map_or([24, 24, 28], |c| tonemap(c, white))).collect();
+        png(&px, w, h, &p)?;
+    }
+    if let Some(p) = file("reference.json") {
+        crate::output::write(&p, format!("{}\n", r.to_json()).as_bytes())?;
+    }
+    let _ = o;
+    Ok(r)
+}

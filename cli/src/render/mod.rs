@@ -1,0 +1,304 @@
+//! `itgfx render SCENE`: path-traced images with the tutorial's adaptive
+//! pixel criteria (Part IV; Part III-IV §5), and `itgfx compare A.exr B.exr`.
+
+mod export_scene;
+pub mod images;
+mod metrics;
+
+use std::path::PathBuf;
+use std::sync::Mutex;
+use std::time::Instant;
+
+use clap::Args;
+use glam::DVec3;
+use itgfx_backends::camera::Camera;
+use itgfx_backends::render::{self, Criterion, Sampling, Shading, criteria, views};
+use itgfx_backends::tracer::Prepared;
+use itgfx_backends::{BackendChoice, open};
+
+use crate::CliError;
+use crate::options::Common;
+use crate::progress::Progress;
+use crate::report::Report;
+use crate::scene::load_scene;
+use crate::values::{backend, count, finite, out_path, threads};
+use images::Radiance;
+pub use metrics::compare_images;
+
+/// Largest image side.
+const MAX_SIDE: u32 = 8192;
+/// Most samples per pixel (average) a run may ask for.
+const MAX_SPP: u32 = 1 << 16;
+
+/// `itgfx render SCENE`.
+#[derive(Debug, Args)]
+#[command(after_help = "SCENE is an .obj file with its MTL (Kd diffuse, Ke emission, Ks with illum 3/5/8 a mirror) \
+                        or a built-in with materials: cornell-box, mirror-room.\n\
+                        DIR receives image.exr (linear radiance), image.png (sRGB) and density.png \
+                        (samples per pixel, log scale).")]
+pub struct RenderOptions {
+    /// A built-in scene name (cornell-box, mirror-room) or an .obj file
+    #[arg(value_name = "SCENE")]
+    pub scene: Option<String>,
+    /// Directory for image.exr, image.png and density.png (made if missing)
+    #[arg(long, value_name = "DIR", value_parser = out_path)]
+    pub out: Option<PathBuf>,
+    /// Samples per pixel (uniform), or the average every adaptive sampler spends
+    #[arg(long, value_name = "N", default_value = "16", value_parser = spp)]
+    pub spp: u32,
+    /// Pixel sampler: uniform (stratified), or an adaptive criterion: cc (classic contrast), ct
+    /// (confidence test), kl cs hl (f-divergences), kl-sqrt cs-sqrt hl-sqrt (their square roots), ec
+    /// (entropy contrast); see docs/RENDER.md
+    #[arg(long, value_name = "NAME", default_value = "uniform", value_parser = sampler_name)]
+    pub sampler: String,
+    /// Adaptive: most samples one pixel may take (default 16 x --spp)
+    #[arg(long, value_name = "N", value_parser = spp)]
+    pub max_spp: Option<u32>,
+    /// Adaptive: this threshold instead of one tuned to spend --spp on average
+    #[arg(long, value_name = "EPS", value_parser = threshold)]
+    pub threshold: Option<f64>,
+    /// Adaptive: decide on a separate pilot set of samples and estimate each pixel from as many
+    /// fresh ones (no bias from samples that chose their own count; traces twice the rays)
+    #[arg(long)]
+    pub unbiased: bool,
+    /// Image size in pixels
+    #[arg(long, value_name = "WxH", default_value = "256x256", value_parser = size)]
+    pub size: (u32, u32),
+    /// Camera in scene units: eye, target, up (3 numbers each) and vertical field of view in degrees
+    #[arg(long, value_name = "EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV", value_parser = camera)]
+    pub camera: Option<Camera>,
+    /// Seed; same seed, same image, any thread count
+    #[arg(long, value_name = "S", default_value = "1", value_parser = count)]
+    pub seed: u64,
+    /// PNG exposure in stops (the EXR is never scaled)
+    #[arg(long, value_name = "STOPS", default_value = "0", value_parser = exposure)]
+    pub exposure: f64,
+    /// Add RMSE/PSNR/relMSE against this reference EXR to the output
+    #[arg(long, value_name = "R.exr")]
+    pub reference: Option<PathBuf>,
+    /// Also write the scene for other renderers: one OBJ per material and scene.json (materials,
+    /// camera, size) in DIR
+    #[arg(long)]
+    pub export_scene: bool,
+    /// Tracing backend: cpu, reference or vulkan
+    #[arg(long, value_name = "cpu|reference|vulkan", default_value = "cpu", value_parser = backend)]
+    pub backend: BackendChoice,
+    /// Worker threads (default: all cores)
+    #[arg(long, value_name = "T", value_parser = threads)]
+    pub threads: Option<usize>,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub common: Common,
+}
+
+/// `itgfx compare A.exr B.exr`.
+#[derive(Debug, Args)]
+pub struct CompareOptions {
+    /// The image to score
+    #[arg(value_name = "A.exr")]
+    pub a: PathBuf,
+    /// The reference
+    #[arg(value_name = "B.exr")]
+    pub b: PathBuf,
+    /// Exposure in stops of the 8-bit display values that RMSE and PSNR are taken on
+    #[arg(long, value_name = "STOPS", default_value = "0", value_parser = exposure)]
+    pub exposure: f64,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub common: Common,
+}
+
+fn spp(s: &str) -> Result<u32, String> {
+    match count(s)? {
+        n @ 1..=65_536 => Ok(n as u32),
+        _ => Err(format!("must be in 1..={MAX_SPP}")),
+    }
+}
+
+fn sampler_name(s: &str) -> Result<String, String> {
+    if s == "uniform" || Criterion::from_name(s).is_some() {
+        Ok(s.to_string())
+    } else {
+        Err(format!("unknown sampler {s:?}: uniform, {}", criteria::NAMES.join(", ")))
+    }
+}
+
+fn threshold(s: &str) -> Result<f64, String> {
+    let x = finite(s)?;
+    if x >= 0.0 { Ok(x) } else { Err("must be a finite number >= 0".into()) }
+}
+
+fn exposure(s: &str) -> Result<f64, String> {
+    let x = finite(s)?;
+    if (-64.0..=64.0).contains(&x) { Ok(x) } else { Err("must be in -64..=64 stops".into()) }
+}
+
+fn size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or("must be WxH, e.g. 256x256")?;
+    let side = |v: &str| match v.parse::<u32>() {
+        Ok(n @ 1..=MAX_SIDE) => Ok(n),
+        _ => Err(format!("{v:?}: each side must be an integer in 1..={MAX_SIDE}")),
+    };
+    Ok((side(w)?, side(h)?))
+}
+
+fn camera(s: &str) -> Result<Camera, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>().ok().filter(|v| v.is_finite()))
+        .collect::<Option<_>>()
+        .ok_or("must be 10 finite numbers: eye, target, up (x,y,z each) and fov")?;
+    if v.len() != 10 {
+        return Err(format!("must be 10 numbers (eye, target, up, fov), got {}", v.len()));
+    }
+    let d = |i: usize| DVec3::new(v[i], v[i + 1], v[i + 2]);
+    Camera::look_at(d(0), d(3), d(6), v[9]).map_err(|e| e.to_string())
+}
+
+/// The output directory: must be a directory or not exist; made if missing.
+/// Returns it and whether it was made here.
+fn out_dir(o: &RenderOptions) -> Result<(PathBuf, bool), CliError> {
+    let d = o.out.clone().ok_or_else(|| CliError::usage("give --out DIR for the images"))?;
+    if std::fs::metadata(&d).is_ok_and(|m| !m.is_dir()) {
+        return Err(CliError::usage(format!("--out {d:?}: not a directory")));
+    }
+    if d.exists() {
+        return Ok((d, false));
+    }
+    std::fs::create_dir_all(&d).map_err(|e| CliError::usage(format!("--out {d:?}: {e}")))?;
+    Ok((d, true))
+}
+
+/// Runs `itgfx render`.
+///
+/// # Errors
+/// Usage, scene, camera and backend errors, one line each.
+pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
+    let spec =
+        o.scene.clone().ok_or_else(|| CliError::usage("give a scene: cornell-box, mirror-room or an .obj file"))?;
+    if let Some(r) = &o.reference
+        && !r.is_file()
+    {
+        return Err(CliError::usage(format!("--reference {r:?}: not a file")));
+    }
+    let adaptive = o.sampler != "uniform";
+    if !adaptive && (o.max_spp.is_some() || o.threshold.is_some() || o.unbiased) {
+        return Err(CliError::usage(
+            "--max-spp, --threshold and --unbiased are for adaptive samplers (--sampler cc, kl, ...)",
+        ));
+    }
+    if let Some(m) = o.max_spp
+        && m < o.spp
+    {
+        return Err(CliError::usage(format!("--max-spp {m} is below --spp {}", o.spp)));
+    }
+    if adaptive && o.spp < criteria::BATCH {
+        return Err(CliError::usage(format!(
+            "--spp {}: adaptive samplers take at least {} per pixel",
+            o.spp,
+            criteria::BATCH
+        )));
+    }
+    let (dir, made) = out_dir(o)?;
+    let result = render_into(o, &spec, &dir);
+    if result.is_err() && made {
+        // Leave nothing behind: the directory made for --out goes again (only if still empty).
+        let _ = std::fs::remove_dir(&dir);
+    }
+    result
+}
+
+fn render_into(o: &RenderOptions, spec: &str, dir: &std::path::Path) -> Result<Report, CliError> {
+    let files = [dir.join("image.exr"), dir.join("image.png"), dir.join("density.png")];
+    for f in &files {
+        crate::output::check("--out", f)?;
+    }
+    let reference = o.reference.as_deref().map(images::read_exr).transpose()?;
+    if let Some(r) = &reference
+        && (r.width, r.height) != (o.size.0 as usize, o.size.1 as usize)
+    {
+        return Err(CliError::usage(format!(
+            "--reference is {} x {}, the render {} x {}",
+            r.width, r.height, o.size.0, o.size.1
+        )));
+    }
+    let scene = load_scene(spec, 1)?;
+    let prepared = Prepared::new(&scene);
+    let shading = Shading::new(&scene, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
+    let tracer = open(o.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
+    let camera = o.camera.unwrap_or_else(|| views::default_camera(&scene));
+    let sampling = match Criterion::from_name(&o.sampler) {
+        None => Sampling::Uniform(o.spp),
+        Some(criterion) => Sampling::Adaptive {
+            criterion,
+            spp: o.spp,
+            max: o.max_spp.unwrap_or(o.spp.saturating_mul(16).min(MAX_SPP)),
+            unbiased: o.unbiased,
+            threshold: o.threshold,
+        },
+    };
+    let t0 = Instant::now();
+    let progress = Mutex::new(Progress::new());
+    let tick = |d: u64, t: u64| {
+        if let Ok(mut p) = progress.lock() {
+            p.update(d, t);
+        }
+    };
+    let rendered =
+        render::render(tracer.as_ref(), &scene, &prepared, &shading, &camera, o.size, o.seed, &sampling, &tick)
+            .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
+    let frame = &rendered.frame;
+    let seconds = t0.elapsed().as_secs_f64();
+    // The values the EXR holds (f32), so --reference and compare agree.
+    let rgb = frame.rgb.iter().map(|c| c.map(|v| f64::from(v as f32))).collect();
+    let image = Radiance { width: frame.width as usize, height: frame.height as usize, rgb };
+    images::write_exr(&image, &files[0])?;
+    images::write_display_png(&image, o.exposure, &files[1])?;
+    images::write_density_png(&frame.samples, image.width, image.height, &files[2])?;
+    let mut wrote: Vec<PathBuf> = files.to_vec();
+    if o.export_scene {
+        wrote.extend(export_scene::export_scene(&scene, &camera, o.size, dir)?);
+    }
+
+    let mut r = Report::new();
+    r.text("scene", scene.name.clone()).text("backend", tracer.name()).text("sampler", o.sampler.clone());
+    r.count("width", u64::from(frame.width)).count("height", u64::from(frame.height)).count("seed", o.seed);
+    r.reals("camera_eye", camera.eye.to_array().to_vec())
+        .reals("camera_forward", camera.forward.to_array().to_vec())
+        .real("camera_fov_y", camera.fov_y.to_degrees(), Some("deg"));
+    if let Sampling::Adaptive { max, unbiased, .. } = sampling {
+        r.maybe_real("threshold", rendered.threshold, None).count("max_spp", u64::from(max)).flag("unbiased", unbiased);
+        if let Some(t) = rendered.tuned {
+            r.count("pilot_pixels", u64::from(t.pilot_pixels)).real("pilot_spp_mean", t.pilot_mean, None);
+        }
+    }
+    r.count("spp_requested", u64::from(o.spp))
+        .real("spp_mean", frame.mean_samples(), None)
+        .real("spp_traced_mean", frame.mean_traced(), None)
+        .count("spp_min", u64::from(frame.samples.iter().copied().min().unwrap_or(0)))
+        .count("spp_max", u64::from(frame.samples.iter().copied().max().unwrap_or(0)));
+    let mean = metrics::mean_rgb(&image.rgb);
+    r.reals("mean_radiance", mean.to_vec()).real("mean_luminance", itgfx_core::pixel::luminance(mean), None);
+    if let Some(reference) = &reference {
+        let m = compare_images(&image, reference, o.exposure)?;
+        m.report(&mut r);
+    }
+    let traced: f64 = frame.samples.iter().chain(&frame.pilot_samples).map(|&s| f64::from(s)).sum();
+    r.real("seconds", seconds, Some("s")).real("Msamples_per_s", traced / seconds.max(1e-9) / 1e6, None);
+    r.texts("wrote", wrote.iter().map(|p| p.display().to_string()).collect());
+    Ok(r)
+}
+
+/// Runs `itgfx compare`.
+///
+/// # Errors
+/// Unreadable or mismatched images.
+pub fn run_compare(o: &CompareOptions) -> Result<Report, CliError> {
+    let a = images::read_exr(&o.a)?;
+    let b = images::read_exr(&o.b)?;
+    let m = compare_images(&a, &b, o.exposure)?;
+    let mut r = Report::new();
+    r.count("width", a.width as u64).count("height", a.height as u64);
+    m.report(&mut r);
+    Ok(r)
+}

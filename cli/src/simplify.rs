@@ -1,0 +1,336 @@
+//! `itgfx simplify MESH.obj --target 10% --out DIR`: viewpoint-driven mesh
+//! simplification (Part VII) and the errors a user checks it by.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use clap::Args;
+use glam::DVec3;
+use itgfx_backends::BackendChoice;
+use itgfx_backends::simplify::metrics::{Render, evaluation_directions, image_error, render, surface_distance};
+use itgfx_backends::simplify::{IndexedMesh, Metric, Settings, simplify};
+use itgfx_backends::tracer::Prepared;
+use itgfx_backends::viewpoint::icosphere;
+
+use crate::CliError;
+use crate::export::{montage, write_png};
+use crate::options::Common;
+use crate::progress::Progress;
+use crate::report::Report;
+use crate::scene::load_scene;
+use crate::values::{
+    backend, distance, max_subdivision, out_path, threads, tolerance, viewpoint_count, viewpoint_level,
+};
+
+/// `itgfx simplify MESH`.
+#[derive(Debug, Args)]
+#[command(after_help = "MESH is an .obj file (or a built-in scene) that welds into a manifold triangle mesh.\n\
+                        Writes DIR/input.obj (welded, repaired), DIR/simplified_N.obj per target, DIR/original.png, DIR/simplified_N.png and\n\
+                        DIR/compare.png (rows: original, then each target; columns: evaluation views).")]
+pub struct SimplifyOptions {
+    /// An .obj file or a built-in scene name
+    #[arg(value_name = "MESH")]
+    pub mesh: Option<String>,
+    /// Triangles to keep: a percentage (10%) or a count (500)
+    #[arg(long, value_name = "P%|N", conflicts_with = "evaluate", allow_negative_numbers = true)]
+    pub target: Option<String>,
+    /// Several targets in one run, each written: 50%,10%,2% (or counts)
+    #[arg(long, value_name = "P%,...", conflicts_with = "evaluate", allow_negative_numbers = true)]
+    pub sweep: Option<String>,
+    /// Output directory (created if missing)
+    #[arg(long, value_name = "DIR", value_parser = out_path)]
+    pub out: Option<PathBuf>,
+    /// Collapse cost: vmi = mean |change of each viewpoint's I(v;O)|, ve = mean |change of viewpoint
+    /// entropy|, ivo = |change of the channel's I(V;O)|
+    #[arg(long, value_name = "vmi|ve|ivo", default_value = "vmi", value_parser = ["vmi", "ve", "ivo"])]
+    pub metric: String,
+    /// Viewpoints of the channel: 12, 42, 162, 642 or 2562 (a subdivided icosahedron)
+    #[arg(long, value_name = "N", default_value = "42", value_parser = viewpoint_count)]
+    pub viewpoints: u32,
+    /// Viewpoint distance in bounding-sphere radii
+    #[arg(long, value_name = "D", default_value = "3", value_parser = distance)]
+    pub distance: f64,
+    /// Relative VMI tolerance of each traced channel
+    #[arg(long, value_name = "F", default_value = "0.05", value_parser = tolerance)]
+    pub tolerance: f64,
+    /// Largest subdivision M of triangles where visibility changes
+    #[arg(long, value_name = "M", default_value = "8", value_parser = max_subdivision)]
+    pub max_subdivision: u32,
+    /// Leave the background out of the channel (by default it is an extra polygon, Part V §3.1,
+    /// so that a shrinking silhouette changes the channel)
+    #[arg(long)]
+    pub no_background: bool,
+    /// Measure this already simplified OBJ against MESH instead of simplifying (e.g. QEM's output)
+    #[arg(long, value_name = "F.obj")]
+    pub evaluate: Option<String>,
+    /// Evaluation views (a Fibonacci spiral, none of them a channel viewpoint)
+    #[arg(long, value_name = "N", default_value = "24", value_parser = eval_views)]
+    pub eval_views: usize,
+    /// Pixels per side of each evaluation render
+    #[arg(long, value_name = "PX", default_value = "128", value_parser = image_size)]
+    pub image_size: u32,
+    /// Points sampled on each surface for the Hausdorff distance
+    #[arg(long, value_name = "N", default_value = "20000", value_parser = samples)]
+    pub samples: usize,
+    /// Tracing backend: cpu, reference or vulkan
+    #[arg(long, value_name = "cpu|reference|vulkan", default_value = "cpu", value_parser = backend)]
+    pub backend: BackendChoice,
+    /// Worker threads (default: all cores)
+    #[arg(long, value_name = "T", value_parser = threads)]
+    pub threads: Option<usize>,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub common: Common,
+}
+
+fn eval_views(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(n) if (1..=1000).contains(&n) => Ok(n),
+        _ => Err("must be an integer in 1..=1000".into()),
+    }
+}
+
+fn image_size(s: &str) -> Result<u32, String> {
+    match s.parse::<u32>() {
+        Ok(n) if (8..=2048).contains(&n) => Ok(n),
+        _ => Err("must be an integer in 8..=2048".into()),
+    }
+}
+
+fn samples(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(n) if (100..=10_000_000).contains(&n) => Ok(n),
+        _ => Err("must be an integer in 100..=10000000".into()),
+    }
+}
+
+/// A target for a mesh of `n` triangles: `P%` with `0 < P < 100`, or a
+/// count `1 ≤ N < n`.
+///
+/// # Errors
+/// A one-line reason naming `flag`.
+pub fn parse_target(flag: &str, s: &str, n: usize) -> Result<usize, CliError> {
+    let bad = |why: String| CliError::usage(format!("{flag} {s:?}: {why}"));
+    let t = s.trim();
+    let count = if let Some(p) = t.strip_suffix('%') {
+        let p: f64 = p.trim().parse().map_err(|_| bad("is not a percentage".into()))?;
+        if !(p > 0.0 && p < 100.0) {
+            return Err(bad("a percentage must be above 0 and below 100".into()));
+        }
+        ((n as f64 * p / 100.0).round() as usize).max(1)
+    } else {
+        let k: i64 = t.parse().map_err(|_| bad("is neither a percentage (10%) nor a triangle count".into()))?;
+        if k <= 0 {
+            return Err(bad("a triangle count must be positive".into()));
+        }
+        k as usize
+    };
+    if count >= n {
+        return Err(bad(format!("{count} triangles is not fewer than the mesh's {n}")));
+    }
+    Ok(count)
+}
+
+/// The targets asked for, largest first, without repeats.
+fn targets(o: &SimplifyOptions, n: usize) -> Result<Vec<usize>, CliError> {
+    let mut t = Vec::new();
+    if let Some(s) = &o.target {
+        t.push(parse_target("--target", s, n)?);
+    }
+    if let Some(s) = &o.sweep {
+        for part in s.split(',') {
+            t.push(parse_target("--sweep", part, n)?);
+        }
+    }
+    t.sort_unstable_by(|a, b| b.cmp(a));
+    t.dedup();
+    Ok(t)
+}
+
+/// A grey picture of one render.
+fn picture(r: &Render) -> image::RgbImage {
+    image::RgbImage::from_fn(r.size, r.size, |x, y| {
+        let i = (y * r.size + x) as usize;
+        if r.covered[i] {
+            let g = (255.0 * (0.12 + 0.88 * f64::from(r.shade[i]))).round().clamp(0.0, 255.0) as u8;
+            image::Rgb([g, g, g])
+        } else {
+            image::Rgb([24, 24, 28])
+        }
+    })
+}
+
+/// One mesh to measure: a stage of the simplification or `--evaluate`'s.
+struct Simplified {
+    label: String,
+    mesh: IndexedMesh,
+    seconds: f64,
+    mi: Option<f64>,
+    stalled: Option<String>,
+}
+
+/// How many of the evaluation views go into the pictures.
+const SHOWN: usize = 4;
+
+fn renders(mesh: &IndexedMesh, o: &SimplifyOptions, eyes: &[DVec3]) -> Result<Vec<Render>, CliError> {
+    render(mesh, o.backend, eyes, o.image_size).map_err(|e| CliError::usage(e.to_string()))
+}
+
+/// Runs `itgfx simplify`.
+///
+/// # Errors
+/// Usage, mesh, backend and output errors, one line.
+#[allow(clippy::too_many_lines)]
+pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
+    let spec = o.mesh.clone().ok_or_else(|| CliError::usage("give a mesh: an .obj file or a built-in scene name"))?;
+    let out = o.out.clone().ok_or_else(|| CliError::usage("give --out DIR for the simplified meshes and pictures"))?;
+    if o.target.is_none() && o.sweep.is_none() && o.evaluate.is_none() {
+        return Err(CliError::usage("give --target P%|N, --sweep P%,... or --evaluate F.obj"));
+    }
+    if std::fs::metadata(&out).is_ok_and(|m| !m.is_dir()) {
+        return Err(CliError::usage(format!("--out {out:?}: not a directory")));
+    }
+    let metric = match o.metric.as_str() {
+        "ve" => Metric::Ve,
+        "ivo" => Metric::Ivo,
+        _ => Metric::Vmi,
+    };
+    // Syntax first, before any file is read; the counts once the mesh is known.
+    targets(o, usize::MAX)?;
+    let scene = load_scene(&spec, 1)?;
+    let prepared = Prepared::new(&scene);
+    let (centre, scale) = (prepared.centre, prepared.scale);
+    let weld = |s: &itgfx_backends::scene::Scene, what: &str| {
+        IndexedMesh::weld(&s.triangles, centre, scale).map_err(|e| CliError::usage(format!("{what}: {e}")))
+    };
+    let (original, repairs) = weld(&scene, &spec)?;
+    if repairs.any() {
+        eprintln!("itgfx: warning: {spec}: repaired: {repairs}");
+    }
+    let n = original.triangles();
+    let wanted = targets(o, n)?;
+    let evaluated = match &o.evaluate {
+        Some(f) => Some(
+            IndexedMesh::weld_any(&load_scene(f, 1)?.triangles, centre, scale)
+                .map_err(|e| CliError::usage(format!("--evaluate {f}: {e}")))?,
+        ),
+        None => None,
+    };
+    if !out.exists() {
+        std::fs::create_dir_all(&out).map_err(|e| CliError::usage(format!("--out {out:?}: {e}")))?;
+    }
+    for name in ["original.png", "compare.png"] {
+        crate::output::check("--out", &out.join(name))?;
+    }
+
+    let t0 = Instant::now();
+    let eyes: Vec<DVec3> = evaluation_directions(o.eval_views).into_iter().map(|d| d * o.distance).collect();
+    let reference = renders(&original, o, &eyes)?;
+    let mut r = Report::new();
+    r.text("mesh", scene.name.clone()).count("triangles", n as u64).count("vertices", original.positions.len() as u64);
+    r.count("evaluation_views", eyes.len() as u64).count("image_size", u64::from(o.image_size));
+    r.count("hausdorff_samples", o.samples as u64);
+    r.count("repaired_degenerate", repairs.degenerate as u64)
+        .count("repaired_duplicates", repairs.duplicates as u64)
+        .count("repaired_detached", repairs.detached as u64)
+        .count("repaired_split_vertices", repairs.split_vertices as u64);
+    r.text("distance_unit", "bounding-box half diagonal");
+
+    let mut results: Vec<Simplified> = Vec::new();
+    let mut results_written: Vec<String> = Vec::new();
+    if let Some(m) = evaluated {
+        r.text("mode", "evaluate");
+        let label = Path::new(o.evaluate.as_deref().unwrap_or("evaluated"))
+            .file_stem()
+            .map_or_else(|| "evaluated".into(), |s| s.to_string_lossy().into_owned());
+        results.push(Simplified { label, mesh: m, seconds: 0.0, mi: None, stalled: None });
+    } else {
+        let dirs = icosphere(viewpoint_level(o.viewpoints));
+        let settings = Settings {
+            metric,
+            directions: dirs,
+            distance: o.distance,
+            backend: o.backend,
+            refresh: 0.5,
+            tolerance: o.tolerance,
+            max_subdivision: o.max_subdivision,
+            background: !o.no_background,
+        };
+        let mut progress = Progress::new();
+        let outcome = simplify(&original, &wanted, &settings, &mut |d, t| progress.update(d, t))
+            .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
+        r.text("mode", "simplify")
+            .text("metric", o.metric.clone())
+            .flag("background", !o.no_background)
+            .count("viewpoints", u64::from(o.viewpoints));
+        r.real("I_VO_bits", outcome.initial_mutual_information, Some("bits"));
+        r.count("collapses", outcome.collapses).count("channel_traces", u64::from(outcome.traces));
+        r.real("channel_seconds", outcome.trace_seconds, Some("s"));
+        for s in outcome.stages {
+            if let Some(why) = &s.stalled {
+                eprintln!("itgfx: warning: target {} not reached: {why}", s.target);
+            }
+            results.push(Simplified {
+                label: s.target.to_string(),
+                mesh: s.mesh,
+                seconds: s.seconds,
+                mi: Some(s.mutual_information),
+                stalled: s.stalled,
+            });
+        }
+    }
+
+    if o.evaluate.is_none() {
+        // The welded, repaired mesh the collapses started from (the input of any peer to compare with).
+        let input = out.join("input.obj");
+        let comment = format!("itgfx simplify: {spec} welded and repaired, {n} triangles");
+        crate::output::write(&input, original.to_obj(centre, scale, &comment).as_bytes())?;
+        results_written.push(input.display().to_string());
+    }
+    let mut rows = vec![reference.iter().take(SHOWN).map(picture).collect::<Vec<_>>()];
+    write_png(&montage(&rows[0], SHOWN), &out.join("original.png"))?;
+    let mut written = results_written;
+    written.push(out.join("original.png").display().to_string());
+    let mut stages = Vec::new();
+    for Simplified { label, mesh, seconds, mi, stalled } in &results {
+        let imgs = renders(mesh, o, &eyes)?;
+        let err = image_error(&reference, &imgs);
+        let dist = surface_distance(&original, mesh, o.samples, 1);
+        let mut x = Report::new();
+        x.text("name", label.clone()).count("triangles", mesh.triangles() as u64);
+        x.real("seconds", *seconds, Some("s"));
+        x.real("image_rmse", err.shading, None).real("silhouette_rmse", err.silhouette, None);
+        x.real("hausdorff", dist.hausdorff, None).real("mean_distance", dist.mean, None);
+        x.maybe_real("I_VO_bits", *mi, Some("bits"));
+        if let Some(why) = stalled {
+            x.text("stalled", why.clone());
+        }
+        let stem = if o.evaluate.is_some() { label.clone() } else { format!("simplified_{label}") };
+        if o.evaluate.is_none() {
+            let obj = out.join(format!("{stem}.obj"));
+            let comment = format!(
+                "itgfx simplify --metric {} --viewpoints {}: {} of {} triangles",
+                o.metric,
+                o.viewpoints,
+                mesh.triangles(),
+                n
+            );
+            crate::output::write(&obj, mesh.to_obj(centre, scale, &comment).as_bytes())?;
+            written.push(obj.display().to_string());
+            x.text("obj", obj.display().to_string());
+        }
+        let row: Vec<image::RgbImage> = imgs.iter().take(SHOWN).map(picture).collect();
+        let png = out.join(format!("{stem}.png"));
+        write_png(&montage(&row, SHOWN), &png)?;
+        written.push(png.display().to_string());
+        rows.push(row);
+        stages.push(x);
+    }
+    let all: Vec<image::RgbImage> = rows.concat();
+    write_png(&montage(&all, SHOWN), &out.join("compare.png"))?;
+    written.push(out.join("compare.png").display().to_string());
+    r.records("results", stages);
+    r.texts("wrote", written);
+    r.real("seconds", t0.elapsed().as_secs_f64(), Some("s"));
+    Ok(r)
+}

@@ -1,0 +1,294 @@
+//! `itgfx render` and `itgfx compare` end to end: small images (≤ 32², ≤ 16 spp).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn itgfx(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_itgfx")).args(args).output().expect("run itgfx")
+}
+
+fn temp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("itgfx-render-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn json(out: &Output) -> serde_json::Value {
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn fails(args: &[&str], needle: &str) {
+    let out = itgfx(args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: one line: {err}");
+    assert!(err.contains(needle), "{args:?}: {err:?} lacks {needle:?}");
+}
+
+/// A closed cube seen from inside, every face diffuse with albedo `a` and
+/// emitting `e`: the radiance is `e / (1 − a)` everywhere (the furnace).
+fn furnace(dir: &Path, a: f64, e: f64) -> PathBuf {
+    std::fs::write(dir.join("f.mtl"), format!("newmtl grey\nKd {a} {a} {a}\nKe {e} {e} {e}\n")).unwrap();
+    let obj = dir.join("furnace.obj");
+    // Faces wound to face inwards.
+    std::fs::write(
+        &obj,
+        "mtllib f.mtl\nusemtl grey\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n\
+         f 1 2 3 4\nf 5 8 7 6\nf 1 5 6 2\nf 2 6 7 3\nf 3 7 8 4\nf 4 8 5 1\n",
+    )
+    .unwrap();
+    obj
+}
+
+#[test]
+fn furnace_is_unbiased() {
+    let dir = temp("furnace");
+    let obj = furnace(&dir, 0.6, 1.0);
+    let out = dir.join("out");
+    let camera = "0.5,0.5,0.5,0.5,0.5,1,0,1,0,90";
+    let v = json(&itgfx(&[
+        "render",
+        s(&obj),
+        "--out",
+        s(&out),
+        "--size",
+        "24x24",
+        "--spp",
+        "8",
+        "--camera",
+        camera,
+        "--json",
+    ]));
+    // Per-pixel scatter gives the standard error of the image mean.
+    let exr = out.join("image.exr");
+    let mean = v["mean_luminance"].as_f64().unwrap();
+    let cmp = json(&itgfx(&["compare", s(&exr), s(&exr), "--json"]));
+    assert_eq!(cmp["relMSE"].as_f64().unwrap(), 0.0);
+    assert_eq!(cmp["PSNR_a"], "inf");
+    // Radiance e/(1-a) = 2.5; 576 pixel means of 8 paths each. The spread of one
+    // path's value is below its mean here (RR weights ≤ 1/0.6): SE < 2.5/sqrt(4608) ≈ 0.037.
+    let want = 1.0 / (1.0 - 0.6);
+    assert!((mean - want).abs() < 3.0 * want / (576.0f64 * 8.0).sqrt(), "furnace mean {mean}, want {want}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn unbiased_adaptive_sampling_keeps_the_furnace_mean() {
+    let dir = temp("furnace-adaptive");
+    let obj = furnace(&dir, 0.6, 1.0);
+    let camera = "0.5,0.5,0.5,0.5,0.5,1,0,1,0,90";
+    let want = 1.0 / (1.0 - 0.6);
+    for (sampler, threshold) in [("ct", "0.2"), ("kl-sqrt", "0.002")] {
+        let out = dir.join(sampler);
+        let v = json(&itgfx(&[
+            "render",
+            s(&obj),
+            "--out",
+            s(&out),
+            "--size",
+            "24x24",
+            "--spp",
+            "8",
+            "--camera",
+            camera,
+            "--sampler",
+            sampler,
+            "--threshold",
+            threshold,
+            "--max-spp",
+            "32",
+            "--unbiased",
+            "--json",
+        ]));
+        let (image, traced) = (v["spp_mean"].as_f64().unwrap(), v["spp_traced_mean"].as_f64().unwrap());
+        assert!(image > 8.0, "{sampler}: some pixels refined ({image})");
+        assert_eq!(traced, 2.0 * image, "{sampler}: pilot and image sets are the same size");
+        // At least 8 fresh paths a pixel: the SE bound of the uniform test holds.
+        let mean = v["mean_luminance"].as_f64().unwrap();
+        assert!((mean - want).abs() < 3.0 * want / (576.0f64 * 8.0).sqrt(), "{sampler}: mean {mean}, want {want}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn adaptive_samplers_spend_the_budget() {
+    let dir = temp("adaptive");
+    // The threshold tuned to an average of 16 (pilot: every pixel of 24 x 24, another seed).
+    let out = dir.join("hl");
+    let v = json(&itgfx(&[
+        "render",
+        "mirror-room:1",
+        "--out",
+        s(&out),
+        "--size",
+        "24x24",
+        "--spp",
+        "16",
+        "--sampler",
+        "hl-sqrt",
+        "--json",
+    ]));
+    let mean = v["spp_mean"].as_f64().unwrap();
+    assert!((mean - 16.0).abs() < 4.0, "spent {mean} a pixel for a budget of 16");
+    assert!(v["spp_min"].as_u64().unwrap() >= 8 && v["spp_max"].as_u64().unwrap() <= 256);
+    assert!(v["spp_max"].as_u64().unwrap() > v["spp_min"].as_u64().unwrap(), "the density varies");
+    assert!(v["threshold"].as_f64().unwrap() > 0.0);
+    assert_eq!(&std::fs::read(out.join("density.png")).unwrap()[1..4], b"PNG");
+    // Every criterion runs with a given threshold.
+    for c in ["cc", "ct", "kl", "cs", "hl", "kl-sqrt", "cs-sqrt", "ec"] {
+        let out = dir.join(c);
+        let v = json(&itgfx(&[
+            "render",
+            "cornell-box",
+            "--out",
+            s(&out),
+            "--size",
+            "12x12",
+            "--spp",
+            "8",
+            "--sampler",
+            c,
+            "--threshold",
+            "0.01",
+            "--max-spp",
+            "24",
+            "--json",
+        ]));
+        assert!(v["spp_min"].as_u64().unwrap() >= 8 && v["spp_max"].as_u64().unwrap() <= 24, "{c}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn cornell_box_images_json_and_threads() {
+    let dir = temp("cornell");
+    let run = |sub: &str, threads: &str| {
+        let out = dir.join(sub);
+        let v = json(&itgfx(&[
+            "render",
+            "cornell-box",
+            "--out",
+            s(&out),
+            "--size",
+            "32x24",
+            "--spp",
+            "8",
+            "--threads",
+            threads,
+            "--json",
+        ]));
+        (v, std::fs::read(out.join("image.exr")).unwrap(), out)
+    };
+    let (v, exr1, out) = run("one", "1");
+    // --export-scene: one OBJ per material and scene.json for peers.
+    let ex = dir.join("export");
+    json(&itgfx(&[
+        "render",
+        "cornell-box",
+        "--out",
+        s(&ex),
+        "--size",
+        "8x8",
+        "--spp",
+        "1",
+        "--export-scene",
+        "--json",
+    ]));
+    let desc: serde_json::Value = serde_json::from_slice(&std::fs::read(ex.join("scene.json")).unwrap()).unwrap();
+    let mats = desc["materials"].as_array().unwrap();
+    assert_eq!(mats.iter().map(|m| m["triangles"].as_u64().unwrap()).sum::<u64>(), 34, "17 quads");
+    assert!(mats.iter().any(|m| m["radiance"][0].as_f64().unwrap() == 17.0), "the light emits");
+    assert_eq!(v["width"], 32);
+    assert_eq!(v["height"], 24);
+    assert_eq!(v["spp_mean"].as_f64().unwrap(), 8.0);
+    assert!(v["mean_luminance"].as_f64().unwrap() > 0.0, "the light emits");
+    assert_eq!(&exr1[..4], &[0x76, 0x2f, 0x31, 0x01], "OpenEXR magic");
+    for png in ["image.png", "density.png"] {
+        assert_eq!(&std::fs::read(out.join(png)).unwrap()[1..4], b"PNG");
+    }
+    let (_, exr2, _) = run("two", "2");
+    assert_eq!(exr1, exr2, "same seed, same EXR with 1 and 2 threads");
+    // Another seed: a different image.
+    let other = dir.join("seed");
+    json(&itgfx(&[
+        "render",
+        "cornell-box",
+        "--out",
+        s(&other),
+        "--size",
+        "32x24",
+        "--spp",
+        "8",
+        "--seed",
+        "2",
+        "--json",
+    ]));
+    assert_ne!(std::fs::read(other.join("image.exr")).unwrap(), exr1);
+    // --reference: the render against itself in another run is exact.
+    let again = dir.join("again");
+    let r = json(&itgfx(&[
+        "render",
+        "cornell-box",
+        "--out",
+        s(&again),
+        "--size",
+        "32x24",
+        "--spp",
+        "8",
+        "--reference",
+        s(&out.join("image.exr")),
+        "--json",
+    ]));
+    assert_eq!(r["relMSE"].as_f64().unwrap(), 0.0);
+    let c = json(&itgfx(&["compare", s(&other.join("image.exr")), s(&out.join("image.exr")), "--json"]));
+    assert!(c["RMSE_a"].as_f64().unwrap() > 0.0 && c["PSNR_p"].as_f64().unwrap().is_finite());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn bad_input_is_one_line_exit_2() {
+    let dir = temp("bad");
+    let out = dir.join("o");
+    let o = s(&out);
+    fails(&["render", "cube-enclosure:2", "--out", o, "--size", "8x8", "--spp", "1"], "no light");
+    // Outside the closed Cornell box, and inside the mirror room's tall block.
+    fails(
+        &["render", "cornell-box", "--out", o, "--size", "8x8", "--camera", "278,273,-800,278,273,0,0,1,0,40"],
+        "outside the closed scene",
+    );
+    fails(
+        &["render", "mirror-room:1", "--out", o, "--size", "8x8", "--camera", "0.6,0.8,1.9,0.6,0.8,5,0,1,0,40"],
+        "inside a closed object",
+    );
+    fails(&["render", "sphere", "--out", o, "--size", "8x8"], "analytic sphere");
+    fails(&["render", "cornell-box", "--out", o, "--size", "0x8"], "--size");
+    fails(&["render", "cornell-box", "--out", o, "--size", "8"], "--size");
+    fails(&["render", "cornell-box", "--out", o, "--spp", "0"], "--spp");
+    fails(&["render", "cornell-box", "--out", o, "--camera", "0,0,0,0,0,0,0,1,0,40"], "--camera");
+    fails(&["render", "cornell-box", "--out", o, "--camera", "1,2,3"], "--camera");
+    fails(&["render", "cornell-box", "--out", o, "--sampler", "magic"], "--sampler");
+    fails(&["render", "cornell-box", "--size", "8x8"], "--out");
+    fails(&["render", "cornell-box", "--out", o, "--threshold", "0.1"], "adaptive");
+    fails(&["render", "cornell-box", "--out", o, "--sampler", "kl", "--spp", "4"], "at least 8");
+    fails(&["render", "cornell-box", "--out", o, "--sampler", "kl", "--spp", "16", "--max-spp", "8"], "--max-spp");
+    fails(&["render", "cornell-box", "--out", o, "--sampler", "kl", "--threshold=-1"], "--threshold");
+    fails(&["render", "--out", o], "scene");
+    fails(&["render", "/nonexistent/x.obj", "--out", o], "/nonexistent/x.obj");
+    let file = dir.join("file");
+    std::fs::write(&file, "x").unwrap();
+    fails(&["render", "cornell-box", "--out", s(&file), "--size", "8x8"], "not a directory");
+    // A missing MTL is an error, not a grey scene.
+    let obj = dir.join("nomtl.obj");
+    std::fs::write(&obj, "mtllib missing.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    fails(&["render", s(&obj), "--out", o, "--size", "8x8"], "missing.mtl");
+    assert!(!out.exists(), "failed runs leave no --out directory behind");
+    fails(&["compare", s(&file), s(&file)], "OpenEXR");
+    fails(&["compare", "/nonexistent/a.exr", s(&file)], "/nonexistent/a.exr");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -48,6 +48,8 @@ fn run(cli: Cli) -> Result<String, CliError> {
         }
         Command::Devices(c) => Ok(render(&devices::run()?, c.json)),
         Command::Phantom(o) => Ok(render(&imaging::run_phantom(&o)?, o.json)),
+        Command::Register(o) => Ok(render(&imaging::run_register(&o)?, o.common.json)),
+        Command::Segment(o) => Ok(render(&imaging::run_segment(&o)?, o.common.json)),
         Command::Render(o) => {
             threads(o.threads)?;
             Ok(render(&itgfx_cli::render::run(&o)?, o.common.json))
@@ -57,8 +59,6 @@ fn run(cli: Cli) -> Result<String, CliError> {
             threads(o.threads)?;
             Ok(render(&itgfx_cli::radiosity::run(&o)?, o.common.json))
         }
-        Command::Register(o) => Ok(render(&imaging::run_register(&o)?, o.common.json)),
-        Command::Segment(o) => Ok(render(&imaging::run_segment(&o)?, o.common.json)),
     }
 }
 

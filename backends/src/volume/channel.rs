@@ -58,12 +58,14 @@ pub fn seeable_voxels(caster: &Caster<'_>) -> usize {
 /// Bytes of memory the channel may need at most: one entry (index and
 /// value, twice: the channel and its normalised copy) per viewpoint and
 /// seeable voxel ([`seeable_voxels`]), plus a dense row per viewpoint in
-/// flight (two per worker thread).
+/// flight (two per worker thread), plus the caster's per-voxel tables
+/// (opacity and active cells, 9 bytes per voxel).
 #[must_use]
 pub fn channel_memory(caster: &Caster<'_>, viewpoints: usize) -> u64 {
     let candidates = seeable_voxels(caster) as u64;
     let threads = rayon::current_num_threads() as u64 * 2;
-    viewpoints as u64 * candidates * 2 * 12 + threads * caster.volume.voxels() as u64 * 8
+    let voxels = caster.volume.voxels() as u64;
+    viewpoints as u64 * candidates * 2 * 12 + threads * voxels * 8 + voxels * 9
 }
 
 /// Casts `size²` rays from every viewpoint and gathers `vis(z|v)`.

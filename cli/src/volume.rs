@@ -331,6 +331,9 @@ fn run_in(
     let best_evmi = argmin(&m.evmi_opacity);
     r.count("best_EVMI_opacity_view", best_evmi as u64);
     r.count("best_EVMI_VoMI_view", argmin(&m.evmi_vomi) as u64);
+    let nw = &m.noteworthiness_entropy;
+    let best_nw = (0..nw.len()).max_by(|&a, &b| nw[a].total_cmp(&nw[b]).then(b.cmp(&a))).unwrap_or(0);
+    r.count("best_noteworthiness_VE_view", best_nw as u64);
     if let (Some(f), Some((_, name))) = (&m.evmi_focus, &focus) {
         r.text("focus", name.clone()).count("best_focus_view", argmin(f) as u64);
         r.reals("best_focus_direction", dirs[argmin(f)].to_array().to_vec());
@@ -389,6 +392,7 @@ fn run_in(
             unit,
         );
         x.real("EVMI_opacity", m.evmi_opacity[k], unit).real("EVMI_VoMI", m.evmi_vomi[k], unit);
+        x.real("VE_noteworthiness", m.noteworthiness_entropy[k], unit);
         if let Some(f) = &m.evmi_focus {
             x.real("EVMI_focus", f[k], unit);
         }

@@ -62,6 +62,8 @@ fn hydrogen_symmetries_and_channel_identities() {
             m[axis] = -m[axis];
             let w = find(&r, m)["VMI"].as_f64().unwrap();
             assert!((w - vmi).abs() <= 1e-9 * vmi.max(1e-3), "{d:?} mirrored in axis {axis}: {vmi} vs {w}");
+            let (a, b) = (v["VE_noteworthiness"].as_f64().unwrap(), find(&r, m)["VE_noteworthiness"].as_f64().unwrap());
+            assert!(a > 0.0 && (a - b).abs() <= 1e-9 * a, "{d:?} mirrored in axis {axis}: {a} vs {b}");
         }
     }
     // Part V eq. (6): I(V;Z) = Σ p(v) I(v;Z); I(V;Z) <= min(H(V), H(Z)).

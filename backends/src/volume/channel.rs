@@ -18,7 +18,7 @@
 //!   [`importance_information`] (with its 1% floor of `p(z)`).
 
 use glam::DVec3;
-use itgfx_core::{Base, Error, entropy};
+use itgfx_core::{Base, Error, entropy, entropy_of_weights};
 use rayon::prelude::*;
 
 use super::raycast::{Caster, View};
@@ -58,12 +58,14 @@ pub fn seeable_voxels(caster: &Caster<'_>) -> usize {
 /// Bytes of memory the channel may need at most: one entry (index and
 /// value, twice: the channel and its normalised copy) per viewpoint and
 /// seeable voxel ([`seeable_voxels`]), plus a dense row per viewpoint in
-/// flight (two per worker thread).
+/// flight (two per worker thread), plus the caster's per-voxel tables
+/// (opacity and active cells, 9 bytes per voxel).
 #[must_use]
 pub fn channel_memory(caster: &Caster<'_>, viewpoints: usize) -> u64 {
     let candidates = seeable_voxels(caster) as u64;
     let threads = rayon::current_num_threads() as u64 * 2;
-    viewpoints as u64 * candidates * 2 * 12 + threads * caster.volume.voxels() as u64 * 8
+    let voxels = caster.volume.voxels() as u64;
+    viewpoints as u64 * candidates * 2 * 12 + threads * voxels * 8 + voxels * 9
 }
 
 /// Casts `size²` rays from every viewpoint and gathers `vis(z|v)`.
@@ -116,6 +118,36 @@ pub fn volume_channel(
     }
 }
 
+/// Viewpoint entropy with noteworthiness (Bordoloi and Shen 2005, Part VI
+/// §2.2): per viewpoint, the entropy of `q(z|v) ∝ vis(z|v) / W(z)` over the
+/// voxels of positive noteworthiness `W` (the transfer function's opacity of
+/// the voxel), highest when each voxel is seen in proportion to its
+/// noteworthiness, so the best view is the maximum. 0 for a viewpoint that
+/// sees no noteworthy voxel.
+///
+/// # Errors
+/// [`Error::LengthMismatch`] if `noteworthiness` is not one per voxel.
+pub fn noteworthiness_entropy(ch: &ViewpointChannel, noteworthiness: &[f64], base: Base) -> Result<Vec<f64>, Error> {
+    if noteworthiness.len() != ch.patches {
+        return Err(Error::LengthMismatch { expected: ch.patches, found: noteworthiness.len() });
+    }
+    (0..ch.viewpoints())
+        .into_par_iter()
+        .map(|v| {
+            let (z, vis) = ch.row(v);
+            let q: Vec<f64> = z
+                .iter()
+                .zip(vis)
+                .filter_map(|(&z, &x)| {
+                    let w = noteworthiness[z as usize];
+                    (w > 0.0).then(|| x / w)
+                })
+                .collect();
+            if q.iter().all(|&x| x <= 0.0) { Ok(0.0) } else { entropy_of_weights(&q, base) }
+        })
+        .collect()
+}
+
 /// A colour for a viewpoint direction, each channel in `[0, 1]`:
 /// `(d + 1) / 2`, so opposite viewpoints get complementary colours.
 #[must_use]
@@ -144,6 +176,8 @@ pub struct VolumeMeasures {
     pub evmi_vomi: Vec<f64>,
     /// EVMI with a focus importance, per viewpoint, when one is given.
     pub evmi_focus: Option<Vec<f64>>,
+    /// Viewpoint entropy with noteworthiness = opacity ([`noteworthiness_entropy`]).
+    pub noteworthiness_entropy: Vec<f64>,
 }
 
 /// Every measure of the channel: `directions` are the viewpoints'
@@ -177,7 +211,18 @@ pub fn volume_measures(
     let evmi_opacity = importance_information(&an, opacity, base)?;
     let evmi_vomi = importance_information(&an, &vomi, base)?;
     let evmi_focus = focus.map(|f| importance_information(&an, f, base)).transpose()?;
-    Ok(VolumeMeasures { analysis: an, views, h_v, vomi, colour_vomi, evmi_opacity, evmi_vomi, evmi_focus })
+    let noteworthiness_entropy = noteworthiness_entropy(ch, opacity, base)?;
+    Ok(VolumeMeasures {
+        analysis: an,
+        views,
+        h_v,
+        vomi,
+        colour_vomi,
+        evmi_opacity,
+        evmi_vomi,
+        evmi_focus,
+        noteworthiness_entropy,
+    })
 }
 
 #[cfg(test)]
@@ -228,6 +273,28 @@ mod tests {
                 .sum();
             assert!((z - v).abs() < 1e-9 * i.max(1.0), "channel {c}: {z} {v}");
         }
+    }
+
+    #[test]
+    fn noteworthiness_entropy_limits() {
+        let ch = ViewpointChannel {
+            positions: vec![DVec3::X; 2],
+            starts: vec![0, 3, 4],
+            patch: vec![0, 1, 2, 3],
+            solid_angle: vec![1.0, 2.0, 1.0, 8.0],
+            background: vec![0.0; 2],
+            patches: 4,
+            rays_per_viewpoint: 1,
+        };
+        // W ≡ 1: the plain viewpoint entropy, H(1/4, 1/2, 1/4) = 1.5 bits.
+        let h = noteworthiness_entropy(&ch, &[1.0; 4], Base::Bits).unwrap();
+        assert!((h[0] - 1.5).abs() < 1e-12 && h[1] == 0.0);
+        // Seen exactly in proportion to W: uniform, log2 3.
+        let h = noteworthiness_entropy(&ch, &[1.0, 2.0, 1.0, 0.0], Base::Bits).unwrap();
+        assert!((h[0] - 3f64.log2()).abs() < 1e-12);
+        // Nothing noteworthy seen: 0.
+        assert_eq!(h[1], 0.0);
+        assert!(noteworthiness_entropy(&ch, &[1.0; 3], Base::Bits).is_err());
     }
 
     #[test]

@@ -98,7 +98,7 @@ fn torus_sweep_stays_a_manifold_torus_at_the_targets() {
     }
     // Fewer triangles, larger errors.
     assert!(results[1]["hausdorff"].as_f64() >= results[0]["hausdorff"].as_f64());
-    for f in ["original.png", "compare.png", "simplified_128.png", "simplified_64.png"] {
+    for f in ["original.png", "compare.png", "simplified_128.png", "simplified_64.png", "errors.png"] {
         assert_eq!(&std::fs::read(out.join(f)).unwrap()[1..4], b"PNG", "{f}");
     }
 

@@ -385,6 +385,27 @@ mod tests {
         assert_eq!(entropy(&[-0.0, 1.0], Base::Bits).unwrap(), 0.0);
     }
 
+    /// The running-sum forms refuse what has no entropy: a negative or
+    /// non-finite weight, a sum that is not finite, no mass.
+    #[test]
+    fn weight_sums_bad_input() {
+        assert_eq!(weight_log_term(-1.0f64), Err(Error::Negative { index: 0 }));
+        assert_eq!(weight_log_term(f64::NAN), Err(Error::NonFinite { index: 0 }));
+        assert_eq!(weight_log_term(0.0f64), Ok(0.0));
+        assert_eq!(entropy_of_weight_sums(0.0f64, 0.0, Base::Bits), Err(Error::ZeroMass));
+        assert_eq!(entropy_of_weight_sums(1.0f64, f64::INFINITY, Base::Bits), Err(Error::NonFinite { index: 1 }));
+        assert_eq!(
+            mutual_information_of_weight_sums(1.0f64, 0.0, f64::NAN, 0.0, Base::Bits),
+            Err(Error::NonFinite { index: 2 })
+        );
+        assert_eq!(mutual_information_of_weight_sums(0.0f64, 0.0, 0.0, 0.0, Base::Bits), Err(Error::ZeroMass));
+        assert_eq!(specific_information_of_weight_sums(1.0f64, 0.0, 0.0, 0.0, Base::Bits), Err(Error::ZeroMass));
+        // A row of one weight 2, alone in its column, of a total 4:
+        // p(y|x) = 1, p(y) = 1/2, so I(x;Y) = 1 bit.
+        let i = specific_information_of_weight_sums(4.0f64, 2.0, 2.0 * 2f64.ln(), 2.0 * 2f64.ln(), Base::Bits).unwrap();
+        assert!((i - 1.0).abs() < 1e-15, "{i}");
+    }
+
     /// Found by the `entropy` fuzz target: a single subnormal weight gave
     /// H = 0.001 through the precision lost in `x ln x`.
     #[test]

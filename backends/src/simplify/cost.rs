@@ -84,6 +84,8 @@ pub struct ViewState {
     pub bg_total: f64,
     /// `K_v = Σ_o a_o(v) ln A_o` (+ the background's) per viewpoint.
     pub cross: Vec<f64>,
+    /// `I(v;O)` in bits per viewpoint from the sums above (kept with them).
+    pub vmi: Vec<f64>,
 }
 
 /// The new weights of the moved triangles of one collapse.
@@ -109,6 +111,8 @@ struct RowStep {
     /// Row sum and `Σ w ln w` before and after.
     before: (f64, f64),
     after: (f64, f64),
+    /// The row's sums did not change (its entropy did not either).
+    unchanged: bool,
 }
 
 impl ViewState {
@@ -157,6 +161,7 @@ impl ViewState {
             cols_xlnx: 0.0,
             bg_total: 0.0,
             cross: vec![0.0; nv],
+            vmi: vec![0.0; nv],
         };
         s.resum();
         s
@@ -195,6 +200,7 @@ impl ViewState {
                 self.cross[v] += cross_term(x, col);
             }
         }
+        self.vmi = self.viewpoint_information();
     }
 
     /// `I(v;O)` in bits of every viewpoint (Part V eq. (7)); 0 where nothing is seen.
@@ -251,6 +257,10 @@ impl ViewState {
 
     fn row_step(&self, k: usize, ds: f64, dterm: f64) -> RowStep {
         let (s0, b0) = (self.object[k], self.bg[k]);
+        if ds == 0.0 && dterm == 0.0 {
+            let r = (s0 + b0, self.row_xlnx[k]);
+            return RowStep { object: s0, bg: b0, before: r, after: r, unchanged: true, ..RowStep::default() };
+        }
         let s1 = (s0 + ds).max(0.0);
         let b1 = if self.background { (b0 - ds).max(0.0) } else { 0.0 };
         let d_joint = dterm + term(b1) - term(b0);
@@ -263,6 +273,7 @@ impl ViewState {
             d_rows: term(r1) - term(r0),
             before: (r0, self.row_xlnx[k]),
             after: (r1, self.row_xlnx[k] + d_joint),
+            unchanged: false,
         }
     }
 
@@ -279,6 +290,7 @@ impl ViewState {
         let (mut d_total, mut d_joint, mut d_rows, mut d_bg) = (0.0, 0.0, 0.0, 0.0);
         let mut ve = 0.0;
         let mut steps = Vec::with_capacity(if metric == Metric::Vmi { nv } else { 0 });
+        let mut hidden = Vec::with_capacity(if metric == Metric::Vmi { nv } else { 0 });
         for (k, eye) in self.eyes.iter().enumerate() {
             let (mut sa, mut old_terms) = (0.0, 0.0);
             for f in old() {
@@ -324,8 +336,9 @@ impl ViewState {
             d_bg += step.bg - self.bg[k];
             if metric == Metric::Vmi {
                 steps.push(step);
+                hidden.push(sa == 0.0);
             }
-            if metric == Metric::Ve && self.total > 0.0 {
+            if metric == Metric::Ve && self.total > 0.0 && !step.unchanged {
                 let h0 = entropy(step.before.0, step.before.1);
                 let h1 = entropy(step.after.0, step.after.1);
                 ve += step.before.0 / self.total * (h1 - h0).abs();
@@ -336,14 +349,21 @@ impl ViewState {
             Metric::Ve => ve,
             Metric::Vmi => {
                 let total1 = self.total + d_total;
+                let bg_total1 = self.bg_total + d_bg;
                 let mut c = 0.0;
                 for (k, step) in steps.iter().enumerate() {
                     if step.before.0 <= 0.0 || self.total <= 0.0 {
                         continue;
                     }
-                    let k1 =
-                        self.cross[k] + self.cross_change(k, change, &p.a, &new_cols, step.bg, self.bg_total + d_bg);
-                    let i0 = specific(self.total, step.before.0, step.before.1, self.cross[k]);
+                    // Triangles this viewpoint does not see add nothing to K_v:
+                    // only the background's term moves.
+                    let dk = if hidden[k] {
+                        cross_term(step.bg, bg_total1) - cross_term(self.bg[k], self.bg_total)
+                    } else {
+                        self.cross_change(k, change, &p.a, &new_cols, step.bg, bg_total1)
+                    };
+                    let k1 = self.cross[k] + dk;
+                    let i0 = self.vmi[k];
                     let i1 = specific(total1, step.after.0, step.after.1, k1);
                     c += step.before.0 / self.total * (i1 - i0).abs();
                 }
@@ -419,6 +439,7 @@ impl ViewState {
             self.cols_xlnx -= term(self.col_sum[f]);
             self.col_sum[f] = 0.0;
         }
+        self.vmi = self.viewpoint_information();
     }
 }
 

@@ -179,14 +179,14 @@ fn viewpoint_merge_refuses_missing_duplicate_and_foreign_shards() {
     let m = |f: &[&String], e: &[&str]| vp_merge(f, e);
     refused(&strs(&m(&[&s[0], &s[2]], &[])), "shard 1/3 missing");
     refused(&strs(&m(&[&s[0], &s[1], &s[1]], &[])), "are both shard 1/3");
-    refused(&strs(&m(&[&s[0], &s[1], &far], &[])), "a shard of another run: this run's --distance 3.0 vs 4.0");
-    refused(&strs(&m(&[&s[0], &s[1], &grid], &[])), "--estimator solid-angle vs grid");
+    refused(&strs(&m(&[&s[0], &s[1], &far], &[])), "a shard of another run (--distance 3.0 here, 4.0 in the shard)");
+    refused(&strs(&m(&[&s[0], &s[1], &grid], &[])), "--estimator solid-angle here, grid in the shard");
     refused(&strs(&m(&[&s[0], &s[1], &two], &[])), "shard 1/2 among shards of 3");
     refused(&strs(&m(&[&s[0], &s[1], &s[2]], &["--max-subdivision", "16"])), "subdivision levels");
     let other = ["viewpoints", "torus", "--viewpoints", "12", "--merge", &s[0], "--json"];
     refused(&other, "a shard of another scene (\"table-chairs:1\"");
     let more = ["viewpoints", MESH, "--viewpoints", "42", "--merge", &s[0]];
-    refused(&more, "--viewpoints 42 vs 12");
+    refused(&more, "--viewpoints 42 here, 12 in the shard");
     // Broken and tampered files.
     let text = std::fs::read_to_string(&s[1]).unwrap();
     let mut v: Value = serde_json::from_str(&text).unwrap();

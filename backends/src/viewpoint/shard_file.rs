@@ -91,10 +91,11 @@ pub struct ShardSettings {
 }
 
 impl ShardSettings {
-    /// The first setting that differs from `other`'s, as `name (self vs other)`.
+    /// The first setting that differs from `other`'s (a shard's), as
+    /// `name A here, B in the shard`.
     #[must_use]
     pub fn difference(&self, other: &Self) -> Option<String> {
-        let d = |name: &str, a: String, b: String| (a != b).then(|| format!("{name} {a} vs {b}"));
+        let d = |name: &str, a: String, b: String| (a != b).then(|| format!("{name} {a} here, {b} in the shard"));
         d("--viewpoints", self.viewpoints.to_string(), other.viewpoints.to_string())
             .or_else(|| d("--estimator", self.estimator.clone(), other.estimator.clone()))
             .or_else(|| d("--distance", format!("{:?}", self.distance), format!("{:?}", other.distance)))
@@ -363,7 +364,7 @@ pub fn order_shards(
             ));
         }
         if let Some(d) = settings.difference(&s.settings) {
-            return Err(format!("{name}: a shard of another run: this run's {d} (the shard's)"));
+            return Err(format!("{name}: a shard of another run ({d})"));
         }
         if s.shards != n {
             return Err(format!("{name}: shard {}/{} among shards of {n}", s.shard, s.shards));

@@ -143,7 +143,7 @@ fn adaptive_samplers_spend_the_budget() {
     assert!(v["threshold"].as_f64().unwrap() > 0.0);
     assert_eq!(&std::fs::read(out.join("density.png")).unwrap()[1..4], b"PNG");
     // Every criterion runs with a given threshold.
-    for c in ["cc", "ct", "kl", "cs", "hl", "kl-sqrt", "cs-sqrt", "ec-batch"] {
+    for c in ["cc", "ct", "kl", "cs", "hl", "kl-sqrt", "cs-sqrt", "ec-batch", "rel"] {
         let out = dir.join(c);
         let v = json(&itgfx(&[
             "render",

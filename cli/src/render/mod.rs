@@ -48,7 +48,8 @@ pub struct RenderOptions {
     pub spp: u32,
     /// Pixel sampler: uniform (stratified), or an adaptive criterion: cc (classic contrast), ct
     /// (confidence test), kl cs hl (f-divergences), kl-sqrt cs-sqrt hl-sqrt (their square roots), ec
-    /// (entropy refinement tree, Part IV §6), ec-batch (entropy contrast in batches); see docs/RENDER.md
+    /// (entropy refinement tree, Part IV §6), ec-batch (entropy contrast in batches), rel (relative
+    /// confidence half-width, beyond the tutorial); see docs/RENDER.md
     #[arg(long, value_name = "NAME", default_value = "uniform", value_parser = sampler_name)]
     pub sampler: String,
     /// Adaptive: most samples one pixel may take (default 16 x --spp)

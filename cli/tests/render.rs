@@ -290,6 +290,7 @@ fn bad_input_is_one_line_exit_2() {
     fails(&["render", "sphere", "--out", o, "--size", "8x8"], "analytic sphere");
     fails(&["render", "cornell-box", "--out", o, "--size", "0x8"], "--size");
     fails(&["render", "cornell-box", "--out", o, "--size", "8"], "--size");
+    fails(&["render", "cornell-box", "--out", o, "--size", "8192x8192", "--spp", "65536"], "GiB");
     fails(&["render", "cornell-box", "--out", o, "--spp", "0"], "--spp");
     fails(&["render", "cornell-box", "--out", o, "--camera", "0,0,0,0,0,0,0,1,0,40"], "--camera");
     fails(&["render", "cornell-box", "--out", o, "--camera", "1,2,3"], "--camera");

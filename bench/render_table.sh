@@ -18,27 +18,32 @@ SIZE=${SIZE:-128x128}
 SPP=${SPP:-60}
 REF_SPP=${REF_SPP:-1024}
 SEEDS=${SEEDS:-"1 2"}
-CRITERIA=${CRITERIA:-"cc ct kl cs hl kl-sqrt cs-sqrt hl-sqrt ec ec-batch"}
+CRITERIA=${CRITERIA:-"cc ct kl cs hl kl-sqrt cs-sqrt hl-sqrt ec ec-batch rel"}
 mkdir -p "$OUT"
 run() { nice -n 10 "$BIN" render "$SCENE" --size "$SIZE" "$@" --json; }
+# Runs whose JSON exists are kept (the script resumes).
+have() { [ -s "$OUT/$1.json" ]; }
 if [ ! -f "$OUT/ref/image.exr" ]; then
     run --out "$OUT/ref" --spp "$REF_SPP" --seed 1000 > "$OUT/ref.json"
 fi
 REF="$OUT/ref/image.exr"
 for seed in $SEEDS; do
-    run --out "$OUT/uniform-$seed" --spp "$SPP" --seed "$seed" --reference "$REF" > "$OUT/uniform-$seed.json"
-    run --out "$OUT/uniform2x-$seed" --spp $((2 * SPP)) --seed "$seed" --reference "$REF" > "$OUT/uniform2x-$seed.json"
+    have "uniform-$seed" || run --out "$OUT/uniform-$seed" --spp "$SPP" --seed "$seed" --reference "$REF" \
+        > "$OUT/uniform-$seed.json"
+    have "uniform2x-$seed" || run --out "$OUT/uniform2x-$seed" --spp $((2 * SPP)) --seed "$seed" --reference "$REF" \
+        > "$OUT/uniform2x-$seed.json"
 done
 for c in $CRITERIA; do
     first=${SEEDS%% *}
-    run --out "$OUT/$c-$first" --sampler "$c" --spp "$SPP" --seed "$first" --reference "$REF" > "$OUT/$c-$first.json"
+    have "$c-$first" || run --out "$OUT/$c-$first" --sampler "$c" --spp "$SPP" --seed "$first" --reference "$REF" \
+        > "$OUT/$c-$first.json"
     t=$(python3 -c "import json,sys; print(repr(json.load(open(sys.argv[1]))['threshold']))" "$OUT/$c-$first.json")
     for seed in $SEEDS; do
-        if [ "$seed" != "$first" ]; then
+        if [ "$seed" != "$first" ] && ! have "$c-$seed"; then
             run --out "$OUT/$c-$seed" --sampler "$c" --spp "$SPP" --threshold "$t" --seed "$seed" \
                 --reference "$REF" > "$OUT/$c-$seed.json"
         fi
-        run --out "$OUT/$c-unbiased-$seed" --sampler "$c" --spp "$SPP" --threshold "$t" --unbiased --seed "$seed" \
+        have "$c-unbiased-$seed" || run --out "$OUT/$c-unbiased-$seed" --sampler "$c" --spp "$SPP" --threshold "$t" --unbiased --seed "$seed" \
             --reference "$REF" > "$OUT/$c-unbiased-$seed.json"
     done
 done

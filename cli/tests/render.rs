@@ -143,7 +143,7 @@ fn adaptive_samplers_spend_the_budget() {
     assert!(v["threshold"].as_f64().unwrap() > 0.0);
     assert_eq!(&std::fs::read(out.join("density.png")).unwrap()[1..4], b"PNG");
     // Every criterion runs with a given threshold.
-    for c in ["cc", "ct", "kl", "cs", "hl", "kl-sqrt", "cs-sqrt", "ec-batch"] {
+    for c in ["cc", "ct", "kl", "cs", "hl", "kl-sqrt", "cs-sqrt", "ec-batch", "rel"] {
         let out = dir.join(c);
         let v = json(&itgfx(&[
             "render",
@@ -290,6 +290,7 @@ fn bad_input_is_one_line_exit_2() {
     fails(&["render", "sphere", "--out", o, "--size", "8x8"], "analytic sphere");
     fails(&["render", "cornell-box", "--out", o, "--size", "0x8"], "--size");
     fails(&["render", "cornell-box", "--out", o, "--size", "8"], "--size");
+    fails(&["render", "cornell-box", "--out", o, "--size", "8192x8192", "--spp", "65536"], "GiB");
     fails(&["render", "cornell-box", "--out", o, "--spp", "0"], "--spp");
     fails(&["render", "cornell-box", "--out", o, "--camera", "0,0,0,0,0,0,0,1,0,40"], "--camera");
     fails(&["render", "cornell-box", "--out", o, "--camera", "1,2,3"], "--camera");

@@ -12,6 +12,7 @@
 //! | `ct` | `t_{1−α/2,N−1} s/√N > ε`, α = 0.1 | confidence test, Part IV eq. (5) (tutorial tolerance 0.025) |
 //! | `kl`, `cs`, `hl` | `(1/N) Ȳ D(p, u) ≥ ε`, `p_i = Y_i/ΣY` | f-divergence criteria, III-IV eqs. (14)–(16) |
 //! | `kl-sqrt`, `cs-sqrt`, `hl-sqrt` | `(1/N) Ȳ D^½(p, u) ≥ ε` | III-IV Def. 4 |
+//! | `rel` | `t_{1−α/2,N−1} s/√N > ε (Ȳ + 0.01)` | beyond the tutorial: a relative-error stop in the style of production renderers' adaptive sampling (noise relative to brightness); the confidence interval of Part IV eq. (5) |
 //! | `ec-batch` | `(1/N) Σ_c w^c C^c c̄^c ≥ ε`, `C^c = 1 − H(p^c)/log N` | entropy contrast of each channel weighted by its importance, Part IV eqs. (16), (27) at the pixel level (`q_1 = c̄`), sRGB weights; the tree form `ec` is in [`super::tree`] |
 //!
 //! The `1/N` factor of III-IV eq. (15) makes every criterion but `ct` stop
@@ -30,6 +31,8 @@ use super::frame::{PixelSamples, Policy};
 pub const BATCH: u32 = 8;
 /// Confidence level parameter α of the confidence test (III-IV §5.2).
 pub const ALPHA: f64 = 0.1;
+/// Added to the mean luminance by `rel` so black pixels stop.
+pub const RELATIVE_FLOOR: f64 = 0.01;
 
 /// A refinement criterion.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -40,13 +43,15 @@ pub enum Criterion {
     ConfidenceTest,
     /// f-divergence from uniform, optionally its square root (`kl`, `kl-sqrt`, …).
     Divergence(DivergenceKernel, bool),
+    /// Confidence half-width relative to the mean luminance (`rel`).
+    RelativeError,
     /// Entropy contrast of the channels weighted by their importance, in
     /// batches (`ec-batch`; the tree form is [`super::tree`]).
     EntropyContrast,
 }
 
 /// Every criterion's command-line name, in help order.
-pub const NAMES: &[&str] = &["cc", "ct", "kl", "cs", "hl", "kl-sqrt", "cs-sqrt", "hl-sqrt", "ec-batch"];
+pub const NAMES: &[&str] = &["cc", "ct", "kl", "cs", "hl", "kl-sqrt", "cs-sqrt", "hl-sqrt", "ec-batch", "rel"];
 
 impl Criterion {
     /// The criterion called `name` (see [`NAMES`]).
@@ -63,6 +68,7 @@ impl Criterion {
             "cs-sqrt" => Self::Divergence(ChiSquare, true),
             "hl-sqrt" => Self::Divergence(Hellinger, true),
             "ec-batch" => Self::EntropyContrast,
+            "rel" => Self::RelativeError,
             _ => return None,
         })
     }
@@ -78,6 +84,7 @@ impl Criterion {
         let v = match self {
             Self::ClassicContrast => classic_contrast(&y).map(|c| mean * c / n),
             Self::ConfidenceTest => confidence_test(&y, ALPHA, 0.0).map(|t| t.half_width),
+            Self::RelativeError => confidence_test(&y, ALPHA, 0.0).map(|t| t.half_width / (mean + RELATIVE_FLOOR)),
             Self::Divergence(k, sqrt) => divergence_criterion(*k, &y, *sqrt),
             Self::EntropyContrast => (|| {
                 let mut contrasts = [0.0; 3];
@@ -113,7 +120,11 @@ impl Adaptive {
     #[must_use]
     pub fn refines(&self, rgb: &[[f64; 3]]) -> bool {
         let v = self.criterion.value(rgb);
-        if self.criterion == Criterion::ConfidenceTest { v > self.threshold } else { v >= self.threshold }
+        if matches!(self.criterion, Criterion::ConfidenceTest | Criterion::RelativeError) {
+            v > self.threshold
+        } else {
+            v >= self.threshold
+        }
     }
 }
 

@@ -48,7 +48,8 @@ pub struct RenderOptions {
     pub spp: u32,
     /// Pixel sampler: uniform (stratified), or an adaptive criterion: cc (classic contrast), ct
     /// (confidence test), kl cs hl (f-divergences), kl-sqrt cs-sqrt hl-sqrt (their square roots), ec
-    /// (entropy refinement tree, Part IV §6), ec-batch (entropy contrast in batches); see docs/RENDER.md
+    /// (entropy refinement tree, Part IV §6), ec-batch (entropy contrast in batches), rel (relative
+    /// confidence half-width, beyond the tutorial); see docs/RENDER.md
     #[arg(long, value_name = "NAME", default_value = "uniform", value_parser = sampler_name)]
     pub sampler: String,
     /// Adaptive: most samples one pixel may take (default 16 x --spp)
@@ -155,6 +156,31 @@ fn camera(s: &str) -> Result<Camera, String> {
     Camera::look_at(d(0), d(3), d(6), v[9]).map_err(|e| e.to_string())
 }
 
+/// Most memory a run may plan to use.
+const MEMORY_LIMIT: u64 = 4 << 30;
+
+/// Refuses a run whose image or per-row sample buffers would pass
+/// [`MEMORY_LIMIT`]: about 120 bytes a pixel (radiance, counts, display
+/// values, PNG), and 48 bytes a sample of the row each worker holds.
+fn memory_check(o: &RenderOptions) -> Result<(), CliError> {
+    let (w, h) = (u64::from(o.size.0), u64::from(o.size.1));
+    let per_pixel = match o.sampler.as_str() {
+        "uniform" => u64::from(o.spp),
+        "ec" => 680,
+        _ => u64::from(o.max_spp.unwrap_or(o.spp.saturating_mul(16).min(MAX_SPP))),
+    };
+    let workers = o.threads.unwrap_or_else(rayon::current_num_threads) as u64;
+    let bytes = w * h * 120 + workers * w * per_pixel * 48;
+    if bytes > MEMORY_LIMIT {
+        return Err(CliError::usage(format!(
+            "{w} x {h} at up to {per_pixel} samples a pixel needs about {:.1} GiB (limit {} GiB): lower --size, --spp or --max-spp",
+            bytes as f64 / f64::from(1u32 << 30),
+            MEMORY_LIMIT >> 30
+        )));
+    }
+    Ok(())
+}
+
 /// The output directory: must be a directory or not exist; made if missing.
 /// Returns it and whether it was made here.
 fn out_dir(o: &RenderOptions) -> Result<(PathBuf, bool), CliError> {
@@ -204,6 +230,7 @@ pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
             criteria::BATCH
         )));
     }
+    memory_check(o)?;
     let (dir, made) = out_dir(o)?;
     let result = render_into(o, &spec, &dir);
     if result.is_err() && made {

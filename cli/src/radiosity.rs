@@ -63,14 +63,14 @@ pub struct RadiosityOptions {
     /// Split every patch into K x K cells first
     #[arg(long, value_name = "K", default_value = "1", value_parser = subdivide)]
     pub subdivide: u32,
-    /// Picture width and height in pixels
+    /// Picture width and height in pixels (8..=2048)
     #[arg(long, value_name = "W", default_value = "256", value_parser = size)]
     pub size: u32,
     /// Score the solution against a path-traced reference (reference.pfm of --path-trace)
     #[arg(long, value_name = "R.pfm", value_parser = out_path, conflicts_with = "path_trace")]
     pub reference: Option<PathBuf>,
     /// Make the reference instead: W random walks per pixel (no mesh, no oracle)
-    #[arg(long, value_name = "W", value_parser = walks)]
+    #[arg(long, value_name = "W", value_parser = walks, conflicts_with_all = ["elements", "epsilon"])]
     pub path_trace: Option<u32>,
     /// Write the pictures and files into DIR
     #[arg(long, value_name = "DIR", value_parser = out_path)]
@@ -134,8 +134,9 @@ fn subdivide(s: &str) -> Result<u32, String> {
     ranged(s, 1, 64).map(|v| v as u32)
 }
 
+/// Up to 2048 x 2048 pixels: a pixel's ray, hit and sight take about 120 bytes.
 fn size(s: &str) -> Result<u32, String> {
-    ranged(s, 8, 4096).map(|v| v as u32)
+    ranged(s, 8, 2048).map(|v| v as u32)
 }
 
 fn walks(s: &str) -> Result<u32, String> {

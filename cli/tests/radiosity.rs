@@ -139,6 +139,8 @@ fn bad_input_is_one_line_and_exit_2() {
     let e = failure(&itgfx(&["radiosity", "cornell-box", "--reference", "/nonexistent/r.pfm"]));
     assert!(e.contains("reference"), "{e}");
     failure(&itgfx(&["radiosity"]));
+    failure(&itgfx(&["radiosity", "cornell-box", "--path-trace", "16", "--elements", "100"]));
+    failure(&itgfx(&["radiosity", "cornell-box", "--size", "5000"]));
     // A white material (Kd 1) would never converge.
     let dir = temp("bad-mtl");
     std::fs::create_dir_all(&dir).unwrap();

@@ -8,7 +8,7 @@ use clap::Args;
 use glam::DVec3;
 use itgfx_backends::BackendChoice;
 use itgfx_backends::simplify::metrics::{Render, evaluation_directions, image_error, render, surface_distance};
-use itgfx_backends::simplify::{IndexedMesh, Metric, Settings, simplify};
+use itgfx_backends::simplify::{IndexedMesh, Metric, Settings, check_memory, simplify};
 use itgfx_backends::tracer::Prepared;
 use itgfx_backends::viewpoint::icosphere;
 
@@ -253,6 +253,10 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
         ),
         None => None,
     };
+    if o.evaluate.is_none() {
+        check_memory(n, icosphere(viewpoint_level(o.viewpoints)).len())
+            .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
+    }
     if !out.exists() {
         std::fs::create_dir_all(&out).map_err(|e| CliError::usage(format!("--out {out:?}: {e}")))?;
     }

@@ -179,6 +179,9 @@ fn bad_input_is_one_line_and_exit_2() {
     std::fs::write(&fin, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n").unwrap();
     let (o, m) = (d.join("out"), obj.to_str().unwrap());
     let o = o.to_str().unwrap();
+    let big = d.join("big.obj");
+    // 56,000 triangles × 2562 viewpoints of weights: over the 2 GiB cap.
+    torus(&big, 200, 140);
     let file = d.join("a-file");
     std::fs::write(&file, "x").unwrap();
     for (args, needle) in [
@@ -195,6 +198,7 @@ fn bad_input_is_one_line_and_exit_2() {
         (vec!["simplify", m, "--target", "10%", "--out", o, "--metric", "qem"], "--metric"),
         (vec!["simplify", m, "--target", "10%", "--out", o, "--viewpoints", "50"], "--viewpoints"),
         (vec!["simplify", "sphere", "--target", "10%", "--out", o], "no triangles"),
+        (vec!["simplify", big.to_str().unwrap(), "--target", "10%", "--out", o, "--viewpoints", "2562"], "GiB"),
         (vec!["simplify", "/nonexistent/mesh.obj", "--target", "10%", "--out", o], "/nonexistent/mesh.obj"),
         (vec!["simplify", m, "--target", "10%", "--evaluate", m, "--out", o], "--evaluate"),
     ] {

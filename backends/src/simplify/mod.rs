@@ -130,7 +130,7 @@ impl std::fmt::Display for SimplifyError {
 impl std::error::Error for SimplifyError {}
 
 /// Most bytes the channel's weights may take.
-pub const MAX_BYTES: u64 = 4 << 30;
+pub const MAX_BYTES: u64 = 2 << 30;
 
 /// A half-edge `u → v` in the queue, cheapest first, then by vertices.
 #[derive(Clone, Copy, Debug)]
@@ -159,6 +159,16 @@ impl Ord for Entry {
     }
 }
 
+/// Checks, before any work, that the channel's weights for `triangles`
+/// triangles and `views` viewpoints fit in [`MAX_BYTES`].
+///
+/// # Errors
+/// [`SimplifyError::TooLarge`].
+pub fn check_memory(triangles: usize, views: usize) -> Result<(), SimplifyError> {
+    let bytes = ViewState::bytes(triangles, views);
+    if bytes > MAX_BYTES { Err(SimplifyError::TooLarge { bytes }) } else { Ok(()) }
+}
+
 /// User and system CPU seconds of this process, all threads (Linux's
 /// `/proc/self/stat`, in its fixed 100 Hz ticks); `None` elsewhere.
 #[must_use]
@@ -174,10 +184,7 @@ pub fn process_cpu_seconds() -> Option<f64> {
 /// Traces the channel of the living triangles.
 pub(crate) fn trace(d: &Dynamic, s: &Settings) -> Result<ViewState, SimplifyError> {
     let live: Vec<u32> = (0..d.faces.len() as u32).filter(|&f| d.alive[f as usize]).collect();
-    let bytes = ViewState::bytes(d.faces.len(), s.directions.len());
-    if bytes > MAX_BYTES {
-        return Err(SimplifyError::TooLarge { bytes });
-    }
+    check_memory(d.faces.len(), s.directions.len())?;
     let mesh =
         IndexedMesh { positions: d.positions.clone(), faces: live.iter().map(|&f| d.faces[f as usize]).collect() };
     let prepared = mesh.prepared();

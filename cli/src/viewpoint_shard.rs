@@ -33,8 +33,8 @@ pub struct ViewpointShardOptions {
     /// Write the shard's channel rows to F (for --merge)
     #[arg(long, value_name = "F", value_parser = out_path, requires = "shard", help_heading = "Shards")]
     pub save_shard: Option<PathBuf>,
-    /// Solid angle: refinement levels a shard saves per viewpoint (default all: the merge traces
-    /// nothing); the merge traces any further level a viewpoint needs. Fewer: less shard work
+    /// Solid angle: refinement levels a shard saves per viewpoint (default 1: the first pass); the
+    /// merge traces any further level a viewpoint needs. 16 keeps them all: the merge traces nothing
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=16), requires = "shard",
           help_heading = "Shards")]
     pub shard_levels: Option<u32>,
@@ -119,7 +119,7 @@ pub fn save(
             .map_err(|e| CliError::usage(e.to_string()))?;
         (ViewpointShard::grid(scene, st, (s.index, s.count), &ch), None)
     } else {
-        let keep = o.shards.shard_levels.map_or(usize::MAX, |k| k as usize);
+        let keep = o.shards.shard_levels.map_or(1, |k| k as usize);
         let ladders = ViewpointChannel::ladders(prepared, tracer, mine, refine, keep, &mut tick)
             .map_err(|e| CliError::usage(format!("{name}: {e}")))?;
         let kept = ladders.first().map_or(0, |l| l.fractions.len());

@@ -59,7 +59,7 @@ say "complexity: merged == single run, bit for bit ($(grep -o '"I_S":[^,]*' "$OU
 
 # viewpoints, both estimators: 4 shards of a 42-viewpoint run.
 export MESH=table-chairs:1 VIEWPOINTS=42
-for case in "|" "|--shard-levels 1" "--estimator grid --resolution 64|"; do
+for case in "|" "|--shard-levels 16" "--estimator grid --resolution 64|"; do
     export VP_ARGS=${case%|*} SHARD_ARGS=${case#*|}
     rm -f "$OUT"/viewpoints*
     submit viewpoints

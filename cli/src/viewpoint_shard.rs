@@ -33,6 +33,11 @@ pub struct ViewpointShardOptions {
     /// Write the shard's channel rows to F (for --merge)
     #[arg(long, value_name = "F", value_parser = out_path, requires = "shard", help_heading = "Shards")]
     pub save_shard: Option<PathBuf>,
+    /// Solid angle: refinement levels a shard saves per viewpoint (default 1: the first pass); the
+    /// merge traces any further level a viewpoint needs. 16 keeps them all: the merge traces nothing
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=16), requires = "shard",
+          help_heading = "Shards")]
+    pub shard_levels: Option<u32>,
     /// Build the channel from the saved shards F1,F2,... of one run (all n of them) instead of tracing
     #[arg(long, value_name = "F1,F2,...", value_delimiter = ',', conflicts_with = "shard", help_heading = "Shards")]
     pub merge: Vec<PathBuf>,
@@ -64,6 +69,9 @@ pub fn check(
         if o.per_polygon {
             return Err(CliError::usage("--per-polygon: a --shard run saves channel rows only; give it to --merge"));
         }
+    }
+    if o.shards.shard_levels.is_some() && o.estimator == "grid" {
+        return Err(CliError::usage("--shard-levels: the grid estimator has no refinement levels"));
     }
     if let Some(p) = &o.shards.save_shard {
         crate::output::check("--save-shard", p)?;
@@ -106,14 +114,16 @@ pub fn save(
     let mut progress = Progress::new();
     let mut tick = |d, t| progress.update(d, t);
     let scene = MeshFingerprint::of(name, prepared);
-    let shard = if o.estimator == "grid" {
+    let (shard, kept) = if o.estimator == "grid" {
         let ch = ViewpointChannel::build(prepared, tracer, mine, o.distance, st.resolution, &mut tick)
             .map_err(|e| CliError::usage(e.to_string()))?;
-        ViewpointShard::grid(scene, st, (s.index, s.count), &ch)
+        (ViewpointShard::grid(scene, st, (s.index, s.count), &ch), None)
     } else {
-        let ladders = ViewpointChannel::ladders(prepared, tracer, mine, refine, &mut tick)
+        let keep = o.shards.shard_levels.map_or(1, |k| k as usize);
+        let ladders = ViewpointChannel::ladders(prepared, tracer, mine, refine, keep, &mut tick)
             .map_err(|e| CliError::usage(format!("{name}: {e}")))?;
-        ViewpointShard::solid_angle(scene, st, (s.index, s.count), ladders)
+        let kept = ladders.first().map_or(0, |l| l.fractions.len());
+        (ViewpointShard::solid_angle(scene, st, (s.index, s.count), ladders), Some(kept))
     };
     let text = shard.to_json().map_err(|e| CliError::usage(format!("--save-shard: {e}")))?;
     let path = o.shards.save_shard.as_ref().ok_or_else(|| CliError::usage("--shard needs --save-shard F"))?;
@@ -122,6 +132,9 @@ pub fn save(
     r.text("mesh", name).text("backend", tracer.name()).text("estimator", o.estimator.clone());
     r.text("shard", s.to_string()).count("first_viewpoint", first).count("end_viewpoint", end);
     r.count("viewpoints", dirs.len() as u64).count("shard_viewpoints", end - first);
+    if let Some(k) = kept {
+        r.count("levels_saved", k as u64);
+    }
     r.text("saved", path.display().to_string()).count("bytes", text.len() as u64);
     r.real("seconds", t0.elapsed().as_secs_f64(), Some("s"));
     Ok(r)
@@ -158,7 +171,7 @@ pub fn merged(
             return Err(CliError::usage(format!("--merge: viewpoint {v}'s eye is not where this run puts it")));
         }
     }
-    let (ch, c) = ViewpointChannel::from_ladders(prepared, &ladders, refine)
+    let (ch, c) = ViewpointChannel::from_ladders(prepared, tracer, &ladders, refine)
         .map_err(|e| CliError::usage(format!("{name}: {e}")))?;
     Ok((ch, Some(c)))
 }

@@ -162,6 +162,14 @@ fn viewpoint_shards_merge_into_the_single_run_bit_for_bit() {
             let files = order.map(|k| &s[k]);
             assert_eq!(vp_json(&vp_merge(&files, &[extra, &["--per-polygon"]].concat())), single, "{tag} {order:?}");
         }
+        // Shards that keep more refinement levels (16: all of them, the merge traces nothing).
+        if tag == "s" {
+            for k in ["2", "16"] {
+                let s: Vec<String> = (0..3).map(|i| vp_shard(i, 3, &["--shard-levels", k], &format!("k{k}"))).collect();
+                let files = [&s[2], &s[0], &s[1]];
+                assert_eq!(vp_json(&vp_merge(&files, &["--per-polygon"])), single, "--shard-levels {k}");
+            }
+        }
         // The measures follow the merging command's options (p(V) here), the rows the shards'.
         let uniform = vp_json(&vp(&[extra, &["--json", "--uniform-input"]].concat()));
         assert_eq!(vp_json(&vp_merge(&[&s[1], &s[0], &s[2]], &[extra, &["--uniform-input"]].concat())), uniform);
@@ -215,6 +223,12 @@ fn bad_viewpoint_shards_are_refused() {
         (vec!["--shard", "0/2", "--save-shard", &p, "--out", "d"], "--out: a --shard run"),
         (vec!["--shard", "0/2", "--save-shard", &p, "--per-polygon"], "--per-polygon"),
         (vec!["--shard", "0/2", "--save-shard", &p, "--merge", &p], "--merge"),
+        (vec!["--shard-levels", "2"], "--shard"),
+        (vec!["--shard", "0/2", "--save-shard", &p, "--shard-levels", "0"], "--shard-levels"),
+        (
+            vec!["--shard", "0/2", "--save-shard", &p, "--estimator", "grid", "--shard-levels", "2"],
+            "no refinement levels",
+        ),
     ] {
         refused(&strs(&vp(&args)), needle);
     }

@@ -37,10 +37,10 @@ fi
 
 # The binary under test.
 if [[ -z ${ITGFX:-} ]]; then
+    # The newer of the release and debug builds.
     for b in "$repo/target/release/itgfx" "$repo/target/debug/itgfx"; do
-        if [[ -x $b ]]; then
+        if [[ -x $b && (-z ${ITGFX:-} || $b -nt ${ITGFX:-}) ]]; then
             ITGFX=$b
-            break
         fi
     done
 fi

@@ -10,7 +10,7 @@
 #   tests/slurm/run.sh --install    apt-get install slurm-wlm munge first (root, Debian/Ubuntu)
 #
 # ITGFX=path/to/itgfx picks the binary (default: target/release/itgfx or
-# target/debug/itgfx, built with cargo if neither exists). TIMEOUT (seconds,
+# target/debug/itgfx, the newer; built with cargo if neither exists). TIMEOUT (seconds,
 # default 150) bounds the whole wait for jobs. Exit 0: passed or skipped;
 # 1: failed.
 set -euo pipefail
@@ -59,15 +59,15 @@ say "complexity: merged == single run, bit for bit ($(grep -o '"I_S":[^,]*' "$OU
 
 # viewpoints, both estimators: 4 shards of a 42-viewpoint run.
 export MESH=table-chairs:1 VIEWPOINTS=42
-for VP_ARGS in "" "--estimator grid --resolution 64"; do
-    export VP_ARGS
+for case in "|" "|--shard-levels 16" "--estimator grid --resolution 64|"; do
+    export VP_ARGS=${case%|*} SHARD_ARGS=${case#*|}
     rm -f "$OUT"/viewpoints*
     submit viewpoints
     # shellcheck disable=SC2086
     "$ITGFX" viewpoints "$MESH" --viewpoints "$VIEWPOINTS" $VP_ARGS --json > "$T/viewpoints-single.json"
     cmp -s <(strip "$OUT/viewpoints.json") <(strip "$T/viewpoints-single.json") ||
-        fail "viewpoints ${VP_ARGS:-solid-angle}: merged shards differ from the single run"
-    say "viewpoints ${VP_ARGS:-(solid angle)}: merged == single run, bit for bit ($(grep -o '"I_VO":[^,]*' "$OUT/viewpoints.json"))"
+        fail "viewpoints ${VP_ARGS:-solid-angle} $SHARD_ARGS: merged shards differ from the single run"
+    say "viewpoints ${VP_ARGS:-(solid angle)} $SHARD_ARGS: merged == single run, bit for bit ($(grep -o '"I_VO":[^,]*' "$OUT/viewpoints.json"))"
 done
 
 # A failed shard: the merge job never runs (afterok) and is cancelled.

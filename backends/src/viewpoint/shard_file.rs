@@ -306,7 +306,7 @@ impl ViewpointShard {
                     {
                         return Err("a ladder's patches or triangles are out of range".into());
                     }
-                    if r.fractions.len() != st.levels.len()
+                    if !(1..=st.levels.len()).contains(&r.fractions.len())
                         || r.fractions
                             .iter()
                             .any(|f| f.len() != r.sampled.len() || !f.iter().all(|x| (0.0..=1.0).contains(x)))

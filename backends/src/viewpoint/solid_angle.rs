@@ -480,18 +480,21 @@ impl ViewpointChannel {
     /// The channel and its convergence from saved ladders (shards of one
     /// run, in viewpoint order): the same refinement as
     /// [`ViewpointChannel::build_solid_angle`], each step reading a view's
-    /// next level instead of tracing it, so the result is bit for bit the
-    /// one-process run's. `refine.first` and `refine.max` must be the ones
-    /// the ladders were built with ([`ladder_levels`]).
+    /// next level from its ladder, or tracing it with `tracer` where the
+    /// ladder stops short, so the result is bit for bit the one-process
+    /// run's. `refine.first` and `refine.max` must be the ones the ladders
+    /// were built with ([`ladder_levels`]).
     ///
     /// # Errors
-    /// [`ChannelError::Measure`] when nothing is seen.
+    /// Backend errors; [`ChannelError::Measure`] when nothing is seen.
     pub fn from_ladders(
         prepared: &Prepared,
+        tracer: &dyn Tracer,
         ladders: &[ViewLadder],
         refine: &Refinement,
     ) -> Result<(Self, Convergence), ChannelError> {
         let levels = ladder_levels(refine.first, refine.max);
+        let tris: Vec<[DVec3; 3]> = prepared.triangles.iter().map(as_d).collect();
         let at = |l: &ViewLadder, k: usize| View {
             eye: l.eye,
             whole: l.whole.clone(),
@@ -506,20 +509,37 @@ impl ViewpointChannel {
         };
         let views: Vec<View> = ladders.iter().map(|l| at(l, 0)).collect();
         refine_views(prepared, views, refine, &mut |views, todo| {
+            let next = |m: u32| levels.iter().position(|&x| x == m).map_or(levels.len() - 1, |k| k + 1);
+            let mut traced = Vec::new();
             for &v in todo {
-                let k = levels.iter().position(|&m| m == views[v].m).map_or(levels.len() - 1, |k| k + 1);
-                views[v] = at(&ladders[v], k.min(levels.len() - 1));
+                let k = next(views[v].m).min(levels.len() - 1);
+                if k < ladders[v].fractions.len() {
+                    views[v] = at(&ladders[v], k);
+                } else {
+                    traced.push(v);
+                }
             }
-            Ok(())
+            let results: Vec<Result<(), BackendError>> = views
+                .par_iter_mut()
+                .enumerate()
+                .filter(|(v, _)| traced.binary_search(v).is_ok())
+                .map(|(_, view)| {
+                    view.m = (view.m * 2).min(refine.max);
+                    view.sample(tracer, &tris)
+                })
+                .collect();
+            results.into_iter().collect::<Result<(), BackendError>>().map_err(ChannelError::Backend)
         })
     }
 
-    /// Every viewpoint's visibility at every level of the refinement
-    /// ([`ladder_levels`]): what a shard of a solid-angle run saves. A
-    /// ladder is a pure function of the scene, the direction, the distance
-    /// and the levels, whatever the other viewpoints, so shards of any
-    /// viewpoint ranges merge exactly ([`ViewpointChannel::from_ladders`]).
-    /// `progress(done, total)` counts viewpoints.
+    /// Every viewpoint's visibility at the first `keep` levels of the
+    /// refinement ([`ladder_levels`]; all of them when `keep` is larger):
+    /// what a shard of a solid-angle run saves. A ladder is a pure function
+    /// of the scene, the direction, the distance and the levels, whatever
+    /// the other viewpoints, so shards of any viewpoint ranges merge exactly
+    /// ([`ViewpointChannel::from_ladders`], which traces the levels not
+    /// kept that a viewpoint turns out to need). `progress(done, total)`
+    /// counts viewpoints.
     ///
     /// # Errors
     /// Backend errors.
@@ -528,9 +548,11 @@ impl ViewpointChannel {
         tracer: &dyn Tracer,
         directions: &[DVec3],
         refine: &Refinement,
+        keep: usize,
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<Vec<ViewLadder>, BackendError> {
-        let levels = ladder_levels(refine.first, refine.max);
+        let mut levels = ladder_levels(refine.first, refine.max);
+        levels.truncate(keep.max(1));
         let tris: Vec<[DVec3; 3]> = prepared.triangles.iter().map(as_d).collect();
         let views = first_pass(prepared, tracer, directions, refine.distance, levels[0], &mut |_, _| {})?;
         let n = views.len() as u64;
@@ -597,7 +619,8 @@ pub struct ViewLadder {
     pub sampled: Vec<(u32, f64)>,
     /// Rays of the centroid probes and the item buffer.
     pub base_rays: u64,
-    /// Per level of [`ladder_levels`], the visible fraction of each sampled triangle.
+    /// Per level of [`ladder_levels`] kept (the first ones, at least one),
+    /// the visible fraction of each sampled triangle.
     pub fractions: Vec<Vec<f64>>,
 }
 
@@ -681,6 +704,15 @@ mod tests {
         assert!((triangle_solid_angle(a, b, c) / (0.5e-6 / 100.0) - 1.0).abs() < 1e-5);
         // Edge-on: zero.
         assert_eq!(triangle_solid_angle(DVec3::X, DVec3::X * 2.0, DVec3::X * 3.0), 0.0);
+    }
+
+    #[test]
+    fn ladder_levels_double_up_to_the_cap() {
+        assert_eq!(ladder_levels(4, 32), [4, 8, 16, 32]);
+        assert_eq!(ladder_levels(4, 20), [4, 8, 16, 20]);
+        assert_eq!(ladder_levels(4, 4), [4]);
+        assert_eq!(ladder_levels(8, 4), [8], "first above the cap: no refinement, as build_solid_angle");
+        assert_eq!(ladder_levels(0, 2), [1, 2]);
     }
 
     #[test]

@@ -40,7 +40,7 @@ pub struct RadiosityOptions {
     #[arg(long, value_name = "N", value_parser = elements, conflicts_with = "epsilon")]
     pub elements: Option<usize>,
     /// Refinement threshold (dimensionless; default 1e-3 without --elements)
-    #[arg(long, value_name = "E", value_parser = epsilon)]
+    #[arg(long, value_name = "E", value_parser = epsilon, allow_hyphen_values = true)]
     pub epsilon: Option<f64>,
     /// Relative tolerance on the element count of --elements
     #[arg(long, value_name = "F", default_value = "0.03", value_parser = fraction)]

@@ -46,7 +46,7 @@ pub fn parse(s: &str) -> Result<Shard, String> {
         return Err(format!("the shard count must be in 1..={MAX_SHARDS}"));
     }
     if index >= count {
-        return Err(format!("shard {index} of {count}: shards are numbered 0..={}", count - 1));
+        return Err(format!("{index}/{count}: shards of {count} are numbered 0..={}", count - 1));
     }
     Ok(Shard { index, count })
 }

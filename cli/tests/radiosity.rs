@@ -136,6 +136,9 @@ fn bad_input_is_one_line_and_exit_2() {
     failure(&itgfx(&["radiosity", "cornell-box", "--elements", "100", "--epsilon", "1e-3"]));
     failure(&itgfx(&["radiosity", "cornell-box", "--samples", "1"]));
     failure(&itgfx(&["radiosity", "cornell-box", "--epsilon", "nan"]));
+    // A negative threshold is a value out of range, not an unknown option "-1".
+    let e = failure(&itgfx(&["radiosity", "cornell-box", "--epsilon", "-1"]));
+    assert!(e.contains("--epsilon must be in (0, 1e6]"), "{e}");
     let e = failure(&itgfx(&["radiosity", "cornell-box", "--reference", "/nonexistent/r.pfm"]));
     assert!(e.contains("reference"), "{e}");
     failure(&itgfx(&["radiosity"]));

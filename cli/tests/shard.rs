@@ -100,7 +100,7 @@ fn complexity_merge_refuses_missing_duplicate_and_foreign_shards() {
 #[test]
 fn bad_shards_are_refused() {
     for (args, needle) in [
-        (&["complexity", SCENE, "--shard", "3/3"][..], "shards are numbered 0..=2"),
+        (&["complexity", SCENE, "--shard", "3/3"][..], "--shard 3/3: shards of 3 are numbered 0..=2"),
         (&["complexity", SCENE, "--shard", "1/0"], "1..=4294967296"),
         (&["complexity", SCENE, "--shard", "1"], "expected i/n"),
         (&["complexity", SCENE, "--shard", "x/2"], "not a non-negative integer"),

@@ -19,7 +19,7 @@ use crate::values::{
     name = "itgfx",
     version,
     about = "itgfx — information theory for computer graphics",
-    after_help = "Every command accepts --json (one JSON object on stdout) and --base 2|e|10.\n\
+    after_help = "Every command accepts --json (one JSON object on stdout); those that report information measures take --base 2|e|10.\n\
                   Errors are one line on stderr and exit code 2.",
     arg_required_else_help = true
 )]
@@ -34,29 +34,29 @@ pub struct Cli {
 pub enum Command {
     /// Scene visibility channel: H_P, H_S, I_S, I_S^c (Part III)
     Complexity(ComplexityOptions),
-    /// Evaluate an information measure
-    #[command(arg_required_else_help = true, subcommand_value_name = "NAME", subcommand_help_heading = "Measures")]
-    Measure(MeasureCommand),
     /// Viewpoint channel V -> O: VE, VMI, best views (Part V)
     Viewpoints(ViewpointsOptions),
-    /// Viewpoint-driven mesh simplification by VMI or VE (Part VII)
-    Simplify(crate::simplify::SimplifyOptions),
-    /// Viewpoint channel over voxels V -> Z: VMI, VoMI, EVMI, best views of a volume (Part VI)
-    Volume(crate::volume::VolumeOptions),
-    /// Vulkan devices found, and the one --backend vulkan uses
-    Devices(Common),
-    /// A synthetic two-modality image pair with a known rigid transform (Part 8)
-    Phantom(crate::imaging::PhantomOptions),
-    /// Rigid 2D registration by mutual information, multiresolution (Part 8)
-    Register(crate::imaging::RegisterOptions),
-    /// Image segmentation by the region-intensity information channel (Part 8)
-    Segment(crate::imaging::SegmentOptions),
     /// Path-traced image with adaptive pixel sampling (Part IV; Part III-IV §5)
     Render(crate::render::RenderOptions),
     /// RMSE, PSNR and relMSE of one EXR image against another
     Compare(crate::render::CompareOptions),
     /// Hierarchical radiosity refined by the oracles of Part III §9 and Part III-IV §4
     Radiosity(crate::radiosity::RadiosityOptions),
+    /// Viewpoint channel over voxels V -> Z: VMI, VoMI, EVMI, best views of a volume (Part VI)
+    Volume(crate::volume::VolumeOptions),
+    /// Viewpoint-driven mesh simplification by VMI or VE (Part VII)
+    Simplify(crate::simplify::SimplifyOptions),
+    /// Rigid 2D registration by mutual information, multiresolution (Part 8)
+    Register(crate::imaging::RegisterOptions),
+    /// Image segmentation by the region-intensity information channel (Part 8)
+    Segment(crate::imaging::SegmentOptions),
+    /// A synthetic two-modality image pair with a known rigid transform (Part 8)
+    Phantom(crate::imaging::PhantomOptions),
+    /// Evaluate an information measure
+    #[command(arg_required_else_help = true, subcommand_value_name = "NAME", subcommand_help_heading = "Measures")]
+    Measure(MeasureCommand),
+    /// Vulkan devices found, and the one --backend vulkan uses
+    Devices(Common),
 }
 
 /// Options every command has.

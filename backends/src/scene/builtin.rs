@@ -93,6 +93,12 @@ pub const BUILT_IN: &[BuiltIn] = &[
         description: "cube enclosure 10x10 per face with K cubes of side 0.05, random (K in 1..=1000, default) or clustered (K in 1..=2197); default K = 27, SEED = 1 (Figs. 11, 15, 16)",
         build: cubes_room,
     },
+    BuiltIn {
+        name: "chairs-room",
+        syntax: "chairs-room",
+        description: "the table with four chairs (wood) in a 5 x 2.6 x 5 m white room lit by a 1 x 1 m ceiling light (after Part III Fig. 18a; radiosity test scene)",
+        build: chairs_room,
+    },
 ];
 
 /// A built-in scene by spec, e.g. `"torus:32,16"` (see [`BUILT_IN`]).
@@ -261,4 +267,21 @@ fn cubes_room(a: &Args) -> Result<Scene, SceneError> {
     let k = a.one(0, "K", 1..=max, 27)?;
     a.check(12 * (100 + u64::from(k)), 6 * (100 + u64::from(k)))?;
     crate::solids::cubes_room(a.spec, k, clustered, seed.unwrap_or(1))
+}
+
+fn chairs_room(a: &Args) -> Result<Scene, SceneError> {
+    a.at_most(0)?;
+    let mut s = crate::meshes::table_with_chairs(a.spec, 1);
+    s.materials = vec![
+        Material { name: "wood".into(), reflectance: [0.55, 0.40, 0.25], ..Material::default() },
+        Material { name: "wall".into(), reflectance: [0.75, 0.75, 0.72], ..Material::default() },
+        Material { name: "light".into(), reflectance: [0.8; 3], emittance: [12.0, 11.0, 9.0], mirror: false },
+    ];
+    s.add_box("room", DVec3::new(-2.5, 0.0, -2.5), DVec3::new(2.5, 2.6, 2.5), 1, true, 1);
+    let y = 2.59;
+    // Facing down: counter-clockwise seen from below.
+    let light =
+        [DVec3::new(-0.5, y, -0.5), DVec3::new(0.5, y, -0.5), DVec3::new(0.5, y, 0.5), DVec3::new(-0.5, y, 0.5)];
+    s.add_polygon("light", &light, 2);
+    Ok(s)
 }

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The equal-element-count table of docs/RADIOSITY.md (Part III-IV Table 2
-# in spirit): every oracle at ~N elements on the Cornell box, scored
+# in spirit): every oracle at ~N elements on $SCENE (default cornell-box), scored
 # against a path-traced reference, over several seeds.
 #
 #   bench/radiosity_table.sh [ITGFX] [OUTDIR]
@@ -15,16 +15,17 @@ WALKS=${WALKS:-2048}
 COUNTS=${COUNTS:-"1000 5000"}
 SEEDS=${SEEDS:-"1 2 3"}
 ORACLES=${ORACLES:-"power ks ks-avg mi kl cs hl variance"}
+SCENE=${SCENE:-cornell-box}
 mkdir -p "$OUT"
 if [ ! -f "$OUT/ref/reference.pfm" ]; then
-  nice -n 10 "$ITGFX" radiosity cornell-box --path-trace "$WALKS" --size "$SIZE" --seed 1000 --out "$OUT/ref" --json > "$OUT/ref.json"
+  nice -n 10 "$ITGFX" radiosity "$SCENE" --path-trace "$WALKS" --size "$SIZE" --seed 1000 --out "$OUT/ref" --json > "$OUT/ref.json"
 fi
 for n in $COUNTS; do
   for o in $ORACLES; do
     for s in $SEEDS; do
       f="$OUT/$o-$n-$s.json"
       [ -f "$f" ] && continue
-      nice -n 10 "$ITGFX" radiosity cornell-box --oracle "$o" --elements "$n" --seed "$s" --size "$SIZE" \
+      nice -n 10 "$ITGFX" radiosity "$SCENE" --oracle "$o" --elements "$n" --seed "$s" --size "$SIZE" \
         --reference "$OUT/ref/reference.pfm" --out "$OUT/$o-$n-$s" --json > "$f.tmp" && mv "$f.tmp" "$f"
     done
   done

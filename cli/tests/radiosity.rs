@@ -126,6 +126,18 @@ fn every_oracle_runs_and_the_reference_scores_the_solution() {
 }
 
 #[test]
+fn the_room_with_table_and_chairs_is_lit_by_its_ceiling_light() {
+    let v =
+        json(&itgfx(&["radiosity", "chairs-room", "--oracle", "kl", "--epsilon", "3e-3", "--size", "16", "--json"]));
+    assert_eq!(v["polygons"], 181, "29 boxes x 6 faces, 6 walls, 1 light");
+    assert!(v["elements"].as_u64().unwrap() > 181);
+    // Hidden faces (box bottoms on the floor) and coarse elements leak some
+    // power, but most of what the light emits is absorbed.
+    let balance = v["balance"].as_f64().unwrap();
+    assert!((0.85..=1.05).contains(&balance), "balance {balance}");
+}
+
+#[test]
 fn bad_input_is_one_line_and_exit_2() {
     let e = failure(&itgfx(&["radiosity", "cornell-box", "--oracle", "entropy"]));
     assert!(e.contains("oracle"), "{e}");

@@ -139,7 +139,10 @@ impl Sampler<'_> {
         for (k, kv) in kernel.iter_mut().enumerate() {
             let d = 4 * k as u32;
             let x = ei.sample(rng.uniform(d), rng.uniform(d + 1));
-            analytic += point_to_polygon(x, ei.normal, polygon) / n as f64;
+            // A receiver point behind the source's plane sees only its back.
+            if ej.normal.dot(x - ej.points[0]) > 0.0 {
+                analytic += point_to_polygon(x, ei.normal, polygon) / n as f64;
+            }
             let y = ej.sample(rng.uniform(d + 2), rng.uniform(d + 3));
             let v = y - x;
             let r2 = v.length_squared();

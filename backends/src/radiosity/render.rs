@@ -43,8 +43,9 @@ pub struct View {
 
 /// The camera pictures use: the Cornell box's published camera (eye
 /// (278, 273, −800) looking down +z, 39.3°; its closed front wall faces away
-/// and is looked through), otherwise a view from a corner of the bounding
-/// box's front-right-top, framing the scene.
+/// and is looked through), a corner of `chairs-room` seen from inside,
+/// otherwise a view from a corner of the bounding box's front-right-top,
+/// framing the scene.
 #[must_use]
 pub fn default_camera(scene: &Scene) -> Camera {
     if scene.name == "cornell-box" {
@@ -52,6 +53,11 @@ pub fn default_camera(scene: &Scene) -> Camera {
         if let Ok(c) = Camera::look_at(d(278.0, 273.0, -800.0), d(278.0, 273.0, 0.0), DVec3::Y, 39.3) {
             return c;
         }
+    }
+    if scene.name == "chairs-room"
+        && let Ok(c) = Camera::look_at(DVec3::new(2.3, 1.8, 2.3), DVec3::new(0.0, 0.45, 0.0), DVec3::Y, 55.0)
+    {
+        return c;
     }
     let (lo, hi) = scene.bounds();
     let centre = (lo + hi) * 0.5;

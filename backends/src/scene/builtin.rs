@@ -99,6 +99,12 @@ pub const BUILT_IN: &[BuiltIn] = &[
         description: "closed 4x3x5 room with a ceiling area light, a mirrored pyramid, a mirrored sphere (geodesic, level L in 1..=6, default 5: 5,120 triangles) and two diffuse blocks (after Part IV Figs. 7, 11)",
         build: mirror_room,
     },
+    BuiltIn {
+        name: "chairs-room",
+        syntax: "chairs-room",
+        description: "the table with four chairs (wood) in a 5 x 2.6 x 5 m white room lit by a 1 x 1 m ceiling light (after Part III Fig. 18a; radiosity test scene)",
+        build: chairs_room,
+    },
 ];
 
 /// A built-in scene by spec, e.g. `"torus:32,16"` (see [`BUILT_IN`]).
@@ -273,4 +279,21 @@ fn mirror_room(a: &Args) -> Result<Scene, SceneError> {
     a.at_most(1)?;
     let l = a.one(0, "L", 1..=6, 5)?;
     Ok(crate::render::room::mirror_room(a.spec, l - 1))
+}
+
+fn chairs_room(a: &Args) -> Result<Scene, SceneError> {
+    a.at_most(0)?;
+    let mut s = crate::meshes::table_with_chairs(a.spec, 1);
+    s.materials = vec![
+        Material { name: "wood".into(), reflectance: [0.55, 0.40, 0.25], ..Material::default() },
+        Material { name: "wall".into(), reflectance: [0.75, 0.75, 0.72], ..Material::default() },
+        Material { name: "light".into(), reflectance: [0.8; 3], emittance: [12.0, 11.0, 9.0], mirror: false },
+    ];
+    s.add_box("room", DVec3::new(-2.5, 0.0, -2.5), DVec3::new(2.5, 2.6, 2.5), 1, true, 1);
+    let y = 2.59;
+    // Facing down: counter-clockwise seen from below.
+    let light =
+        [DVec3::new(-0.5, y, -0.5), DVec3::new(0.5, y, -0.5), DVec3::new(0.5, y, 0.5), DVec3::new(-0.5, y, 0.5)];
+    s.add_polygon("light", &light, 2);
+    Ok(s)
 }

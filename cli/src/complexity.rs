@@ -102,7 +102,7 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
     let scene = load_scene(&spec, o.subdivide)?;
     let t0 = Instant::now();
     let prepared = Prepared::new(&scene);
-    let tracer = open(o.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
+    let tracer = open(o.tracing.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
     let opts = LineOptions { lines, seed, local, blocks: o.blocks, offset };
     let counts = if o.merge.is_empty() {
         let mut progress = Progress::new();

@@ -30,16 +30,16 @@ fn run(cli: Cli) -> Result<String, CliError> {
             Ok(render(&measure::run(&m.measure)?, json))
         }
         Command::Complexity(o) => {
-            threads(o.threads)?;
+            threads(o.tracing.threads)?;
             let (report, _counts, _scene) = complexity::run(&o)?;
             Ok(render(&report, o.common.json))
         }
         Command::Viewpoints(o) => {
-            threads(o.threads)?;
+            threads(o.tracing.threads)?;
             Ok(render(&viewpoints::run(&o)?, o.common.json))
         }
         Command::Simplify(o) => {
-            threads(o.threads)?;
+            threads(o.tracing.threads)?;
             Ok(render(&simplify::run(&o)?, o.common.json))
         }
         Command::Volume(o) => {
@@ -51,12 +51,12 @@ fn run(cli: Cli) -> Result<String, CliError> {
         Command::Register(o) => Ok(render(&imaging::run_register(&o)?, o.common.json)),
         Command::Segment(o) => Ok(render(&imaging::run_segment(&o)?, o.common.json)),
         Command::Render(o) => {
-            threads(o.threads)?;
+            threads(o.tracing.threads)?;
             Ok(render(&itgfx_cli::render::run(&o)?, o.common.json))
         }
         Command::Compare(o) => Ok(render(&itgfx_cli::render::run_compare(&o)?, o.common.json)),
         Command::Radiosity(o) => {
-            threads(o.threads)?;
+            threads(o.tracing.threads)?;
             Ok(render(&itgfx_cli::radiosity::run(&o)?, o.common.json))
         }
     }

@@ -70,6 +70,17 @@ pub struct Common {
     pub base: Base,
 }
 
+/// Options of every command that traces: the backend and the worker threads.
+#[derive(Debug, Clone, Copy, Args)]
+pub struct Tracing {
+    /// Tracing backend: cpu, reference or vulkan
+    #[arg(long, value_name = "cpu|reference|vulkan", default_value = "cpu", value_parser = backend)]
+    pub backend: BackendChoice,
+    /// Worker threads (default: all cores)
+    #[arg(long, value_name = "T", value_parser = threads)]
+    pub threads: Option<usize>,
+}
+
 /// The built-in scenes, one per line with its description (the registry of backends).
 #[must_use]
 pub fn scene_list() -> String {
@@ -103,9 +114,6 @@ pub struct ComplexityOptions {
     /// Jackknife blocks for standard errors (1 = none)
     #[arg(long, value_name = "B", default_value = "8", value_parser = blocks)]
     pub blocks: u32,
-    /// Tracing backend: cpu, reference or vulkan
-    #[arg(long, value_name = "cpu|reference|vulkan", default_value = "cpu", value_parser = backend)]
-    pub backend: BackendChoice,
     /// Mesh coloured by information per unit area, as PLY
     #[arg(long, value_name = "F", value_parser = out_path)]
     pub export_ply: Option<PathBuf>,
@@ -128,9 +136,9 @@ pub struct ComplexityOptions {
     /// Evaluate saved shards together instead of tracing: F1,F2,... (with --lines N: they must cover 0..N)
     #[arg(long, value_name = "F1,F2,...", value_delimiter = ',', conflicts_with_all = ["offset", "local", "shard"])]
     pub merge: Vec<PathBuf>,
-    /// Worker threads (default: all cores)
-    #[arg(long, value_name = "T", value_parser = threads)]
-    pub threads: Option<usize>,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub tracing: Tracing,
     #[command(flatten)]
     #[allow(missing_docs)]
     pub common: Common,
@@ -175,12 +183,9 @@ pub struct ViewpointsOptions {
     /// Split every polygon into K x K cells (1..=64)
     #[arg(long, value_name = "K", default_value = "1", value_parser = vp_subdivide, help_heading = "Channel")]
     pub subdivide: u32,
-    /// Tracing backend: cpu, reference or vulkan
-    #[arg(long, value_name = "cpu|reference|vulkan", default_value = "cpu", value_parser = backend)]
-    pub backend: BackendChoice,
-    /// Worker threads (default: all cores)
-    #[arg(long, value_name = "T", value_parser = threads)]
-    pub threads: Option<usize>,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub tracing: Tracing,
     /// At most N best views, greedy
     #[arg(long, value_name = "N", default_value = "6", value_parser = best_n, help_heading = "Selection")]
     pub best_n: usize,

@@ -6,21 +6,21 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use clap::Args;
+use itgfx_backends::open;
 use itgfx_backends::radiosity::reference::{Reference, path_traced};
 use itgfx_backends::radiosity::refine::check_scene;
 use itgfx_backends::radiosity::render::{View, default_camera, mesh_picture, picture, tonemap, view, white_point};
 use itgfx_backends::radiosity::search::search_epsilon;
 use itgfx_backends::radiosity::{Oracle, Rgb, Settings, Solution, element::Hierarchy, solve};
 use itgfx_backends::tracer::Prepared;
-use itgfx_backends::{BackendChoice, open};
 use itgfx_core::pixel::{SRGB_LUMINANCE_WEIGHTS, image_error};
 
 use crate::CliError;
-use crate::options::Common;
+use crate::options::{Common, Tracing};
 use crate::progress::Progress;
 use crate::report::Report;
 use crate::scene::load_scene;
-use crate::values::{backend, count, out_path, threads};
+use crate::values::{count, out_path};
 
 /// `itgfx radiosity SCENE`.
 #[derive(Debug, Args)]
@@ -75,12 +75,9 @@ pub struct RadiosityOptions {
     /// Write the pictures and files into DIR
     #[arg(long, value_name = "DIR", value_parser = out_path)]
     pub out: Option<PathBuf>,
-    /// Tracing backend: cpu, reference or vulkan
-    #[arg(long, value_name = "cpu|reference|vulkan", default_value = "cpu", value_parser = backend)]
-    pub backend: BackendChoice,
-    /// Worker threads (default: all cores)
-    #[arg(long, value_name = "T", value_parser = threads)]
-    pub threads: Option<usize>,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub tracing: Tracing,
     #[command(flatten)]
     #[allow(missing_docs)]
     pub common: Common,
@@ -266,7 +263,7 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
     if let Some(r) = &o.reference
         && !r.is_file()
     {
-        return Err(CliError::usage(format!("--reference {r:?}: no such file")));
+        return Err(CliError::usage(format!("--reference {r:?}: not a regular file")));
     }
     let scene = load_scene(&spec, o.subdivide)?;
     check_scene(&scene).map_err(usage)?;
@@ -292,7 +289,7 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
     let file = |name: &str| files.iter().find(|f| f.0 == name).map(|f| f.1.clone());
     let t0 = Instant::now();
     let prepared = Prepared::new(&scene);
-    let tracer = open(o.backend, &prepared).map_err(usage)?;
+    let tracer = open(o.tracing.backend, &prepared).map_err(usage)?;
     let camera = default_camera(&scene);
     let mut r = Report::new();
     r.text("scene", scene.name.clone()).text("backend", tracer.name());

@@ -6,7 +6,6 @@ use std::time::Instant;
 
 use clap::Args;
 use glam::DVec3;
-use itgfx_backends::BackendChoice;
 use itgfx_backends::simplify::metrics::{Render, evaluation_directions, image_error, render, surface_distance};
 use itgfx_backends::simplify::{IndexedMesh, Metric, Settings, check_memory, simplify};
 use itgfx_backends::tracer::Prepared;
@@ -14,12 +13,10 @@ use itgfx_backends::viewpoint::icosphere;
 
 use crate::CliError;
 use crate::export::{montage, write_png};
-use crate::options::Common;
+use crate::options::{Common, Tracing};
 use crate::report::Report;
 use crate::scene::load_scene;
-use crate::values::{
-    backend, distance, max_subdivision, out_path, threads, tolerance, viewpoint_count, viewpoint_level,
-};
+use crate::values::{distance, max_subdivision, out_path, tolerance, viewpoint_count, viewpoint_level};
 
 /// `itgfx simplify MESH`.
 #[derive(Debug, Args)]
@@ -72,12 +69,9 @@ pub struct SimplifyOptions {
     /// Points sampled on each surface for the Hausdorff distance
     #[arg(long, value_name = "N", default_value = "20000", value_parser = samples)]
     pub samples: usize,
-    /// Tracing backend: cpu, reference or vulkan
-    #[arg(long, value_name = "cpu|reference|vulkan", default_value = "cpu", value_parser = backend)]
-    pub backend: BackendChoice,
-    /// Worker threads (default: all cores)
-    #[arg(long, value_name = "T", value_parser = threads)]
-    pub threads: Option<usize>,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub tracing: Tracing,
     #[command(flatten)]
     #[allow(missing_docs)]
     pub common: Common,
@@ -210,7 +204,7 @@ struct Simplified {
 const SHOWN: usize = 4;
 
 fn renders(mesh: &IndexedMesh, o: &SimplifyOptions, eyes: &[DVec3]) -> Result<Vec<Render>, CliError> {
-    render(mesh, o.backend, eyes, o.image_size).map_err(|e| CliError::usage(e.to_string()))
+    render(mesh, o.tracing.backend, eyes, o.image_size).map_err(|e| CliError::usage(e.to_string()))
 }
 
 /// Runs `itgfx simplify`.
@@ -294,7 +288,7 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
             metric,
             directions: dirs,
             distance: o.distance,
-            backend: o.backend,
+            backend: o.tracing.backend,
             refresh: 0.5,
             tolerance: o.tolerance,
             max_subdivision: o.max_subdivision,

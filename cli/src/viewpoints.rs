@@ -84,7 +84,7 @@ pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
     let scene = load_scene(&spec, o.subdivide)?;
     let t0 = Instant::now();
     let prepared = Prepared::new(&scene);
-    let tracer = open(o.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
+    let tracer = open(o.tracing.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
     let dirs = icosphere(level);
     let mut progress = Progress::new();
     let mut tick = |d, t| progress.update(d, t);

@@ -12,16 +12,16 @@ use std::time::Instant;
 use clap::Args;
 use glam::DVec3;
 use itgfx_backends::camera::Camera;
+use itgfx_backends::open;
 use itgfx_backends::render::{self, Criterion, Sampling, Shading, criteria, views};
 use itgfx_backends::tracer::Prepared;
-use itgfx_backends::{BackendChoice, open};
 
 use crate::CliError;
-use crate::options::Common;
+use crate::options::{Common, Tracing};
 use crate::progress::Progress;
 use crate::report::Report;
 use crate::scene::load_scene;
-use crate::values::{backend, count, finite, out_path, threads};
+use crate::values::{count, finite, out_path};
 use images::Radiance;
 pub use metrics::compare_images;
 
@@ -81,12 +81,9 @@ pub struct RenderOptions {
     /// camera, size) in DIR
     #[arg(long)]
     pub export_scene: bool,
-    /// Tracing backend: cpu, reference or vulkan
-    #[arg(long, value_name = "cpu|reference|vulkan", default_value = "cpu", value_parser = backend)]
-    pub backend: BackendChoice,
-    /// Worker threads (default: all cores)
-    #[arg(long, value_name = "T", value_parser = threads)]
-    pub threads: Option<usize>,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub tracing: Tracing,
     #[command(flatten)]
     #[allow(missing_docs)]
     pub common: Common,
@@ -169,7 +166,7 @@ fn memory_check(o: &RenderOptions) -> Result<(), CliError> {
         "ec" => 680,
         _ => u64::from(o.max_spp.unwrap_or(o.spp.saturating_mul(16).min(MAX_SPP))),
     };
-    let workers = o.threads.unwrap_or_else(rayon::current_num_threads) as u64;
+    let workers = o.tracing.threads.unwrap_or_else(rayon::current_num_threads) as u64;
     let bytes = w * h * 120 + workers * w * per_pixel * 48;
     if bytes > MEMORY_LIMIT {
         return Err(CliError::usage(format!(
@@ -205,7 +202,7 @@ pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
     if let Some(r) = &o.reference
         && !r.is_file()
     {
-        return Err(CliError::usage(format!("--reference {r:?}: not a file")));
+        return Err(CliError::usage(format!("--reference {r:?}: not a regular file")));
     }
     let adaptive = o.sampler != "uniform";
     if !adaptive && (o.max_spp.is_some() || o.threshold.is_some() || o.unbiased) {
@@ -257,7 +254,7 @@ fn render_into(o: &RenderOptions, spec: &str, dir: &std::path::Path) -> Result<R
     let scene = load_scene(spec, 1)?;
     let prepared = Prepared::new(&scene);
     let shading = Shading::new(&scene, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
-    let tracer = open(o.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
+    let tracer = open(o.tracing.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
     let camera = o.camera.unwrap_or_else(|| views::default_camera(&scene));
     let sampling = match Criterion::from_name(&o.sampler) {
         None if o.sampler == "ec" => Sampling::Tree { spp: o.spp, unbiased: o.unbiased, threshold: o.threshold },

@@ -180,7 +180,11 @@ pub fn montage(images: &[image::RgbImage], per_row: usize) -> image::RgbImage {
     let (w, h) = images.first().map_or((1, 1), |i| i.dimensions());
     let per_row = per_row.clamp(1, images.len().max(1));
     let rows = images.len().div_ceil(per_row).max(1);
-    let mut out = image::RgbImage::from_pixel(w * per_row as u32, h * rows as u32, image::Rgb([24, 24, 28]));
+    let mut out = image::RgbImage::from_pixel(
+        w * per_row as u32,
+        h * rows as u32,
+        image::Rgb(itgfx_backends::preview::BACKGROUND),
+    );
     for (k, img) in images.iter().enumerate() {
         let (x0, y0) = ((k % per_row) as u32 * w, (k / per_row) as u32 * h);
         for (x, y, p) in img.enumerate_pixels() {
@@ -197,7 +201,11 @@ pub fn montage(images: &[image::RgbImage], per_row: usize) -> image::RgbImage {
 #[must_use]
 pub fn sphere_image(directions: &[DVec3], measures: &[&[f64]], mark: DVec3, radius: u32) -> image::RgbImage {
     let side = 2 * radius + 8;
-    let mut img = image::RgbImage::from_pixel(2 * side, side * measures.len() as u32, image::Rgb([24, 24, 28]));
+    let mut img = image::RgbImage::from_pixel(
+        2 * side,
+        side * measures.len() as u32,
+        image::Rgb(itgfx_backends::preview::BACKGROUND),
+    );
     let mark = mark.normalize();
     // The nearest viewpoint of every disc pixel, shared by all rows.
     let d = 2 * radius;

@@ -376,7 +376,8 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
         r.real("RMSE_a_flat", fa, None).real("PSNR_a_flat", fpa, Some("dB"));
     }
     if let Some(p) = file("radiosity.png") {
-        let px: Vec<[u8; 3]> = gouraud.iter().map(|c| c.map_or([24, 24, 28], |c| tonemap(c, white))).collect();
+        let px: Vec<[u8; 3]> =
+            gouraud.iter().map(|c| c.map_or(itgfx_backends::preview::BACKGROUND, |c| tonemap(c, white))).collect();
         png(&px, o.size, o.size, &p)?;
     }
     if let Some(p) = file("mesh.png") {
@@ -464,7 +465,11 @@ fn reference_report(
         crate::output::write(&p, &pfm(&reference.halves[1], w, h))?;
     }
     if let Some(p) = file("reference.png") {
-        let px: Vec<[u8; 3]> = reference.mean.iter().map(|c| c.map_or([24, 24, 28], |c| tonemap(c, white))).collect();
+        let px: Vec<[u8; 3]> = reference
+            .mean
+            .iter()
+            .map(|c| c.map_or(itgfx_backends::preview::BACKGROUND, |c| tonemap(c, white)))
+            .collect();
         png(&px, w, h, &p)?;
     }
     if let Some(p) = file("reference.json") {

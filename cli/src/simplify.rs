@@ -149,7 +149,7 @@ fn picture(r: &Render) -> image::RgbImage {
             let g = (255.0 * (0.12 + 0.88 * f64::from(r.shade[i]))).round().clamp(0.0, 255.0) as u8;
             image::Rgb([g, g, g])
         } else {
-            image::Rgb([24, 24, 28])
+            image::Rgb(itgfx_backends::preview::BACKGROUND)
         }
     })
 }
@@ -446,7 +446,7 @@ fn line(img: &mut image::RgbImage, a: (f64, f64), b: (f64, f64), colour: [u8; 3]
 /// to the input's; the axis ends and the largest error are labelled.
 fn error_plot(points: &[(usize, f64, f64)], input: usize) -> image::RgbImage {
     let (w, h, m) = (480u32, 300u32, 40.0);
-    let mut img = image::RgbImage::from_pixel(w, h, image::Rgb([24, 24, 28]));
+    let mut img = image::RgbImage::from_pixel(w, h, image::Rgb(itgfx_backends::preview::BACKGROUND));
     let lo = points.iter().map(|p| p.0).min().unwrap_or(1).max(1) as f64;
     let hi = (input as f64).max(lo * 1.01);
     let top = points.iter().map(|p| p.1.max(p.2)).fold(0.0, f64::max).max(1e-6) * 1.1;

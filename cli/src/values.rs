@@ -232,3 +232,10 @@ pub fn positive(s: &str) -> Result<u64, String> {
         n => Ok(n),
     }
 }
+
+/// Index of the smallest finite value (0 if none): the best view of a
+/// minimum-VMI criterion, wherever a command reports one.
+#[must_use]
+pub fn argmin(x: &[f64]) -> usize {
+    (0..x.len()).filter(|&i| x[i].is_finite()).min_by(|&a, &b| x[a].total_cmp(&x[b])).unwrap_or(0)
+}

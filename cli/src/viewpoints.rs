@@ -16,7 +16,7 @@ use crate::options::ViewpointsOptions;
 use crate::progress::Progress;
 use crate::report::Report;
 use crate::scene::load_scene;
-use crate::values::viewpoint_level;
+use crate::values::{argmin, viewpoint_level};
 
 /// Where each picture goes: explicit paths, or standard names under `--out`.
 fn pictures(o: &ViewpointsOptions) -> Vec<(&'static str, &'static str, Option<PathBuf>)> {
@@ -256,9 +256,4 @@ fn save(img: &image::RgbImage, path: &Path, written: &mut Vec<PathBuf>) -> Resul
 fn grey_levels(info: &[f64]) -> Vec<[u8; 3]> {
     let (lo, hi) = percentile_range(info);
     info.iter().map(|&i| [(255.0 * (1.0 - (i - lo) / (hi - lo))).round().clamp(0.0, 255.0) as u8; 3]).collect()
-}
-
-/// Index of the smallest finite value (0 if none).
-fn argmin(x: &[f64]) -> usize {
-    (0..x.len()).filter(|&i| x[i].is_finite()).min_by(|&a, &b| x[a].total_cmp(&x[b])).unwrap_or(0)
 }

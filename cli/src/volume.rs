@@ -25,7 +25,9 @@ use crate::export::{montage, percentile_range, sphere_image, viridis, write_png}
 use crate::options::Common;
 use crate::progress::Progress;
 use crate::report::Report;
-use crate::values::{best_n, capture, count, distance, explore, out_path, threads, viewpoint_count, viewpoint_level};
+use crate::values::{
+    argmin, best_n, capture, count, distance, explore, out_path, threads, viewpoint_count, viewpoint_level,
+};
 use crate::{CliError, core_err};
 
 /// Most memory the channel may take (estimated before any ray is cast).
@@ -474,7 +476,7 @@ fn vomi_planes(
         let (i, k) = at(x, y);
         let (a, w) =
             (0..ny).map(|j| v.index(i, j, k)).fold((0.0, 0.0), |(a, w), z| (a + weight[z] * field[z], w + weight[z]));
-        if w > 0.0 { colour(a / w) } else { image::Rgb([24, 24, 28]) }
+        if w > 0.0 { colour(a / w) } else { image::Rgb(itgfx_backends::preview::BACKGROUND) }
     });
     (slice, mip)
 }
@@ -488,7 +490,7 @@ fn sphere_palette(dirs: &[DVec3], radius: u32) -> image::RgbImage {
         let w = 1.0 - (f64::from(y) + 0.5) / f64::from(radius);
         let r2 = u * u + w * w;
         if r2 > 1.0 {
-            return image::Rgb([24, 24, 28]);
+            return image::Rgb(itgfx_backends::preview::BACKGROUND);
         }
         let s = if half == 0 { 1.0 } else { -1.0 };
         let p = DVec3::new(u * s, w, s * (1.0 - r2).sqrt());
@@ -605,7 +607,7 @@ fn correlation(a: &[f64], b: &[f64]) -> Option<f64> {
 fn beside(images: &[image::RgbImage]) -> image::RgbImage {
     let w = images.iter().map(image::RgbImage::width).sum::<u32>().max(1);
     let h = images.iter().map(image::RgbImage::height).max().unwrap_or(1).max(1);
-    let mut out = image::RgbImage::from_pixel(w, h, image::Rgb([24, 24, 28]));
+    let mut out = image::RgbImage::from_pixel(w, h, image::Rgb(itgfx_backends::preview::BACKGROUND));
     let mut x0 = 0;
     for img in images {
         for (x, y, p) in img.enumerate_pixels() {
@@ -614,9 +616,4 @@ fn beside(images: &[image::RgbImage]) -> image::RgbImage {
         x0 += img.width();
     }
     out
-}
-
-/// Index of the smallest finite value (0 if none).
-fn argmin(x: &[f64]) -> usize {
-    (0..x.len()).filter(|&i| x[i].is_finite()).min_by(|&a, &b| x[a].total_cmp(&x[b])).unwrap_or(0)
 }

@@ -58,14 +58,9 @@ pub enum EyePlace {
 /// # Errors
 /// Backend failures only.
 pub fn eye_place(tracer: &dyn Tracer, camera: &Camera) -> Result<EyePlace, BackendError> {
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-    let lines: Vec<Line> = (0..PROBES)
-        .map(|i| {
-            let z = 1.0 - (f64::from(i) + 0.5) * 2.0 / f64::from(PROBES);
-            let r = (1.0 - z * z).sqrt();
-            let phi = golden * f64::from(i);
-            Line::ray(camera.eye, DVec3::new(r * phi.cos(), r * phi.sin(), z), 0.0, 1e5)
-        })
+    let lines: Vec<Line> = crate::viewpoint::fibonacci_sphere(PROBES as usize)
+        .into_iter()
+        .map(|d| Line::ray(camera.eye, d, 0.0, 1e5))
         .collect();
     let mut hits = Vec::new();
     tracer.closest_hit(&lines, &mut hits)?;

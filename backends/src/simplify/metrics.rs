@@ -18,15 +18,7 @@ use crate::tracer::Hit;
 /// not optimise for.
 #[must_use]
 pub fn evaluation_directions(n: usize) -> Vec<DVec3> {
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-    (0..n)
-        .map(|i| {
-            let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            let phi = golden * i as f64;
-            DVec3::new(r * phi.cos(), r * phi.sin(), z)
-        })
-        .collect()
+    crate::viewpoint::fibonacci_sphere(n)
 }
 
 /// A grey render: `|cos|` between the ray and the surface normal at the

@@ -43,6 +43,23 @@ use rayon::prelude::*;
 use crate::lines::Line;
 use crate::tracer::{BackendError, Prepared, Tracer};
 
+/// `n` unit directions on a Fibonacci spiral: golden-angle steps in
+/// longitude, `z = 1 − (2i + 1)/n` from `1 − 1/n` to `−1 + 1/n`, so every
+/// direction stands for the same area of the sphere. None is a vertex of the
+/// subdivided icosahedra of [`icosphere`].
+#[must_use]
+pub fn fibonacci_sphere(n: usize) -> Vec<DVec3> {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = golden * i as f64;
+            DVec3::new(r * phi.cos(), r * phi.sin(), z)
+        })
+        .collect()
+}
+
 /// Unit directions of a subdivided icosahedron: 12, 42, 162, 642, 2562
 /// points for `level` 0..=4 (see [`crate::meshes::icosphere_mesh`]).
 #[must_use]

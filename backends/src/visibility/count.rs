@@ -49,18 +49,29 @@ type KeyMap = HashMap<u64, u64, BuildHasherDefault<KeyHasher>>;
 /// Where a block's pair counts accumulate: a dense `n × n` matrix of `u32`
 /// when it fits in [`DENSE_LIMIT`] entries (chunks arrive as sorted runs, so
 /// the adds sweep it in order), a hash map of the pairs hit otherwise.
+///
+/// One accumulator serves every block of a run: [`Accumulator::take_pairs`]
+/// zeroes what it reads, so the matrix is allocated (and its pages faulted
+/// in) once per run, not once per block. The cells a block hit are listed
+/// while they are few, so a small shard reads its pairs without sweeping
+/// all `n²` cells (that sweep, eight times over 5400² cells, was a second of
+/// every small shard's CPU time).
 enum Accumulator {
-    Dense { n: usize, counts: Vec<u32>, overflow: KeyMap },
+    Dense { n: usize, counts: Vec<u32>, touched: Option<Vec<u32>>, overflow: KeyMap },
     Sparse(KeyMap),
 }
 
 /// Largest `n²` counted densely (6000 patches: 144 MB of `u32` per block).
 const DENSE_LIMIT: usize = 36_000_000;
 
+/// Past `n² / TOUCHED_FRACTION` cells hit, a sweep of the matrix is cheaper
+/// than sorting the list of cells hit, which is then dropped.
+const TOUCHED_FRACTION: usize = 32;
+
 impl Accumulator {
     fn new(n: usize) -> Self {
         if n.saturating_mul(n) <= DENSE_LIMIT {
-            Accumulator::Dense { n, counts: vec![0; n * n], overflow: KeyMap::default() }
+            Accumulator::Dense { n, counts: vec![0; n * n], touched: Some(Vec::new()), overflow: KeyMap::default() }
         } else {
             Accumulator::Sparse(KeyMap::default())
         }
@@ -68,15 +79,27 @@ impl Accumulator {
 
     fn add(&mut self, runs: &[(u64, u64)]) {
         match self {
-            Accumulator::Dense { n, counts, overflow } => {
+            Accumulator::Dense { n, counts, touched, overflow } => {
+                let limit = counts.len() / TOUCHED_FRACTION;
                 for &(k, c) in runs {
                     let idx = (k >> 32) as usize * *n + (k as u32) as usize;
-                    let (sum, carry) = counts[idx].overflowing_add(c as u32);
+                    let old = counts[idx];
+                    let (sum, carry) = old.overflowing_add(c as u32);
                     if carry || c > u64::from(u32::MAX) {
                         // Counts past 2^32 for one pair: keep the excess exactly.
                         *overflow.entry(k).or_insert(0) += c;
                     } else {
                         counts[idx] = sum;
+                        if old == 0
+                            && sum != 0
+                            && let Some(t) = touched
+                        {
+                            // idx < n² ≤ DENSE_LIMIT < 2^32.
+                            t.push(idx as u32);
+                            if t.len() > limit {
+                                *touched = None;
+                            }
+                        }
                     }
                 }
             }
@@ -88,16 +111,31 @@ impl Accumulator {
         }
     }
 
-    fn into_pairs(self) -> Vec<PairCount> {
+    /// The pairs counted since the last call, sorted; the accumulator is
+    /// left empty.
+    fn take_pairs(&mut self) -> Vec<PairCount> {
         let mut pairs: Vec<PairCount> = match self {
-            Accumulator::Dense { n, counts, overflow } => {
-                let mut v: Vec<PairCount> = counts
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, c)| **c > 0)
-                    .map(|(idx, &c)| PairCount { from: (idx / n) as u32, to: (idx % n) as u32, count: u64::from(c) })
-                    .collect();
-                for (k, c) in overflow {
+            Accumulator::Dense { n, counts, touched, overflow } => {
+                let n = *n;
+                let pair = |idx: usize, c: u32| PairCount {
+                    from: (idx / n) as u32,
+                    to: (idx % n) as u32,
+                    count: u64::from(c),
+                };
+                let mut v: Vec<PairCount> = match touched.take() {
+                    Some(mut t) => {
+                        t.sort_unstable();
+                        t.iter().map(|&idx| pair(idx as usize, std::mem::take(&mut counts[idx as usize]))).collect()
+                    }
+                    None => counts
+                        .iter_mut()
+                        .enumerate()
+                        .filter(|(_, c)| **c > 0)
+                        .map(|(idx, c)| pair(idx, std::mem::take(c)))
+                        .collect(),
+                };
+                *touched = Some(Vec::new());
+                for (k, c) in overflow.drain() {
                     let (i, j) = ((k >> 32) as u32, k as u32);
                     match v.binary_search_by_key(&(i, j), |p| (p.from, p.to)) {
                         Ok(pos) => v[pos].count += c,
@@ -107,7 +145,7 @@ impl Accumulator {
                 v
             }
             Accumulator::Sparse(map) => {
-                map.into_iter().map(|(k, c)| PairCount { from: (k >> 32) as u32, to: k as u32, count: c }).collect()
+                map.drain().map(|(k, c)| PairCount { from: (k >> 32) as u32, to: k as u32, count: c }).collect()
             }
         };
         pairs.sort_unstable();
@@ -484,9 +522,9 @@ pub fn count_visibility(
     let mut endpoints = vec![0u64; n];
     let mut endpoint_log = vec![FixedSum::default(); n];
     let mut done = 0;
+    let mut acc = Accumulator::new(n);
     for b in 0..blocks {
         let (first, count) = block_lines(start, end, b, blocks);
-        let mut acc = Accumulator::new(n);
         let mut background = vec![0u64; n];
         let mut block = BlockCounts { lines: count, ..BlockCounts::default() };
         let run_wave = |w: &[u64]| -> Vec<Result<ChunkResult, CountsError>> {
@@ -534,7 +572,7 @@ pub fn count_visibility(
         if let Some(prev) = pending {
             merge(prev)?;
         }
-        block.pairs = acc.into_pairs();
+        block.pairs = acc.take_pairs();
         block.background =
             background.iter().enumerate().filter(|(_, c)| **c > 0).map(|(i, &c)| (i as u32, c)).collect();
         out.push(block);

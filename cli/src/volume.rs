@@ -11,7 +11,7 @@ use itgfx_backends::tracer::Prepared;
 use itgfx_backends::viewpoint::selection::{best_views, exploration};
 use itgfx_backends::viewpoint::{ViewpointAnalysis, ViewpointChannel, ViewpointMeasures, ViewpointWeights, icosphere};
 use itgfx_backends::volume::builtin::{BUILT_IN, built_in, is_built_in};
-use itgfx_backends::volume::channel::{channel_memory, viewpoint_colour};
+use itgfx_backends::volume::channel::{channel_memory, seeable_voxels, viewpoint_colour};
 use itgfx_backends::volume::iso::iso_surface;
 use itgfx_backends::volume::nrrd::read_nrrd;
 use itgfx_backends::volume::objects::object_channel;
@@ -284,7 +284,7 @@ fn run_in(
         return Err(CliError::usage(format!("{}: the transfer function makes every voxel transparent", volume.name)));
     }
     let dirs = icosphere(viewpoint_level(o.viewpoints));
-    let need = channel_memory(&caster, dirs.len());
+    let need = channel_memory(&caster, seeable_voxels(&caster), dirs.len());
     if need > MEMORY_LIMIT {
         return Err(CliError::usage(format!(
             "{}: the channel may need {:.1} GiB (limit {} GiB): fewer --viewpoints or a smaller volume",
@@ -304,16 +304,18 @@ fn run_in(
     }
     let weights = if o.uniform_input { ViewpointWeights::Uniform } else { ViewpointWeights::ProjectedArea };
     let err = |e| core_err("volume channel", e);
-    let m = volume_measures(&ch, &dirs, &caster.voxel_opacity, focus.as_ref().map(|f| f.0.as_slice()), weights, base)
+    // What needs the raw rows comes first: the measures normalise them in place.
+    let (entries, rays_per_viewpoint, neighbours) = (ch.patch.len() as u64, ch.rays_per_viewpoint, ch.neighbours(6));
+    let objects =
+        volume.labels.as_ref().map(|l| object_measures(&ch, l, &volume.label_names, weights, base)).transpose()?;
+    let m = volume_measures(ch, &dirs, &caster.voxel_opacity, focus.as_ref().map(|f| f.0.as_slice()), weights, base)
         .map_err(err)?;
     let v = &m.views;
     let t_measures = t0.elapsed().as_secs_f64() - t_channel;
     let best_n = best_views(&m.analysis, v, o.capture, o.best_n, base).map_err(err)?;
-    let neighbours = ch.neighbours(6);
     let tour = exploration(&m.analysis, &neighbours, v.best, o.explore, base).map_err(err)?;
     let instability = m.analysis.instability(&neighbours, base).map_err(err)?;
-    let objects =
-        volume.labels.as_ref().map(|l| object_measures(&ch, l, &volume.label_names, weights, base)).transpose()?;
+    let seen = m.analysis.expand(&m.analysis.seen_angle, 0.0);
     let iso = o.iso.map(|f| iso_route(&volume, f, &dirs, o.distance, rays, base)).transpose()?;
     let seconds = t0.elapsed().as_secs_f64();
 
@@ -321,8 +323,8 @@ fn run_in(
     r.text("volume", volume.name.clone());
     r.counts("dims", volume.dims.iter().map(|&d| d as u64).collect());
     r.count("voxels", volume.voxels() as u64).count("viewpoints", dirs.len() as u64);
-    r.count("rays_per_viewpoint", ch.rays_per_viewpoint).real("step_voxels", o.step, None);
-    r.count("channel_entries", ch.patch.len() as u64);
+    r.count("rays_per_viewpoint", rays_per_viewpoint).real("step_voxels", o.step, None);
+    r.count("channel_entries", entries);
     r.count("voxels_seen", m.analysis.p_o.iter().filter(|&&p| p > 0.0).count() as u64);
     r.text("p_v", if o.uniform_input { "uniform" } else { "visibility gathered" });
     r.real("H_V", m.h_v, unit).real("H_Z", v.object_entropy, unit).real("H_Z_given_V", v.conditional_entropy, unit);
@@ -405,7 +407,7 @@ fn run_in(
             x.real("object_VMI", ob.measures.mutual_information[k], unit);
         }
         x.maybe_real("instability", Some(instability[k]).filter(|x| x.is_finite()), unit);
-        x.real("visibility", ch.seen(k) / ch.rays_per_viewpoint as f64, None);
+        x.real("visibility", seen[k] / rays_per_viewpoint as f64, None);
         views.push(x);
     }
     r.records("views", views);

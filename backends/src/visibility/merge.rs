@@ -73,8 +73,8 @@ impl VisibilityCounts {
                 background: Vec::new(),
                 continuous: a.continuous.checked_add(&b.continuous).ok_or_else(|| overflow("an I_S^c sum"))?,
             });
-            let new_pairs =
-                new_keys(&a.pairs, &b.pairs, |p| (p.from, p.to), |p| p.count).ok_or_else(|| overflow("a pair count"))?;
+            let new_pairs = new_keys(&a.pairs, &b.pairs, |p| (p.from, p.to), |p| p.count)
+                .ok_or_else(|| overflow("a pair count"))?;
             let new_bg =
                 new_keys(&a.background, &b.background, |p| p.0, |p| p.1).ok_or_else(|| overflow("a pair count"))?;
             grow.push((new_pairs, new_bg));
@@ -92,10 +92,13 @@ impl VisibilityCounts {
         // bounds add up as its parts' do (`validate` would sweep every pair
         // of the merged counts again, once per shard merged).
         for (((a, b), t), (new_pairs, new_bg)) in self.blocks.iter_mut().zip(other.blocks).zip(totals).zip(grow) {
-            merge_into(&mut a.pairs, &b.pairs, new_pairs, |p| (p.from, p.to), |p, q| PairCount {
-                count: p.count + q.count,
-                ..*p
-            });
+            merge_into(
+                &mut a.pairs,
+                &b.pairs,
+                new_pairs,
+                |p| (p.from, p.to),
+                |p, q| PairCount { count: p.count + q.count, ..*p },
+            );
             merge_into(&mut a.background, &b.background, new_bg, |p| p.0, |p, q| (p.0, p.1 + q.1));
             let (pairs, background) = (std::mem::take(&mut a.pairs), std::mem::take(&mut a.background));
             *a = BlockCounts { pairs, background, ..t };

@@ -3,6 +3,8 @@
 # (tests/slurm/cluster.sh): the single run against SHARDS job-array tasks
 # (1 CPU each) and their afterok merge job, timed, and compared bit for bit.
 #   bench/slurm_complexity.sh [--install]      SCENE (cube-enclosure:30), LINES (1e8), SHARDS (16)
+#   SINGLE_DIR=D: no single run here; D/time-single (/usr/bin/time -f "%e %U %S %M") and D/single.json
+#   of one timed separately are read when the cluster is done.
 # Prints one line per measurement and a summary; needs root (slurmd launches jobs).
 set -euo pipefail
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -24,9 +26,11 @@ chmod +x "$T/timed-itgfx"
 now() { date +%s.%N; }
 say "machine: $(nproc) CPUs, load $(cut -d' ' -f1-3 /proc/loadavg); binary $real"
 t0=$(now)
-/usr/bin/time -f "%e %U %S %M" -o "$T/time-single" "$real" complexity "$SCENE" --lines "$LINES" --seed "$SEED" \
-    --blocks 8 --json > "$T/single.json"
-say "single: $(cat "$T/time-single") (wall user sys KiB), threads $(nproc)"
+if [[ -z ${SINGLE_DIR:-} ]]; then
+    /usr/bin/time -f "%e %U %S %M" -o "$T/time-single" "$real" complexity "$SCENE" --lines "$LINES" --seed "$SEED" \
+        --blocks 8 --json > "$T/single.json"
+    say "single: $(cat "$T/time-single") (wall user sys KiB), threads $(nproc)"
+fi
 t1=$(now)
 ids=$(cd "$T/run" && ITGFX=$T/timed-itgfx "$repo/slurm/submit.sh" complexity) || fail "submit"
 read -r array merge <<< "$ids"
@@ -35,6 +39,12 @@ while [[ -n $(squeue -h -j "$merge" -o %i 2> /dev/null) ]]; do
     sleep 0.5
 done
 t2=$(now)
+if [[ -n ${SINGLE_DIR:-} ]]; then
+    # A single run timed separately (one 10^9 run is enough), read once the cluster is done.
+    while [[ ! -s $SINGLE_DIR/time-single ]]; do sleep 5; done
+    cp "$SINGLE_DIR/time-single" "$SINGLE_DIR/single.json" "$T/"
+    say "single: $(cat "$T/time-single") (wall user sys KiB) from $SINGLE_DIR"
+fi
 st=$(scontrol show job "$merge" | sed -n 's/.*JobState=\([A-Z_]*\).*/\1/p' | head -n 1)
 [[ $st == COMPLETED ]] || fail "merge job ended $st"
 same=no

@@ -126,8 +126,14 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
         merged
     };
     if let Some(p) = &o.save_counts {
-        let mut bytes = Vec::new();
-        counts.save(&scene.name, &mut bytes).map_err(|e| CliError::usage(format!("{p:?}: {e}")))?;
+        // Binary (version 3) unless the name ends in .json (version 2).
+        let bytes = if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("json")) {
+            let mut bytes = Vec::new();
+            counts.save(&scene.name, &mut bytes).map_err(|e| CliError::usage(format!("{p:?}: {e}")))?;
+            bytes
+        } else {
+            counts.to_binary(&scene.name)
+        };
         crate::output::write(p, &bytes)?;
     }
     let c = counts.complexity(base);

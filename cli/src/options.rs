@@ -130,7 +130,7 @@ pub struct ComplexityOptions {
     /// Shard i of n (0-based) of the --lines run: lines [i*N/n, (i+1)*N/n), for job arrays
     #[arg(long, value_name = "i/n", value_parser = crate::shard::parse, conflicts_with = "offset")]
     pub shard: Option<crate::shard::Shard>,
-    /// Write the counts to F
+    /// Write the counts to F (binary; JSON if F ends in .json)
     #[arg(long, value_name = "F", value_parser = out_path)]
     pub save_counts: Option<PathBuf>,
     /// Evaluate saved shards together instead of tracing: F1,F2,... (with --lines N: they must cover 0..N)

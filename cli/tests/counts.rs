@@ -1,6 +1,7 @@
-//! The counts file end to end (`--save-counts`, `--merge`): the version-2
-//! format round-trips bit for bit, shards merge in any order, and every
-//! broken or hostile file is refused with one line and exit code 2.
+//! The counts file end to end (`--save-counts`, `--merge`): the binary
+//! (version 3) and JSON (version 2, `F.json`) formats round-trip bit for
+//! bit, shards merge in any order and across formats, and every broken or
+//! hostile file is refused with one line and exit code 2.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -43,9 +44,10 @@ fn refused(args: &[&str], needle: &str) {
     assert!(out.stdout.is_empty());
 }
 
-/// Saves the counts of `cube-enclosure:1` (`extra` options added) and returns the file.
+/// Saves the counts of `cube-enclosure:1` (`extra` options added) as JSON
+/// (the tests below edit it) and returns the file.
 fn save(name: &str, extra: &[&str]) -> String {
-    let p = path(name);
+    let p = path(&format!("{name}.json"));
     let mut a = vec!["complexity", "cube-enclosure:1", "--lines", "2000", "--save-counts", &p];
     a.extend_from_slice(extra);
     if !extra.contains(&"--blocks") {
@@ -224,8 +226,69 @@ fn a_scene_name_with_a_newline_round_trips() {
     )
     .unwrap();
     let o = obj.to_str().unwrap();
-    let p = path("newline.counts");
+    let p = path("newline.counts.json");
     let run = json_of(&["complexity", o, "--lines", "3000", "--save-counts", &p, "--json"]);
     assert_eq!(read(&p)["scene"]["name"], json!(o));
     assert_eq!(json_of(&["complexity", o, "--merge", &p, "--json"]), run);
+}
+
+/// The binary file (the default) and the JSON file (`.json`) hold the same
+/// counts: shards saved in either format merge into the single run bit for
+/// bit, the binary file is the smaller, and a JSON shard converts to binary
+/// by merging it alone.
+#[test]
+fn binary_and_json_shards_merge_into_the_run() {
+    let run = ["complexity", "cube-enclosure:3", "--lines", "20000", "--seed", "5", "--json"];
+    let whole = json_of(&run);
+    let shard = |i: u32, name: &str| {
+        let p = path(name);
+        let s = format!("{i}/3");
+        let mut a = run.to_vec();
+        a.extend_from_slice(&["--shard", &s, "--save-counts", &p]);
+        assert!(itgfx(&a).status.success());
+        p
+    };
+    let (a, b, c) = (shard(0, "a.counts"), shard(1, "b.counts.json"), shard(2, "c.counts"));
+    let bin = std::fs::read(&a).unwrap();
+    assert_eq!(&bin[..8], b"ITGFXCNT");
+    let b_bin = path("b-converted.counts");
+    let convert = ["complexity", "cube-enclosure:3", "--seed", "5", "--merge", &b, "--save-counts", &b_bin];
+    assert!(itgfx(&convert).status.success());
+    assert!(std::fs::metadata(&b_bin).unwrap().len() < std::fs::metadata(&b).unwrap().len());
+    for list in [format!("{a},{b},{c}"), format!("{c},{b_bin},{a}")] {
+        let m = json_of(&["complexity", "cube-enclosure:3", "--lines", "20000", "--merge", &list, "--json"]);
+        assert_eq!(m, whole, "{list}");
+    }
+}
+
+/// A hostile binary file (a huge declared size, a truncation, bytes after
+/// the end, another version, garbage) is refused with one line, exit 2,
+/// and no huge allocation.
+#[test]
+fn hostile_binary_files_are_refused() {
+    let p = path("good.counts");
+    let a = ["complexity", "cube-enclosure:1", "--lines", "2000", "--blocks", "2", "--save-counts", &p];
+    assert!(itgfx(&a).status.success());
+    let good = std::fs::read(&p).unwrap();
+    let name_len = "cube-enclosure:1".len();
+    let patches_at = 8 + 4 + 4 + 8 + 4 + 4 + name_len;
+    let edit = |name: &str, f: &dyn Fn(&mut Vec<u8>)| {
+        let mut b = good.clone();
+        f(&mut b);
+        let q = path(name);
+        std::fs::write(&q, b).unwrap();
+        q
+    };
+    let huge = edit("huge.counts", &|b| b[patches_at..patches_at + 8].copy_from_slice(&u64::MAX.to_le_bytes()));
+    refused(&strs(&merge(&[&huge])), "patches: 18446744073709551615 declared but only");
+    let cut = edit("cut.counts", &|b| b.truncate(b.len() - 3));
+    refused(&strs(&merge(&[&cut])), "(truncated?)");
+    let more = edit("more.counts", &|b| b.extend_from_slice(b"x"));
+    refused(&strs(&merge(&[&more])), "1 bytes follow the last block");
+    let v9 = edit("v9.counts", &|b| b[8..12].copy_from_slice(&9u32.to_le_bytes()));
+    refused(&strs(&merge(&[&v9])), "version 9");
+    let garbage = edit("garbage.counts", &|b| {
+        b[0] = 0xff;
+    });
+    refused(&strs(&merge(&[&garbage])), "neither binary (ITGFXCNT) nor JSON");
 }

@@ -1,7 +1,9 @@
 #![no_main]
-//! The counts-file reader: any text either loads into counts that evaluate
-//! to finite numbers, save and load again to the same counts, and merge
-//! with themselves only as a repeat — or is refused. Never a panic.
+//! The counts-file readers (JSON version 2, binary version 3): any text or
+//! bytes either load into counts that evaluate to finite numbers, save and
+//! load again to the same counts in both formats, and merge with themselves
+//! only as a repeat — or are refused. Never a panic, never an allocation
+//! sized by a declared count (libFuzzer's `-rss_limit_mb` catches one).
 use itgfx_backends::visibility::VisibilityCounts;
 use itgfx_core::Base;
 use libfuzzer_sys::fuzz_target;
@@ -69,15 +71,31 @@ fn edited(data: &[u8]) -> String {
     out
 }
 
+/// The template saved as a binary file with some bytes overwritten as
+/// `data` says (nine bytes per edit: where, then eight bytes written
+/// little-endian there, so a whole size field can become huge).
+fn edited_binary(data: &[u8]) -> Vec<u8> {
+    let (name, c) = VisibilityCounts::load(TEMPLATE).expect("the template loads");
+    let mut b = c.to_binary(&name);
+    for e in data.chunks_exact(9) {
+        let at = usize::from(e[0]) % b.len();
+        let end = (at + 8).min(b.len());
+        b[at..end].copy_from_slice(&e[1..1 + end - at]);
+    }
+    b
+}
+
 fuzz_target!(|data: &[u8]| {
     if let Ok(text) = std::str::from_utf8(data) {
-        check(text);
+        check(VisibilityCounts::load(text));
     }
-    check(&edited(data));
+    check(VisibilityCounts::load(&edited(data)));
+    check(VisibilityCounts::from_binary(data));
+    check(VisibilityCounts::from_binary(&edited_binary(data)));
 });
 
-fn check(text: &str) {
-    let Ok((name, c)) = VisibilityCounts::load(text) else {
+fn check(loaded: Result<(String, VisibilityCounts), itgfx_backends::visibility::CountsError>) {
+    let Ok((name, c)) = loaded else {
         return;
     };
     let e = c.complexity(Base::Bits);
@@ -93,6 +111,8 @@ fn check(text: &str) {
     c.save(&name, &mut out).unwrap();
     let (again_name, again) = VisibilityCounts::load(std::str::from_utf8(&out).unwrap()).unwrap();
     assert_eq!((&again_name, &again), (&name, &c));
+    let (bin_name, bin) = VisibilityCounts::from_binary(&c.to_binary(&name)).unwrap();
+    assert_eq!((&bin_name, &bin), (&name, &c));
     let mut twice = c.clone();
     assert!(twice.merge(c.clone()).is_err(), "the same ranges merged twice");
     assert_eq!(twice, c, "a refused merge leaves the counts unchanged");

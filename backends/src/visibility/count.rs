@@ -49,18 +49,29 @@ type KeyMap = HashMap<u64, u64, BuildHasherDefault<KeyHasher>>;
 /// Where a block's pair counts accumulate: a dense `n × n` matrix of `u32`
 /// when it fits in [`DENSE_LIMIT`] entries (chunks arrive as sorted runs, so
 /// the adds sweep it in order), a hash map of the pairs hit otherwise.
+///
+/// One accumulator serves every block of a run: [`Accumulator::take_pairs`]
+/// zeroes what it reads, so the matrix is allocated (and its pages faulted
+/// in) once per run, not once per block. The cells a block hit are listed
+/// while they are few, so a small shard reads its pairs without sweeping
+/// all `n²` cells (that sweep, eight times over 5400² cells, was a second of
+/// every small shard's CPU time).
 enum Accumulator {
-    Dense { n: usize, counts: Vec<u32>, overflow: KeyMap },
+    Dense { n: usize, counts: Vec<u32>, touched: Option<Vec<u32>>, overflow: KeyMap },
     Sparse(KeyMap),
 }
 
 /// Largest `n²` counted densely (6000 patches: 144 MB of `u32` per block).
 const DENSE_LIMIT: usize = 36_000_000;
 
+/// Past `n² / TOUCHED_FRACTION` cells hit, a sweep of the matrix is cheaper
+/// than sorting the list of cells hit, which is then dropped.
+const TOUCHED_FRACTION: usize = 32;
+
 impl Accumulator {
     fn new(n: usize) -> Self {
         if n.saturating_mul(n) <= DENSE_LIMIT {
-            Accumulator::Dense { n, counts: vec![0; n * n], overflow: KeyMap::default() }
+            Accumulator::Dense { n, counts: vec![0; n * n], touched: Some(Vec::new()), overflow: KeyMap::default() }
         } else {
             Accumulator::Sparse(KeyMap::default())
         }
@@ -68,15 +79,27 @@ impl Accumulator {
 
     fn add(&mut self, runs: &[(u64, u64)]) {
         match self {
-            Accumulator::Dense { n, counts, overflow } => {
+            Accumulator::Dense { n, counts, touched, overflow } => {
+                let limit = counts.len() / TOUCHED_FRACTION;
                 for &(k, c) in runs {
                     let idx = (k >> 32) as usize * *n + (k as u32) as usize;
-                    let (sum, carry) = counts[idx].overflowing_add(c as u32);
+                    let old = counts[idx];
+                    let (sum, carry) = old.overflowing_add(c as u32);
                     if carry || c > u64::from(u32::MAX) {
                         // Counts past 2^32 for one pair: keep the excess exactly.
                         *overflow.entry(k).or_insert(0) += c;
                     } else {
                         counts[idx] = sum;
+                        if old == 0
+                            && sum != 0
+                            && let Some(t) = touched
+                        {
+                            // idx < n² ≤ DENSE_LIMIT < 2^32.
+                            t.push(idx as u32);
+                            if t.len() > limit {
+                                *touched = None;
+                            }
+                        }
                     }
                 }
             }
@@ -92,22 +115,32 @@ impl Accumulator {
     /// the next block: the dense matrix is zeroed where it was written and
     /// kept, so its pages are touched once per run, not once per block
     /// (fresh pages cost two page faults each: 13% of a 10^7-line run).
+    /// While the cells hit are listed, only they are read; otherwise the
+    /// matrix is swept, whole runs of zeros skipped 16 entries at a time.
     fn take_pairs(&mut self) -> Vec<PairCount> {
         let mut pairs: Vec<PairCount> = match self {
-            Accumulator::Dense { n, counts, overflow } => {
+            Accumulator::Dense { n, counts, touched, overflow } => {
                 let n = *n;
+                let pair = |idx: usize, c: u32| PairCount {
+                    from: (idx / n) as u32,
+                    to: (idx % n) as u32,
+                    count: u64::from(c),
+                };
                 let mut v: Vec<PairCount> = Vec::new();
-                // Whole runs of zeros are skipped 16 entries at a time.
-                for (c, chunk) in counts.chunks_mut(16).enumerate() {
-                    if chunk.iter().fold(0, |a, &x| a | x) == 0 {
-                        continue;
-                    }
-                    for (k, x) in chunk.iter_mut().enumerate().filter(|(_, x)| **x > 0) {
-                        let idx = c * 16 + k;
-                        v.push(PairCount { from: (idx / n) as u32, to: (idx % n) as u32, count: u64::from(*x) });
-                        *x = 0;
+                if let Some(mut t) = touched.take() {
+                    t.sort_unstable();
+                    v = t.iter().map(|&idx| pair(idx as usize, std::mem::take(&mut counts[idx as usize]))).collect();
+                } else {
+                    for (c, chunk) in counts.chunks_mut(16).enumerate() {
+                        if chunk.iter().fold(0, |a, &x| a | x) == 0 {
+                            continue;
+                        }
+                        for (k, x) in chunk.iter_mut().enumerate().filter(|(_, x)| **x > 0) {
+                            v.push(pair(c * 16 + k, std::mem::take(x)));
+                        }
                     }
                 }
+                *touched = Some(Vec::new());
                 for (k, c) in overflow.drain() {
                     let (i, j) = ((k >> 32) as u32, k as u32);
                     match v.binary_search_by_key(&(i, j), |p| (p.from, p.to)) {

@@ -16,6 +16,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::count::block_lines;
+use super::counts_binary::{BYTES_PER_BINARY_BYTE, MAGIC};
 use super::{BlockCounts, ContinuousSums, CountsError, FixedSum, MAX_BLOCKS, VisibilityCounts};
 use crate::scene::Scene;
 use itgfx_core::PairCount;
@@ -394,23 +395,39 @@ impl VisibilityCounts {
         Ok((f.scene.name, counts))
     }
 
-    /// Reads and checks a counts file from `path`, refusing before reading
-    /// one whose parsed form would not fit in the memory available (at most
-    /// [`BYTES_PER_FILE_BYTE`] bytes per byte of file, text included).
+    /// Reads and checks a counts file from `path`, binary (version 3,
+    /// [`super::counts_binary`]) or JSON (version 2), refusing before
+    /// reading one whose parsed form would not fit in the memory available
+    /// (at most [`BYTES_PER_FILE_BYTE`] bytes per byte of JSON,
+    /// [`BYTES_PER_BINARY_BYTE`] per byte of binary, the file included).
     ///
     /// # Errors
-    /// As [`VisibilityCounts::load`]; I/O errors as [`CountsError::Format`]
-    /// with the path; [`CountsError::TooLarge`].
+    /// As [`VisibilityCounts::load`] and [`VisibilityCounts::from_binary`];
+    /// I/O errors as [`CountsError::Format`] with the path; [`CountsError::TooLarge`].
     pub fn read(path: &std::path::Path) -> Result<(String, Self), CountsError> {
+        use std::io::Read;
         let io = |e: std::io::Error| CountsError::Format(format!("{}: {e}", path.display()));
-        let len = std::fs::metadata(path).map_err(io)?.len();
-        let needed = len.saturating_mul(BYTES_PER_FILE_BYTE);
+        let mut file = std::fs::File::open(path).map_err(io)?;
+        let len = file.metadata().map_err(io)?.len();
+        let mut head = Vec::with_capacity(MAGIC.len());
+        (&mut file).take(MAGIC.len() as u64).read_to_end(&mut head).map_err(io)?;
+        let binary = head == MAGIC;
+        let needed = len.saturating_mul(if binary { BYTES_PER_BINARY_BYTE } else { BYTES_PER_FILE_BYTE });
         if let Some(available) = available_memory()
             && needed > available
         {
             return Err(CountsError::TooLarge { needed, available });
         }
-        let text = std::fs::read_to_string(path).map_err(io)?;
+        // The length is a hint only (the file may grow); it fits in memory.
+        let mut bytes = Vec::with_capacity(usize::try_from(len).unwrap_or(0).saturating_add(1));
+        bytes.extend_from_slice(&head);
+        file.read_to_end(&mut bytes).map_err(io)?;
+        if binary {
+            return Self::from_binary(&bytes);
+        }
+        let text = String::from_utf8(bytes).map_err(|_| {
+            CountsError::Format("not an itgfx counts file: neither binary (ITGFXCNT) nor JSON text".into())
+        })?;
         Self::load(&text)
     }
 }

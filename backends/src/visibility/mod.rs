@@ -28,9 +28,11 @@
 //! ([`counts_file`]) evaluates to the same bits as the run itself.
 //!
 //! Modules: [`count`] casts lines into counts, [`counts_file`] saves, loads,
-//! validates them, [`merge`] adds shards, [`jackknife`] evaluates the measures.
+//! validates them (JSON), [`counts_binary`] in the compact binary format,
+//! [`merge`] adds shards, [`jackknife`] evaluates the measures.
 
 pub mod count;
+pub mod counts_binary;
 pub mod counts_file;
 pub mod jackknife;
 pub mod merge;

@@ -1,0 +1,427 @@
+//! The binary counts file (version 3): the same counts as the JSON file of
+//! [`super::counts_file`], little-endian, a few bytes per pair, read with
+//! every declared size checked against the bytes left before anything is
+//! allocated.
+//!
+//! Layout (all integers little-endian, no padding):
+//!
+//! | field | bytes |
+//! |---|---|
+//! | magic `ITGFXCNT`, version `u32` = 3 | 12 |
+//! | flags `u32` (bit 0: local lines; others 0), seed `u64`, blocks `u32` | 16 |
+//! | scene name: length `u32`, UTF-8 bytes; patches `u64`; areas hash `u64` | 20 + name |
+//! | line ranges: count `u64`, then `[start, end)` as `u64` pairs | 8 + 16 per range |
+//! | areas: `f64` per patch | 8 per patch |
+//! | endpoints: count `u64` and `Σ ln(A_T F)` `i128` (units of `2^-64` nats) per patch | 24 per patch |
+//! | per block: lines, segments, escaped, samples `u64`; `Σ l`, `Σ l²` `i128` | 64 |
+//! | per block: pairs `u64`, step width `u8` (1, 2 or 4), count width `u8` (1, 2, 4 or 8) | 10 |
+//! | per block: pairs from each patch `u32` per patch; then each pair's step (its `to` less the previous `to` of its row, or its `to` if first; step width bytes); then each count (count width bytes) | 4 per patch + (step width + count width) per pair |
+//! | per block: background entries `u64`, then `(patch u32, count u64)` | 8 + 12 per entry |
+//!
+//! Pairs are stored sparse, row by row (compressed sparse rows): a shard of
+//! `10^8 / 16` lines of `cube-enclosure:30` hits about 2% of the `5400²`
+//! pairs per block, mostly once, so a pair costs 5 bytes here against
+//! 16 bytes in a dense `u32` matrix row and about 16 bytes of JSON text.
+//! The file ends exactly after the last block: a truncated file is refused.
+
+use itgfx_core::PairCount;
+
+use super::counts_file::SceneFingerprint;
+use super::{BlockCounts, ContinuousSums, CountsError, FixedSum, MAX_BLOCKS, VisibilityCounts};
+
+/// The first 8 bytes of a binary counts file.
+pub const MAGIC: &[u8; 8] = b"ITGFXCNT";
+/// The binary version written and read.
+pub const BINARY_VERSION: u32 = 3;
+/// Bytes of memory per byte of binary file that reading may take: the file,
+/// and the parsed pairs (a pair of at least 5 bytes becomes 16 bytes).
+pub const BYTES_PER_BINARY_BYTE: u64 = 5;
+
+fn invalid(m: impl Into<String>) -> CountsError {
+    CountsError::Invalid(m.into())
+}
+
+/// Appends little-endian fields.
+struct Writer<'a>(&'a mut Vec<u8>);
+
+impl Writer<'_> {
+    fn u32(&mut self, v: u32) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn u64(&mut self, v: u64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn i128(&mut self, v: i128) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+}
+
+/// Reads little-endian fields, refusing to read past the end.
+struct Reader<'a> {
+    rest: &'a [u8],
+}
+
+impl<'a> Reader<'a> {
+    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], CountsError> {
+        if n > self.rest.len() {
+            return Err(CountsError::Format(format!("the binary counts file ends inside {what} (truncated?)")));
+        }
+        let (head, tail) = self.rest.split_at(n);
+        self.rest = tail;
+        Ok(head)
+    }
+    fn array<const N: usize>(&mut self, what: &str) -> Result<[u8; N], CountsError> {
+        Ok(self.take(N, what)?.try_into().expect("N bytes"))
+    }
+    fn u8(&mut self, what: &str) -> Result<u8, CountsError> {
+        Ok(self.array::<1>(what)?[0])
+    }
+    fn u32(&mut self, what: &str) -> Result<u32, CountsError> {
+        Ok(u32::from_le_bytes(self.array(what)?))
+    }
+    fn u64(&mut self, what: &str) -> Result<u64, CountsError> {
+        Ok(u64::from_le_bytes(self.array(what)?))
+    }
+    fn i128(&mut self, what: &str) -> Result<i128, CountsError> {
+        Ok(i128::from_le_bytes(self.array(what)?))
+    }
+    /// A declared number of items of `size` bytes each, checked against the
+    /// bytes left: what it returns can be allocated (it is at most the
+    /// file's length).
+    fn count(&mut self, declared: u64, size: u64, what: &str) -> Result<usize, CountsError> {
+        match declared.checked_mul(size) {
+            Some(bytes) if bytes <= self.rest.len() as u64 => Ok(declared as usize),
+            _ => Err(CountsError::Format(format!(
+                "{what}: {declared} declared but only {} bytes are left in the file",
+                self.rest.len()
+            ))),
+        }
+    }
+}
+
+/// Each pair's `to` as a step from the previous pair's `to` in its row
+/// (the first of a row: from 0).
+fn to_steps(pairs: &[PairCount]) -> Vec<u32> {
+    let mut prev = None;
+    pairs
+        .iter()
+        .map(|p| {
+            let base = match prev {
+                Some((from, to)) if from == p.from => to,
+                _ => 0,
+            };
+            prev = Some((p.from, p.to));
+            p.to.wrapping_sub(base)
+        })
+        .collect()
+}
+
+/// Reads a `width`-byte little-endian integer (`width` ≤ 8) at item `i`.
+#[inline]
+fn le(bytes: &[u8], width: usize, i: usize) -> u64 {
+    let at = width * i;
+    match width {
+        1 => u64::from(bytes[at]),
+        2 => u64::from(u16::from_le_bytes([bytes[at], bytes[at + 1]])),
+        4 => u64::from(u32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"))),
+        _ => u64::from_le_bytes(bytes[at..at + 8].try_into().expect("8 bytes")),
+    }
+}
+
+/// The smallest of 1, 2, 4, 8 bytes that holds every value.
+fn width(values: impl Iterator<Item = u64>) -> u8 {
+    match values.max().unwrap_or(0) {
+        0..=0xff => 1,
+        0x100..=0xffff => 2,
+        0x1_0000..=0xffff_ffff => 4,
+        _ => 8,
+    }
+}
+
+impl VisibilityCounts {
+    /// The counts as a version-3 binary counts file, with the scene name
+    /// `name` in the fingerprint.
+    #[must_use]
+    pub fn to_binary(&self, name: &str) -> Vec<u8> {
+        let n = self.areas.len();
+        let pairs: usize = self.blocks.iter().map(|b| b.pairs.len()).sum();
+        let mut out = Vec::with_capacity(64 + name.len() + 40 * n + self.blocks.len() * (96 + 4 * n) + 6 * pairs);
+        out.extend_from_slice(MAGIC);
+        let mut w = Writer(&mut out);
+        w.u32(BINARY_VERSION);
+        w.u32(u32::from(self.local));
+        w.u64(self.seed);
+        w.u32(self.blocks.len() as u32);
+        w.u32(name.len() as u32);
+        w.0.extend_from_slice(name.as_bytes());
+        w.u64(self.scene.patches);
+        w.u64(self.scene.areas_hash);
+        w.u64(self.ranges.len() as u64);
+        for r in &self.ranges {
+            w.u64(r.0);
+            w.u64(r.1);
+        }
+        for a in &self.areas {
+            w.u64(a.to_bits());
+        }
+        for (e, l) in self.endpoints.iter().zip(&self.endpoint_log) {
+            w.u64(*e);
+            w.i128(l.0);
+        }
+        for b in &self.blocks {
+            for v in [b.lines, b.segments, b.escaped, b.continuous.samples] {
+                w.u64(v);
+            }
+            w.i128(b.continuous.sum.0);
+            w.i128(b.continuous.sum_sq.0);
+            w.u64(b.pairs.len() as u64);
+            let steps = to_steps(&b.pairs);
+            let to_width = width(steps.iter().map(|&d| u64::from(d)));
+            let width = width(b.pairs.iter().map(|p| p.count));
+            w.0.push(to_width);
+            w.0.push(width);
+            let mut rows = vec![0u32; n];
+            for p in &b.pairs {
+                rows[p.from as usize] += 1;
+            }
+            for r in rows {
+                w.u32(r);
+            }
+            for d in steps {
+                w.0.extend_from_slice(&d.to_le_bytes()[..usize::from(to_width)]);
+            }
+            for p in &b.pairs {
+                w.0.extend_from_slice(&p.count.to_le_bytes()[..usize::from(width)]);
+            }
+            w.u64(b.background.len() as u64);
+            for &(i, c) in &b.background {
+                w.u32(i);
+                w.u64(c);
+            }
+        }
+        out
+    }
+
+    /// Reads a version-3 binary counts file and checks it
+    /// ([`VisibilityCounts::validate`]); returns the scene name too.
+    /// Nothing is allocated from a declared size before that size is
+    /// checked against the bytes left in the file.
+    ///
+    /// # Errors
+    /// [`CountsError::Format`] for bytes that are not a binary counts file
+    /// of this version (or are truncated, or run on), [`CountsError::Invalid`]
+    /// / [`CountsError::Overflow`] for bad contents.
+    pub fn from_binary(bytes: &[u8]) -> Result<(String, Self), CountsError> {
+        let mut r = Reader { rest: bytes };
+        if r.take(8, "the magic").ok() != Some(&MAGIC[..]) {
+            return Err(CountsError::Format("not a binary itgfx counts file (no ITGFXCNT magic)".into()));
+        }
+        let version = r.u32("the version")?;
+        if version != BINARY_VERSION {
+            return Err(CountsError::Format(format!(
+                "a binary counts file of version {version}: this itgfx reads version {BINARY_VERSION}; count again with --save-counts"
+            )));
+        }
+        let flags = r.u32("the flags")?;
+        if flags > 1 {
+            return Err(invalid(format!("flags {flags:#x}: only bit 0 (local lines) is defined")));
+        }
+        let seed = r.u64("the seed")?;
+        let blocks = r.u32("the block count")?;
+        if !(1..=MAX_BLOCKS).contains(&blocks) {
+            return Err(invalid(format!("{blocks} jackknife blocks: expected 1..={MAX_BLOCKS}")));
+        }
+        let len = r.u32("the scene name's length")?;
+        let len = r.count(u64::from(len), 1, "the scene name's bytes")?;
+        let name = std::str::from_utf8(r.take(len, "the scene name")?)
+            .map_err(|_| invalid("the scene name is not UTF-8"))?
+            .to_string();
+        let patches = r.u64("the patch count")?;
+        let areas_hash = r.u64("the areas hash")?;
+        let ranges_declared = r.u64("the range count")?;
+        let nr = r.count(ranges_declared, 16, "line ranges")?;
+        let mut ranges = Vec::with_capacity(nr);
+        for _ in 0..nr {
+            ranges.push((r.u64("a line range")?, r.u64("a line range")?));
+        }
+        // Areas and endpoints take 32 bytes per patch.
+        let n = r.count(patches, 32, "patches")?;
+        let mut areas = Vec::with_capacity(n);
+        for _ in 0..n {
+            areas.push(f64::from_bits(r.u64("an area")?));
+        }
+        let (mut endpoints, mut endpoint_log) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        for _ in 0..n {
+            endpoints.push(r.u64("an endpoint count")?);
+            endpoint_log.push(FixedSum(r.i128("an endpoint sum")?));
+        }
+        // A block takes at least 74 + 4n bytes.
+        let nb = r.count(u64::from(blocks), 74 + 4 * n as u64, "jackknife blocks")?;
+        let mut out = Vec::with_capacity(nb);
+        for k in 0..nb {
+            out.push(read_block(&mut r, n, k)?);
+        }
+        if !r.rest.is_empty() {
+            return Err(CountsError::Format(format!(
+                "{} bytes follow the last block of the binary counts file",
+                r.rest.len()
+            )));
+        }
+        let counts = Self {
+            scene: SceneFingerprint { name: name.clone(), patches, areas_hash },
+            areas,
+            local: flags == 1,
+            seed,
+            ranges,
+            blocks: out,
+            endpoints,
+            endpoint_log,
+        };
+        counts.validate()?;
+        Ok((name, counts))
+    }
+}
+
+/// One block's counts: totals, sums, the pairs row by row, the background.
+fn read_block(r: &mut Reader<'_>, n: usize, k: usize) -> Result<BlockCounts, CountsError> {
+    let what = |s: &str| format!("block {k}'s {s}");
+    let lines = r.u64(&what("line count"))?;
+    let segments = r.u64(&what("segment count"))?;
+    let escaped = r.u64(&what("background count"))?;
+    let samples = r.u64(&what("sample count"))?;
+    let sum = FixedSum(r.i128(&what("log sum"))?);
+    let sum_sq = FixedSum(r.i128(&what("log square sum"))?);
+    let declared = r.u64(&what("pair count"))?;
+    let to_width = r.u8(&what("step width"))?;
+    let width = r.u8(&what("count width"))?;
+    if ![1, 2, 4].contains(&to_width) || ![1, 2, 4, 8].contains(&width) {
+        return Err(invalid(format!(
+            "block {k}: widths {to_width} and {width}: expected 1, 2 or 4 bytes per step and 1, 2, 4 or 8 per count"
+        )));
+    }
+    let (tw, w) = (usize::from(to_width), usize::from(width));
+    let rows = r.take(4 * n, &what("rows"))?;
+    let np = r.count(declared, (tw + w) as u64, &what("pairs"))?;
+    let (to, counts) = (r.take(tw * np, &what("pairs"))?, r.take(w * np, &what("counts"))?);
+    let mut pairs = Vec::with_capacity(np);
+    let mut at = 0usize;
+    for (from, row) in rows.chunks_exact(4).enumerate() {
+        let len = u32::from_le_bytes(row.try_into().expect("4 bytes")) as usize;
+        if len > np - at {
+            return Err(invalid(format!("block {k}: the rows list more than its {np} pairs")));
+        }
+        let mut t = 0u64;
+        for p in at..at + len {
+            t += le(to, tw, p);
+            let t = u32::try_from(t).map_err(|_| invalid(format!("block {k}: a patch index is out of range")))?;
+            pairs.push(PairCount { from: from as u32, to: t, count: le(counts, w, p) });
+        }
+        at += len;
+    }
+    if at != np {
+        return Err(invalid(format!("block {k}: the rows list {at} of its {np} pairs")));
+    }
+    let nbg = r.u64(&what("background entry count"))?;
+    let nbg = r.count(nbg, 12, &what("background entries"))?;
+    let mut background = Vec::with_capacity(nbg);
+    for _ in 0..nbg {
+        background.push((r.u32(&what("background entry"))?, r.u64(&what("background entry"))?));
+    }
+    Ok(BlockCounts { lines, segments, escaped, pairs, background, continuous: ContinuousSums { samples, sum, sum_sq } })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::built_in;
+    use crate::tracer::{CpuTracer, Prepared};
+    use crate::visibility::{LineOptions, count_visibility};
+
+    fn counts(lines: u64, local: bool) -> VisibilityCounts {
+        let scene = built_in("cube-enclosure:2").unwrap();
+        let prepared = Prepared::new(&scene);
+        let tracer = CpuTracer::new(&prepared);
+        let opts = LineOptions { lines, seed: 3, local, blocks: 3, offset: 5 };
+        count_visibility(&scene, &prepared, &tracer, &opts, &mut |_, _| {}).unwrap()
+    }
+
+    /// Saved and read back, the counts are the same, for global and local
+    /// lines.
+    #[test]
+    fn round_trips_bit_for_bit() {
+        for local in [false, true] {
+            let c = counts(4000, local);
+            let bytes = c.to_binary("cube-enclosure:2");
+            assert_eq!(bytes[..8], MAGIC[..]);
+            assert_eq!(VisibilityCounts::from_binary(&bytes).unwrap(), ("cube-enclosure:2".into(), c));
+        }
+    }
+
+    /// A count past 2^32 takes 8 bytes and reads back exactly (2^34 local
+    /// lines from patch 0, all reaching patch 1).
+    #[test]
+    fn wide_counts_round_trip() {
+        let areas = vec![1.0, 0.5];
+        let lines = 1u64 << 34;
+        let block = BlockCounts {
+            lines,
+            segments: lines,
+            escaped: 0,
+            pairs: vec![PairCount { from: 0, to: 1, count: lines }],
+            background: Vec::new(),
+            continuous: ContinuousSums::default(),
+        };
+        let c = VisibilityCounts {
+            scene: SceneFingerprint::of("wide", &areas),
+            areas,
+            local: true,
+            seed: 7,
+            ranges: vec![(0, lines)],
+            blocks: vec![block],
+            endpoints: vec![0, 0],
+            endpoint_log: vec![FixedSum::default(); 2],
+        };
+        c.validate().unwrap();
+        assert_eq!(width(c.blocks[0].pairs.iter().map(|p| p.count)), 8);
+        let bytes = c.to_binary("wide");
+        assert_eq!(VisibilityCounts::from_binary(&bytes).unwrap(), ("wide".into(), c));
+    }
+
+    /// Every prefix of a file is refused with a message (no panic, no huge
+    /// allocation), and so is a byte appended.
+    #[test]
+    fn truncated_and_extended_files_are_refused() {
+        let c = counts(300, false);
+        let bytes = c.to_binary("cube-enclosure:2");
+        for cut in 0..bytes.len() {
+            assert!(VisibilityCounts::from_binary(&bytes[..cut]).is_err(), "cut at {cut}");
+        }
+        let mut more = bytes.clone();
+        more.push(0);
+        let e = VisibilityCounts::from_binary(&more).unwrap_err().to_string();
+        assert!(e.contains("1 bytes follow"), "{e}");
+    }
+
+    /// Declared sizes of 2^64-1 patches, ranges, pairs or blocks are refused
+    /// before anything is allocated.
+    #[test]
+    fn huge_declared_sizes_are_refused() {
+        let c = counts(300, false);
+        let bytes = c.to_binary("cube-enclosure:2");
+        let name_len = "cube-enclosure:2".len();
+        let patches_at = 8 + 4 + 4 + 8 + 4 + 4 + name_len;
+        let ranges_at = patches_at + 16;
+        for (at, needle) in [(patches_at, "patches"), (ranges_at, "line ranges")] {
+            let mut b = bytes.clone();
+            b[at..at + 8].copy_from_slice(&u64::MAX.to_le_bytes());
+            let e = VisibilityCounts::from_binary(&b).unwrap_err().to_string();
+            assert!(e.contains(needle) && e.contains("declared"), "{e}");
+        }
+        let mut b = bytes.clone();
+        b[8 + 4 + 4 + 8..8 + 4 + 4 + 8 + 4].copy_from_slice(&u32::MAX.to_le_bytes());
+        assert!(VisibilityCounts::from_binary(&b).unwrap_err().to_string().contains("jackknife blocks"));
+        let mut b = bytes;
+        b[8..12].copy_from_slice(&2u32.to_le_bytes());
+        assert!(VisibilityCounts::from_binary(&b).unwrap_err().to_string().contains("version 2"));
+    }
+}

@@ -57,7 +57,7 @@ fn edited(data: &[u8]) -> String {
         let i = usize::from(e[0]) % values.len();
         values[i] = match e[1] % 20 {
             v @ 0..16 => INTERESTING[usize::from(v)].to_string(),
-            _ => (values[i].parse::<i128>().unwrap_or(0) + i128::from(e[2] as i8)).to_string(),
+            _ => values[i].parse::<i128>().unwrap_or(0).saturating_add(i128::from(e[2] as i8)).to_string(),
         };
     }
     let mut out = String::with_capacity(TEMPLATE.len() + 64);

@@ -18,7 +18,7 @@ SIZE=${SIZE:-128x128}
 SPP=${SPP:-60}
 REF_SPP=${REF_SPP:-1024}
 SEEDS=${SEEDS:-"1 2"}
-CRITERIA=${CRITERIA:-"cc ct kl cs hl kl-sqrt cs-sqrt hl-sqrt ec ec-batch rel"}
+CRITERIA=${CRITERIA:-"cc ct kl cs hl kl-sqrt cs-sqrt hl-sqrt ec ic cc-tree ec-batch rel es"}
 mkdir -p "$OUT"
 run() { nice -n 10 "$BIN" render "$SCENE" --size "$SIZE" "$@" --json; }
 # Runs whose JSON exists are kept (the script resumes).
@@ -37,13 +37,17 @@ for c in $CRITERIA; do
     first=${SEEDS%% *}
     have "$c-$first" || run --out "$OUT/$c-$first" --sampler "$c" --spp "$SPP" --seed "$first" --reference "$REF" \
         > "$OUT/$c-$first.json"
-    t=$(python3 -c "import json,sys; print(repr(json.load(open(sys.argv[1]))['threshold']))" "$OUT/$c-$first.json")
+    # es (supersampling) has no threshold: it spends exactly --spp, and decides once (no --unbiased).
+    t=$(python3 -c "import json,sys; t=json.load(open(sys.argv[1])).get('threshold'); print('' if t is None else repr(t))" "$OUT/$c-$first.json")
+    thr=()
+    [ -n "$t" ] && thr=(--threshold "$t")
     for seed in $SEEDS; do
         if [ "$seed" != "$first" ] && ! have "$c-$seed"; then
-            run --out "$OUT/$c-$seed" --sampler "$c" --spp "$SPP" --threshold "$t" --seed "$seed" \
+            run --out "$OUT/$c-$seed" --sampler "$c" --spp "$SPP" "${thr[@]}" --seed "$seed" \
                 --reference "$REF" > "$OUT/$c-$seed.json"
         fi
-        have "$c-unbiased-$seed" || run --out "$OUT/$c-unbiased-$seed" --sampler "$c" --spp "$SPP" --threshold "$t" --unbiased --seed "$seed" \
+        [ -n "$t" ] || continue
+        have "$c-unbiased-$seed" || run --out "$OUT/$c-unbiased-$seed" --sampler "$c" --spp "$SPP" "${thr[@]}" --unbiased --seed "$seed" \
             --reference "$REF" > "$OUT/$c-unbiased-$seed.json"
     done
 done

@@ -304,6 +304,110 @@ pub fn tree_colour_contrast(channel_contrasts: &[f64], weights: &[f64], importan
     Ok(acc.value())
 }
 
+/// The per-channel contrast measure of a pixel or node.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ChannelContrast {
+    /// Entropy contrast `1 − H(p)/log N` (Part IV Def. 8, eq. (16)).
+    Entropy,
+    /// Binary contrast `1 − H_b` of the extreme probabilities (Part IV Def. 9, eq. (17)).
+    Binary,
+    /// Mitchell's classic contrast `(I_max − I_min)/(I_max + I_min)` (Part IV eq. (1)).
+    Classic,
+}
+
+/// The contrast of one channel's samples under `kind`: [`pixel_contrast`],
+/// [`binary_contrast`] or [`classic_contrast`].
+///
+/// # Errors
+/// As [`pixel_entropy`].
+pub fn channel_contrast<T: Real>(samples: &[T], kind: ChannelContrast) -> Result<f64, Error> {
+    match kind {
+        ChannelContrast::Entropy => pixel_contrast(samples),
+        ChannelContrast::Binary => binary_contrast(samples),
+        ChannelContrast::Classic => classic_contrast(samples),
+    }
+}
+
+/// Importance-weighted contrast of an `n`-node of the refinement tree,
+/// `Σ_c w^c C^c q_n^c` with the importance `q_n^c = c̄_n^c / N_r^{n−1}`
+/// of Proposition 1 (Part IV eqs. (26), (27)); `channels[c]` holds channel
+/// `c` of the node's samples, `level = n ≥ 1`.
+///
+/// With [`ChannelContrast::Entropy`] this is the entropy contrast `C_n` of
+/// eq. (27) (the `EC` sampler of §6.4); with [`ChannelContrast::Classic`]
+/// it is the importance-weighted classic contrast `IC` of §6.4 (eq. (1)
+/// per channel weighted by `q_n` instead of the channel mean). Both fall by
+/// a factor `N_r` per level, which is what stops the descent.
+///
+/// # Errors
+/// [`Error::LengthMismatch`] when `weights` and `channels` differ in length
+/// or the channels in sample count; as [`channel_contrast`] for each
+/// channel; as [`node_importance`].
+pub fn importance_weighted_contrast(
+    channels: &[&[f64]],
+    weights: &[f64],
+    kind: ChannelContrast,
+    regions: u32,
+    level: u32,
+) -> Result<f64, Error> {
+    same_len(channels.len(), weights.len())?;
+    let n = channels.first().map_or(0, |c| c.len());
+    let mut acc = Neumaier::new();
+    for (index, (ch, w)) in channels.iter().zip(weights).enumerate() {
+        same_len(n, ch.len())?;
+        let c = channel_contrast(ch, kind)?;
+        let q = node_importance(mean(ch)?, regions, level)?;
+        let v = w * c * q;
+        if !v.is_finite() {
+            return Err(Error::NonFinite { index });
+        }
+        acc.add(v);
+    }
+    Ok(acc.value())
+}
+
+/// Pixel colour contrast of a colour system from its channels' samples
+/// (Part IV Defs. 10–11, eqs. (18), (19)): each channel's contrast under
+/// `kind`, weighted by `w^c c̄^c` and normalised, so in `[0, 1]`.
+///
+/// # Errors
+/// As [`importance_weighted_contrast`].
+pub fn pixel_colour_contrast(channels: &[&[f64]], weights: &[f64], kind: ChannelContrast) -> Result<f64, Error> {
+    same_len(channels.len(), weights.len())?;
+    mass(weights)?;
+    let n = channels.first().map_or(0, |c| c.len());
+    let (mut num, mut den) = (Neumaier::new(), Neumaier::new());
+    for (ch, w) in channels.iter().zip(weights) {
+        same_len(n, ch.len())?;
+        let m = mean(ch)?;
+        num.add(w * m * channel_contrast(ch, kind)?);
+        den.add(w * m);
+    }
+    let d = den.value();
+    Ok(if d > 0.0 { num.value() / d } else { 0.0 })
+}
+
+/// Pixel colour quality from its channels' samples: the channel qualities
+/// `H(p^c)/log N` (eq. (10)) averaged with the weights `w^c` (Part IV
+/// Def. 4, eq. (11)).
+///
+/// # Errors
+/// As [`importance_weighted_contrast`]; [`Error::ZeroMass`] for all-zero weights.
+pub fn pixel_colour_quality(channels: &[&[f64]], weights: &[f64]) -> Result<f64, Error> {
+    same_len(channels.len(), weights.len())?;
+    let sw = mass(weights)?;
+    if sw == 0.0 {
+        return Err(Error::ZeroMass);
+    }
+    let n = channels.first().map_or(0, |c| c.len());
+    let mut acc = Neumaier::new();
+    for (ch, w) in channels.iter().zip(weights) {
+        same_len(n, ch.len())?;
+        acc.add(w * pixel_quality(ch)?);
+    }
+    Ok(acc.value() / sw)
+}
+
 /// The f-divergence refinement criterion for ray tracing,
 /// `(1/N) L̄ D(p, u)` with `p_i = L_i / Σ L_j` and `u` uniform
 /// (Part III-IV eqs. (14)–(16)); with `square_root`, `(1/N) L̄ D^½(p, u)`
@@ -449,6 +553,26 @@ mod tests {
         );
         assert!((node_importance(0.8, 4, 3).unwrap() - 0.05).abs() < 1e-15);
         assert!((tree_colour_contrast(&[0.5, 1.0], &[0.5, 0.5], &[1.0, 0.2]).unwrap() - 0.35).abs() < 1e-15);
+    }
+
+    #[test]
+    fn importance_weighted_contrast_by_hand() {
+        // Two channels, samples (1, 3) and (2, 2): classic contrasts 0.5 and 0;
+        // means 2 and 2; level 2 of N_r = 4: q = 2/4. IC = w0 * 0.5 * 0.5.
+        let (a, b) = ([1.0, 3.0], [2.0, 2.0]);
+        let ic = importance_weighted_contrast(&[&a, &b], &[0.3, 0.7], ChannelContrast::Classic, 4, 2).unwrap();
+        assert!((ic - 0.3 * 0.5 * 0.5).abs() < 1e-15, "{ic}");
+        // Entropy form equals eq. (27) through tree_colour_contrast.
+        let ec = importance_weighted_contrast(&[&a, &b], &[0.3, 0.7], ChannelContrast::Entropy, 4, 1).unwrap();
+        let want = tree_colour_contrast(&[pixel_contrast(&a).unwrap(), 0.0], &[0.3, 0.7], &[2.0, 2.0]).unwrap();
+        assert!((ec - want).abs() < 1e-15);
+        assert!(importance_weighted_contrast(&[&a, &[1.0]], &[0.3, 0.7], ChannelContrast::Classic, 4, 1).is_err());
+        assert!(importance_weighted_contrast(&[&a], &[0.3, 0.7], ChannelContrast::Classic, 4, 1).is_err());
+        // Eq. (18) normalises: (w0 m0 C0 + w1 m1 C1) / (w0 m0 + w1 m1) = 0.3 * 2 * 0.5 / 2.
+        let cc = pixel_colour_contrast(&[&a, &b], &[0.3, 0.7], ChannelContrast::Classic).unwrap();
+        assert!((cc - 0.15).abs() < 1e-15, "{cc}");
+        let q = pixel_colour_quality(&[&a, &b], &[1.0, 1.0]).unwrap();
+        assert!((q - 0.5 * (pixel_quality(&a).unwrap() + 1.0)).abs() < 1e-15);
     }
 
     #[test]

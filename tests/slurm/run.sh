@@ -70,6 +70,16 @@ for case in "|" "|--shard-levels 16" "--estimator grid --resolution 64|"; do
     say "viewpoints ${VP_ARGS:-(solid angle)} $SHARD_ARGS: merged == single run, bit for bit ($(grep -o '"I_VO":[^,]*' "$OUT/viewpoints.json"))"
 done
 
+# volume: 4 shards of a 42-viewpoint run over a labelled phantom.
+export VOLUME=phantom:32 VIEWPOINTS=42 VOL_ARGS="--size 48" MERGE_ARGS="--focus left"
+rm -f "$OUT"/volume*
+submit volume
+# shellcheck disable=SC2086
+"$ITGFX" volume "$VOLUME" --viewpoints "$VIEWPOINTS" $VOL_ARGS $MERGE_ARGS --json > "$T/volume-single.json"
+cmp -s <(strip "$OUT/volume.json") <(strip "$T/volume-single.json") ||
+    fail "volume: merged shards differ from the single run"
+say "volume: merged == single run, bit for bit ($(grep -o '"I_VZ":[^,]*' "$OUT/volume.json"))"
+
 # A failed shard: the merge job never runs (afterok) and is cancelled.
 export SCENE=cube-enclosure:10 LINES=1e6
 ids=$(cd "$T/run" && SHARDS=2 ITGFX=/nonexistent/itgfx "$repo/slurm/submit.sh" complexity) || fail "submit.sh"

@@ -121,21 +121,37 @@ fn position(x: u32, y: u32, i: u32, first: u32, n: u32, rng: &LineRng, odd: bool
 
 /// One pending batch: pixel, first sample index, batch size, parity.
 #[derive(Clone, Copy)]
-struct Batch {
-    pixel: u32,
-    slot: u32,
-    first: u32,
-    n: u32,
-    odd: bool,
-    pilot: bool,
+pub(crate) struct Batch {
+    pub(crate) pixel: u32,
+    pub(crate) slot: u32,
+    pub(crate) first: u32,
+    pub(crate) n: u32,
+    pub(crate) odd: bool,
+    pub(crate) pilot: bool,
 }
 
 /// Traces the batches of a row; returns the RGB of every sample in order.
 fn trace(pt: &PathTracer, view: &View, batches: &[Batch]) -> Result<Vec<[f64; 3]>, BackendError> {
+    trace_geometry(pt, view, batches, None)
+}
+
+/// As [`trace`]; with `geometry`, also each sample's first-hit geometry
+/// factor (Part IV eq. (12)), in order.
+pub(crate) fn trace_geometry(
+    pt: &PathTracer,
+    view: &View,
+    batches: &[Batch],
+    mut geometry: Option<&mut Vec<f64>>,
+) -> Result<Vec<[f64; 3]>, BackendError> {
     let mut starts = Vec::new();
     let mut out = Vec::new();
-    let flush = |starts: &mut Vec<Start>, out: &mut Vec<[f64; 3]>| -> Result<(), BackendError> {
-        out.extend(pt.radiance(starts)?);
+    let mut g = Vec::new();
+    let mut flush = |starts: &mut Vec<Start>, out: &mut Vec<[f64; 3]>| -> Result<(), BackendError> {
+        let want = geometry.is_some();
+        out.extend(pt.radiance_geometry(starts, want.then_some(&mut g))?);
+        if let Some(all) = geometry.as_deref_mut() {
+            all.extend_from_slice(&g);
+        }
         starts.clear();
         Ok(())
     };
@@ -285,7 +301,7 @@ fn render_pixels(
         .collect())
 }
 
-fn mean(s: &[[f64; 3]]) -> [f64; 3] {
+pub(crate) fn mean(s: &[[f64; 3]]) -> [f64; 3] {
     let mut acc = DVec3::ZERO;
     for c in s {
         acc += DVec3::from_array(*c);

@@ -20,6 +20,7 @@ pub mod frame;
 pub mod lights;
 pub mod path;
 pub mod room;
+pub mod supersample;
 pub mod tree;
 pub mod tune;
 pub mod views;
@@ -33,7 +34,8 @@ pub use criteria::{Adaptive, Criterion};
 pub use frame::{Frame, Policy, Uniform, View};
 pub use lights::{Lights, Surfaces};
 pub use path::PathTracer;
-pub use tree::Tree;
+pub use supersample::{ContrastMap, Oracle, PixelMeasures};
+pub use tree::{Tree, TreeContrast};
 pub use tune::Tuned;
 
 /// Why a scene cannot be rendered.
@@ -115,8 +117,12 @@ pub enum Sampling {
         /// A given threshold instead of tuning one.
         threshold: Option<f64>,
     },
-    /// The entropy refinement tree of Part IV §6.
+    /// The refinement tree of Part IV §6 (`ec`, `ic`, `cc-tree`).
     Tree {
+        /// The node contrast.
+        contrast: TreeContrast,
+        /// Colour weight `δ` against geometry (eq. (28)); 1 is colour only.
+        delta: f64,
         /// Average samples per pixel to spend (the threshold is tuned to it).
         spp: u32,
         /// Pilot tree decides, fresh leaf samples estimate.
@@ -124,6 +130,20 @@ pub enum Sampling {
         /// A given threshold instead of tuning one.
         threshold: Option<f64>,
     },
+    /// Entropy-based supersampling of Part IV §5.
+    Supersample(Supersampling),
+}
+
+/// Entropy-based supersampling (Part IV §5): the contrast map of 8 spp
+/// shares out the rest of the budget.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Supersampling {
+    /// How the oracle's contrast is formed.
+    pub oracle: Oracle,
+    /// Average samples per pixel (exact: no threshold is tuned).
+    pub spp: u32,
+    /// Most samples one pixel takes.
+    pub max: u32,
 }
 
 /// A rendered frame and how its sampler was set.
@@ -135,11 +155,16 @@ pub struct Rendered {
     pub threshold: Option<f64>,
     /// The tuning pilot, when the threshold was tuned.
     pub tuned: Option<Tuned>,
+    /// The pixel quality and contrast maps of 8 spp (Part IV §3–§4): the
+    /// supersampler's oracle, or a separate pass when asked for.
+    pub map: Option<ContrastMap>,
 }
 
 /// Renders `scene` seen by `camera` (scene units): checks the camera, tunes
-/// an adaptive sampler's threshold to its budget, then traces. `progress`
-/// gets (rows done, rows).
+/// an adaptive sampler's threshold to its budget, then traces. With `maps`,
+/// also the quality and contrast maps of an 8-spp pass (the supersampler's
+/// own oracle pass, so no extra rays for `Sampling::Supersample`).
+/// `progress` gets (rows done, rows).
 ///
 /// # Errors
 /// [`RenderError`].
@@ -153,34 +178,61 @@ pub fn render(
     size: (u32, u32),
     seed: u64,
     sampling: &Sampling,
+    maps: Option<Oracle>,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<Rendered, RenderError> {
     let camera = views::check_camera(tracer, scene, prepared, camera)?;
     let pt = PathTracer { tracer, prepared, surfaces: &shading.surfaces, lights: &shading.lights, max_depth: 256 };
     let view = View { camera, width: size.0, height: size.1, seed };
+    let mut rendered = trace(&pt, &view, sampling, progress)?;
+    if let (None, Some(oracle)) = (&rendered.map, maps) {
+        rendered.map = Some(supersample::contrast_map(&pt, &view, oracle, &|_, _| {})?);
+    }
+    Ok(rendered)
+}
+
+fn trace(
+    pt: &PathTracer,
+    view: &View,
+    sampling: &Sampling,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<Rendered, RenderError> {
+    let view = *view;
     match *sampling {
-        Sampling::Uniform(n) => {
-            Ok(Rendered { frame: frame::render(&pt, &view, &Uniform(n), progress)?, threshold: None, tuned: None })
-        }
+        Sampling::Uniform(n) => Ok(Rendered {
+            frame: frame::render(pt, &view, &Uniform(n), progress)?,
+            threshold: None,
+            tuned: None,
+            map: None,
+        }),
         Sampling::Adaptive { criterion, spp, max, unbiased, threshold } => {
             let tuned = match threshold {
                 Some(_) => None,
-                None => Some(tune::tune(&pt, &view, criterion, f64::from(spp), max)?),
+                None => Some(tune::tune(pt, &view, criterion, f64::from(spp), max)?),
             };
             let threshold = threshold.or(tuned.map(|t| t.threshold)).unwrap_or(0.0);
             let policy = Adaptive { criterion, threshold, max, unbiased };
-            Ok(Rendered { frame: frame::render(&pt, &view, &policy, progress)?, threshold: Some(threshold), tuned })
+            Ok(Rendered {
+                frame: frame::render(pt, &view, &policy, progress)?,
+                threshold: Some(threshold),
+                tuned,
+                map: None,
+            })
         }
-        Sampling::Tree { spp, unbiased, threshold } => {
+        Sampling::Tree { contrast, delta, spp, unbiased, threshold } => {
             let tuned = match threshold {
                 Some(_) => None,
-                None => Some(tune::tune_policy(&pt, &view, f64::from(spp), &|eps| {
-                    Box::new(Tree { threshold: eps, unbiased: false })
+                None => Some(tune::tune_policy(pt, &view, f64::from(spp), &|eps| {
+                    Box::new(Tree { threshold: eps, unbiased: false, contrast, delta })
                 })?),
             };
             let threshold = threshold.or(tuned.map(|t| t.threshold)).unwrap_or(0.0);
-            let frame = frame::render(&pt, &view, &Tree { threshold, unbiased }, progress)?;
-            Ok(Rendered { frame, threshold: Some(threshold), tuned })
+            let frame = frame::render(pt, &view, &Tree { threshold, unbiased, contrast, delta }, progress)?;
+            Ok(Rendered { frame, threshold: Some(threshold), tuned, map: None })
+        }
+        Sampling::Supersample(es) => {
+            let (frame, map) = supersample::render(pt, &view, es.oracle, es.spp, es.max, progress)?;
+            Ok(Rendered { frame, threshold: None, tuned: None, map: Some(map) })
         }
     }
 }

@@ -86,6 +86,24 @@ impl PathTracer<'_> {
     /// # Errors
     /// Backend failures only.
     pub fn radiance(&self, starts: &[Start]) -> Result<Vec<[f64; 3]>, BackendError> {
+        self.radiance_geometry(starts, None)
+    }
+
+    /// As [`Self::radiance`]; with `geometry`, also the geometry factor
+    /// `g(s) = |cos θ| / r²` of each camera ray's first hit (Part IV eq.
+    /// (12), normalised units; 0 for a ray that hits nothing), in order.
+    ///
+    /// # Errors
+    /// Backend failures only.
+    pub fn radiance_geometry(
+        &self,
+        starts: &[Start],
+        mut geometry: Option<&mut Vec<f64>>,
+    ) -> Result<Vec<[f64; 3]>, BackendError> {
+        if let Some(g) = geometry.as_deref_mut() {
+            g.clear();
+            g.resize(starts.len(), 0.0);
+        }
         let mut out = vec![DVec3::ZERO; starts.len()];
         let mut paths: Vec<Path> = starts
             .iter()
@@ -117,6 +135,12 @@ impl PathTracer<'_> {
                 let x = v0 * (1.0 - b1 - b2) + v1 * b1 + v2 * b2;
                 let n = DVec3::from(h.normal.map(f64::from));
                 let cos_in = n.dot(p.direction);
+                if p.depth == 0
+                    && let Some(g) = geometry.as_deref_mut()
+                {
+                    let r = (x - p.origin).length();
+                    g[p.slot] = itgfx_core::pixel::geometry_factor(cos_in, r);
+                }
                 let m = self.surfaces.of(h.primitive);
                 let light = self.lights.of_triangle[t];
                 if cos_in < 0.0 && light != u32::MAX {

@@ -1,22 +1,39 @@
-//! Entropy-based adaptive sampling with the refinement tree of Part IV §6.
+//! Adaptive sampling with the refinement tree of Part IV §6.
 //!
 //! Every pixel is a 1-node; an `n`-node takes `N_s = 8` stratified samples
-//! (2 in each of its `N_r = 4` quadrants). Its contrast is eq. (27),
-//! `C_n = Σ_c w^c C_n^c q_n^c`: the entropy contrast `C^c = 1 − H(p^c)/log N`
-//! of each channel (eq. (16)) weighted by the sRGB weights and the node's
-//! importance `q_n^c = c̄_n^c / N_r^{n−1}` (Proposition 1, eq. (26)). Colour
-//! only: `δ = 1` in eq. (28). While `C_n ≥ ε` and `n` is below the deepest
-//! level (4, as the tutorial's trees), the node splits into its quadrants,
-//! each sampled anew. A leaf's colour is the mean of its samples; a split
-//! node's is the mean of its children's (eq. (29), the children covering
-//! equal areas). The pixel's value is its 1-node's colour.
+//! (2 in each of its `N_r = 4` quadrants). While its contrast is `≥ ε` and
+//! `n` is below the deepest level (4, as the tutorial's trees), the node
+//! splits into its quadrants, each sampled anew. The node contrast is one
+//! of the three compared in §6.4 ([`TreeContrast`]):
+//!
+//! * `ec`: eq. (27), `C_n = Σ_c w^c C_n^c q_n^c`, the entropy contrast
+//!   `C^c = 1 − H(p^c)/log N` of each channel (eq. (16)) weighted by the
+//!   sRGB weights and the node's importance `q_n^c = c̄_n^c / N_r^{n−1}`
+//!   (Proposition 1, eq. (26));
+//! * `ic`: the same with Mitchell's classic contrast (eq. (1)) per channel
+//!   and Mitchell's channel weights (0.4, 0.3, 0.6), as `cc-tree` — the
+//!   importance-weighted contrast `IC`;
+//! * `cc-tree`: Simmons' priority `p_c = Σ_c k_c C^c c̄^c` (eq. (2)), the
+//!   classic contrast weighted by the channel mean, recursive to level 4 —
+//!   the tutorial's `CC` of Table 2.
+//!
+//! With `δ < 1` the colour contrast is mixed with the pixel geometry
+//! contrast `C^g = 1 − H(g)/log N` of the samples' first-hit geometry
+//! factors `g = cos θ / r²` (eqs. (12), (20), (28)): a node whose rays hit
+//! different surfaces, or one surface at very different distances, splits.
+//! A leaf's colour is the mean of its samples; a split node's is the mean of
+//! its children's (eq. (29), the children covering equal areas). The
+//! pixel's value is its 1-node's colour.
 //!
 //! The tree is built level by level for all pixels of a row at once (one
 //! wavefront per level through the tracing seam). Node `k` (breadth-first
 //! within its pixel) uses sample indices `8k..8k+8`, so the image does not
 //! depend on the thread count.
 
-use itgfx_core::pixel::{SRGB_LUMINANCE_WEIGHTS, node_importance, pixel_contrast, tree_colour_contrast};
+use itgfx_core::pixel::{
+    ChannelContrast, MITCHELL_WEIGHTS, SRGB_LUMINANCE_WEIGHTS, importance_weighted_contrast, mixed_contrast,
+    pixel_contrast, priority_colour,
+};
 
 use super::frame::{PILOT, PixelSamples, Policy, View};
 use super::path::{PathTracer, Start};
@@ -30,6 +47,33 @@ pub const REGIONS: u32 = 4;
 /// Deepest level of the tree (the pixel is level 1).
 pub const MAX_LEVEL: u32 = 4;
 
+/// The colour contrast a tree node is judged by (Part IV §6.4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TreeContrast {
+    /// Entropy contrast weighted by importance, eq. (27) (`ec`).
+    Entropy,
+    /// Classic contrast weighted by importance, eqs. (1), (26) (`ic`).
+    Importance,
+    /// Classic contrast weighted by the channel mean, eq. (2) (`cc-tree`).
+    Classic,
+}
+
+impl TreeContrast {
+    /// The tree sampler called `name`: `ec`, `ic` or `cc-tree`.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "ec" => Some(Self::Entropy),
+            "ic" => Some(Self::Importance),
+            "cc-tree" => Some(Self::Classic),
+            _ => None,
+        }
+    }
+}
+
+/// Command-line names of the tree samplers.
+pub const NAMES: &[&str] = &["ec", "ic", "cc-tree"];
+
 /// The refinement-tree sampler with threshold `ε`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tree {
@@ -38,6 +82,10 @@ pub struct Tree {
     /// Build the tree on pilot samples, then sample every leaf afresh for
     /// its colour (the deciding samples never enter the image).
     pub unbiased: bool,
+    /// The colour contrast of a node.
+    pub contrast: TreeContrast,
+    /// Weight `δ` of colour against geometry in eq. (28); 1 is colour only.
+    pub delta: f64,
 }
 
 impl Policy for Tree {
@@ -55,20 +103,32 @@ impl Policy for Tree {
     }
 }
 
-/// The contrast `C_n` of an `n`-node's samples (eq. (27)); infinite when
-/// the core refuses the samples (non-finite radiance), so the node splits.
+/// The contrast of an `n`-node's samples (eq. (28)): `δ` times the colour
+/// contrast of `kind` plus `1 − δ` times the geometry contrast (eq. (20)) of
+/// the first-hit geometry factors `g`; infinite when the core refuses the
+/// samples (non-finite radiance), so the node splits.
 #[must_use]
-pub fn node_contrast(rgb: &[[f64; 3]], level: u32) -> f64 {
-    let n = rgb.len() as f64;
+pub fn node_contrast(rgb: &[[f64; 3]], g: &[f64], level: u32, kind: TreeContrast, delta: f64) -> f64 {
     let value = || -> Result<f64, itgfx_core::Error> {
-        let mut contrasts = [0.0; 3];
-        let mut importance = [0.0; 3];
-        for c in 0..3 {
-            let ch: Vec<f64> = rgb.iter().map(|s| s[c]).collect();
-            contrasts[c] = pixel_contrast(&ch)?;
-            importance[c] = node_importance(ch.iter().sum::<f64>() / n, REGIONS, level)?;
+        let ch: [Vec<f64>; 3] = std::array::from_fn(|c| rgb.iter().map(|s| s[c]).collect());
+        let channels = [ch[0].as_slice(), ch[1].as_slice(), ch[2].as_slice()];
+        let colour = match kind {
+            TreeContrast::Entropy => importance_weighted_contrast(
+                &channels,
+                &SRGB_LUMINANCE_WEIGHTS,
+                ChannelContrast::Entropy,
+                REGIONS,
+                level,
+            )?,
+            TreeContrast::Importance => {
+                importance_weighted_contrast(&channels, &MITCHELL_WEIGHTS, ChannelContrast::Classic, REGIONS, level)?
+            }
+            TreeContrast::Classic => priority_colour(&ch[0], &ch[1], &ch[2])?,
+        };
+        if delta >= 1.0 {
+            return Ok(colour);
         }
-        tree_colour_contrast(&contrasts, &SRGB_LUMINANCE_WEIGHTS, &importance)
+        mixed_contrast(delta, colour, pixel_contrast(g)?)
     };
     value().unwrap_or(f64::INFINITY)
 }
@@ -124,13 +184,17 @@ pub(crate) fn render_tree(
     let mut level_start = 0;
     while level_start < nodes.len() {
         let level_end = nodes.len();
-        let rgb = pt.radiance(&node_starts(view, &nodes[level_start..level_end], tree.unbiased))?;
+        let mut g = Vec::new();
+        let starts = node_starts(view, &nodes[level_start..level_end], tree.unbiased);
+        let rgb = pt.radiance_geometry(&starts, (tree.delta < 1.0).then_some(&mut g))?;
         for k in level_start..level_end {
-            let s = &rgb[(k - level_start) * NODE_SAMPLES as usize..(k - level_start + 1) * NODE_SAMPLES as usize];
+            let span = (k - level_start) * NODE_SAMPLES as usize..(k - level_start + 1) * NODE_SAMPLES as usize;
+            let s = &rgb[span.clone()];
+            let gs = g.get(span).unwrap_or(&[]);
             let (slot, level) = (nodes[k].slot, nodes[k].level);
             counts[slot] += NODE_SAMPLES;
             nodes[k].colour = reconstruct(s);
-            if level < MAX_LEVEL && node_contrast(s, level) >= tree.threshold {
+            if level < MAX_LEVEL && node_contrast(s, gs, level, tree.contrast, tree.delta) >= tree.threshold {
                 nodes[k].children = Some(nodes.len());
                 let (x, y, half) = (nodes[k].x, nodes[k].y, nodes[k].size * 0.5);
                 let pixel = nodes[k].pixel;
@@ -212,14 +276,59 @@ mod tests {
         assert_eq!(c1, [1.0, 1.0, 1.0]);
     }
 
+    const KINDS: [TreeContrast; 3] = [TreeContrast::Entropy, TreeContrast::Importance, TreeContrast::Classic];
+
     #[test]
     fn node_contrast_is_eq_27_and_falls_with_depth() {
         let flat = [[0.5; 3]; 8];
-        assert_eq!(node_contrast(&flat, 1), 0.0, "a flat node never splits");
+        assert_eq!(node_contrast(&flat, &[], 1, TreeContrast::Entropy, 1.0), 0.0, "a flat node never splits");
         let edge: Vec<[f64; 3]> = (0..8).map(|i| if i < 4 { [1.0; 3] } else { [0.0; 3] }).collect();
         // Each channel: 4 of 8 samples equal, H = log 4, quality 2/3, contrast 1/3; mean 1/2.
-        let c1 = node_contrast(&edge, 1);
+        let c1 = node_contrast(&edge, &[], 1, TreeContrast::Entropy, 1.0);
         assert!((c1 - (1.0 / 3.0) * 0.5).abs() < 1e-12, "{c1}");
-        assert!((node_contrast(&edge, 2) - c1 / 4.0).abs() < 1e-12, "importance falls by N_r a level");
+        let c2 = node_contrast(&edge, &[], 2, TreeContrast::Entropy, 1.0);
+        assert!((c2 - c1 / 4.0).abs() < 1e-12, "importance falls by N_r a level");
+    }
+
+    #[test]
+    fn importance_weighted_classic_contrast_by_hand() {
+        // Classic contrast 1 in every channel, means 1/2: IC = Σ k_c · 1 · (1/2) / 4^{n-1};
+        // CC (eq. (2)) = Σ k_c · 1 · 1/2 at every level.
+        let edge: Vec<[f64; 3]> = (0..8).map(|i| if i < 4 { [1.0; 3] } else { [0.0; 3] }).collect();
+        let k: f64 = MITCHELL_WEIGHTS.iter().sum();
+        for level in 1..=3 {
+            let ic = node_contrast(&edge, &[], level, TreeContrast::Importance, 1.0);
+            assert!((ic - k * 0.5 / 4f64.powi(level as i32 - 1)).abs() < 1e-12, "{ic}");
+            let cc = node_contrast(&edge, &[], level, TreeContrast::Classic, 1.0);
+            assert!((cc - k * 0.5).abs() < 1e-12, "{cc}");
+        }
+    }
+
+    #[test]
+    fn flat_nodes_never_split_and_split_nodes_always_do() {
+        // Synthetic sample sets: a flat node stays, an edge node splits, for
+        // every tree contrast, at any small threshold and any level above the last.
+        let flat = [[0.3, 0.4, 0.5]; 8];
+        let split: Vec<[f64; 3]> = (0..8).map(|i| if i % 2 == 0 { [2.0, 1.0, 0.5] } else { [0.0; 3] }).collect();
+        let g = [1.0; 8];
+        for kind in KINDS {
+            for level in 1..MAX_LEVEL {
+                assert!(node_contrast(&flat, &g, level, kind, 0.9) < 1e-9, "{kind:?}: a flat node splits");
+                assert!(node_contrast(&split, &g, level, kind, 0.9) >= 1e-3, "{kind:?}: an edge does not split");
+            }
+        }
+    }
+
+    #[test]
+    fn geometry_contrast_splits_a_node_over_two_surfaces() {
+        // Same colour everywhere, but half the rays hit a near wall and half a far one:
+        // colour alone (δ = 1) never splits, δ < 1 (eq. (28)) does.
+        let rgb = [[0.5; 3]; 8];
+        let g: Vec<f64> = (0..8).map(|i| if i < 4 { 1.0 } else { 0.01 }).collect();
+        assert_eq!(node_contrast(&rgb, &g, 1, TreeContrast::Entropy, 1.0), 0.0);
+        let c = node_contrast(&rgb, &g, 1, TreeContrast::Entropy, 0.9);
+        let want = 0.1 * itgfx_core::pixel::pixel_contrast(&g).unwrap();
+        assert!(c > 0.01 && (c - want).abs() < 1e-12, "{c}");
+        assert!(node_contrast(&rgb, &[1.0; 8], 1, TreeContrast::Entropy, 0.9) < 1e-12, "one surface: no split");
     }
 }

@@ -3,6 +3,7 @@
 
 mod export_scene;
 pub mod images;
+pub mod maps;
 mod metrics;
 
 use std::path::PathBuf;
@@ -13,7 +14,9 @@ use clap::Args;
 use glam::DVec3;
 use itgfx_backends::camera::Camera;
 use itgfx_backends::open;
-use itgfx_backends::render::{self, Criterion, Sampling, Shading, criteria, views};
+use itgfx_backends::render::{
+    self, Criterion, Oracle, Sampling, Shading, Supersampling, TreeContrast, criteria, supersample, tree, views,
+};
 use itgfx_backends::tracer::Prepared;
 
 use crate::CliError;
@@ -48,10 +51,25 @@ pub struct RenderOptions {
     pub spp: u32,
     /// Pixel sampler: uniform (stratified), or an adaptive criterion: cc (classic contrast), ct
     /// (confidence test), kl cs hl (f-divergences), kl-sqrt cs-sqrt hl-sqrt (their square roots), ec
-    /// (entropy refinement tree, Part IV §6), ec-batch (entropy contrast in batches), rel (relative
-    /// confidence half-width, beyond the tutorial); see docs/RENDER.md
+    /// (entropy refinement tree, Part IV §6), ic (importance-weighted classic contrast tree), cc-tree
+    /// (classic contrast tree), ec-batch (entropy contrast in batches), rel (relative confidence
+    /// half-width, beyond the tutorial), es (entropy-based supersampling, Part IV §5: a contrast map
+    /// of 8 spp decides where the rest of the budget goes); see docs/RENDER.md
     #[arg(long, value_name = "NAME", default_value = "uniform", value_parser = sampler_name)]
     pub sampler: String,
+    /// ec, ic, cc-tree, es: weight of the colour contrast against the geometry contrast of the
+    /// rays' first hits (Part IV eqs. (23), (28)); 1 is colour only
+    #[arg(long, value_name = "D", value_parser = delta)]
+    pub delta: Option<f64>,
+    /// es and --maps: the binary colour contrast C_b (Part IV eq. (19)) instead of the entropy
+    /// contrast (eq. (18)) in the oracle's contrast
+    #[arg(long)]
+    pub binary_contrast: bool,
+    /// Also write the pixel quality and contrast maps of an 8-spp pass (Part IV §3-4, Figs. 1-6):
+    /// quality.png, geometry-quality.png, contrast.png, colour-contrast.png, binary-contrast.png,
+    /// geometry-contrast.png, quality.exr, contrast.exr
+    #[arg(long)]
+    pub maps: bool,
     /// Adaptive: most samples one pixel may take (default 16 x --spp)
     #[arg(long, value_name = "N", value_parser = spp)]
     pub max_spp: Option<u32>,
@@ -114,11 +132,16 @@ fn spp(s: &str) -> Result<u32, String> {
 }
 
 fn sampler_name(s: &str) -> Result<String, String> {
-    if s == "uniform" || s == "ec" || Criterion::from_name(s).is_some() {
+    if s == "uniform" || s == "es" || TreeContrast::from_name(s).is_some() || Criterion::from_name(s).is_some() {
         Ok(s.to_string())
     } else {
-        Err(format!("unknown sampler {s:?}: uniform, ec, {}", criteria::NAMES.join(", ")))
+        Err(format!("unknown sampler {s:?}: uniform, es, {}, {}", tree::NAMES.join(", "), criteria::NAMES.join(", ")))
     }
+}
+
+fn delta(s: &str) -> Result<f64, String> {
+    let x = finite(s)?;
+    if (0.0..=1.0).contains(&x) { Ok(x) } else { Err("must be in 0..=1".into()) }
 }
 
 fn threshold(s: &str) -> Result<f64, String> {
@@ -163,7 +186,7 @@ fn memory_check(o: &RenderOptions) -> Result<(), CliError> {
     let (w, h) = (u64::from(o.size.0), u64::from(o.size.1));
     let per_pixel = match o.sampler.as_str() {
         "uniform" => u64::from(o.spp),
-        "ec" => 680,
+        "ec" | "ic" | "cc-tree" => 680,
         _ => u64::from(o.max_spp.unwrap_or(o.spp.saturating_mul(16).min(MAX_SPP))),
     };
     let workers = o.tracing.threads.unwrap_or_else(rayon::current_num_threads) as u64;
@@ -210,9 +233,23 @@ pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
             "--max-spp, --threshold and --unbiased are for adaptive samplers (--sampler cc, kl, ...)",
         ));
     }
-    if o.sampler == "ec" && o.max_spp.is_some() {
+    let is_tree = TreeContrast::from_name(&o.sampler).is_some();
+    if is_tree && o.max_spp.is_some() {
+        return Err(CliError::usage(format!(
+            "--sampler {}: the refinement tree is capped by its depth (4 levels), not --max-spp",
+            o.sampler
+        )));
+    }
+    let oracle_maps = o.sampler == "es" || o.maps;
+    if o.delta.is_some() && !(is_tree || oracle_maps) {
+        return Err(CliError::usage("--delta is for the contrast samplers (--sampler ec, ic, cc-tree, es) and --maps"));
+    }
+    if o.binary_contrast && !oracle_maps {
+        return Err(CliError::usage("--binary-contrast is for --sampler es and --maps"));
+    }
+    if o.sampler == "es" && (o.threshold.is_some() || o.unbiased) {
         return Err(CliError::usage(
-            "--sampler ec: the refinement tree is capped by its depth (4 levels), not --max-spp",
+            "--sampler es spends exactly --spp on average (no threshold) and decides once: no --threshold or --unbiased",
         ));
     }
     if let Some(m) = o.max_spp
@@ -239,7 +276,7 @@ pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
 
 fn render_into(o: &RenderOptions, spec: &str, dir: &std::path::Path) -> Result<Report, CliError> {
     let files = [dir.join("image.exr"), dir.join("image.png"), dir.join("density.png")];
-    for f in &files {
+    for f in files.iter().chain(&if o.maps { maps::files(dir) } else { Vec::new() }) {
         crate::output::check("--out", f)?;
     }
     let reference = o.reference.as_deref().map(images::read_exr).transpose()?;
@@ -256,10 +293,18 @@ fn render_into(o: &RenderOptions, spec: &str, dir: &std::path::Path) -> Result<R
     let shading = Shading::new(&scene, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
     let tracer = open(o.tracing.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
     let camera = o.camera.unwrap_or_else(|| views::default_camera(&scene));
-    let sampling = match Criterion::from_name(&o.sampler) {
-        None if o.sampler == "ec" => Sampling::Tree { spp: o.spp, unbiased: o.unbiased, threshold: o.threshold },
-        None => Sampling::Uniform(o.spp),
-        Some(criterion) => Sampling::Adaptive {
+    let delta = o.delta.unwrap_or(1.0);
+    let sampling = match (Criterion::from_name(&o.sampler), TreeContrast::from_name(&o.sampler)) {
+        (None, Some(contrast)) => {
+            Sampling::Tree { contrast, delta, spp: o.spp, unbiased: o.unbiased, threshold: o.threshold }
+        }
+        (None, None) if o.sampler == "es" => Sampling::Supersample(Supersampling {
+            oracle: Oracle { delta, binary: o.binary_contrast },
+            spp: o.spp,
+            max: o.max_spp.unwrap_or(o.spp.saturating_mul(16).min(MAX_SPP)),
+        }),
+        (None, None) => Sampling::Uniform(o.spp),
+        (Some(criterion), _) => Sampling::Adaptive {
             criterion,
             spp: o.spp,
             max: o.max_spp.unwrap_or(o.spp.saturating_mul(16).min(MAX_SPP)),
@@ -274,9 +319,19 @@ fn render_into(o: &RenderOptions, spec: &str, dir: &std::path::Path) -> Result<R
             p.update(d, t);
         }
     };
-    let rendered =
-        render::render(tracer.as_ref(), &scene, &prepared, &shading, &camera, o.size, o.seed, &sampling, &tick)
-            .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
+    let rendered = render::render(
+        tracer.as_ref(),
+        &scene,
+        &prepared,
+        &shading,
+        &camera,
+        o.size,
+        o.seed,
+        &sampling,
+        o.maps.then_some(Oracle { delta, binary: o.binary_contrast }),
+        &tick,
+    )
+    .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
     let frame = &rendered.frame;
     let seconds = t0.elapsed().as_secs_f64();
     // The values the EXR holds (f32), so --reference and compare agree.
@@ -286,6 +341,12 @@ fn render_into(o: &RenderOptions, spec: &str, dir: &std::path::Path) -> Result<R
     images::write_display_png(&image, o.exposure, &files[1])?;
     images::write_density_png(&frame.samples, image.width, image.height, &files[2])?;
     let mut wrote: Vec<PathBuf> = files.to_vec();
+    if o.maps
+        && let Some(map) = &rendered.map
+    {
+        maps::write_maps(map, dir)?;
+        wrote.extend(maps::files(dir));
+    }
     if o.export_scene {
         wrote.extend(export_scene::export_scene(&scene, &camera, o.size, dir)?);
     }
@@ -298,6 +359,20 @@ fn render_into(o: &RenderOptions, spec: &str, dir: &std::path::Path) -> Result<R
         .real("camera_fov_y", camera.fov_y.to_degrees(), Some("deg"));
     if let Sampling::Adaptive { max, unbiased, .. } = sampling {
         r.count("max_spp", u64::from(max)).flag("unbiased", unbiased);
+    }
+    if let Sampling::Supersample(es) = sampling {
+        r.count("max_spp", u64::from(es.max)).count("oracle_spp", u64::from(supersample::ORACLE_SAMPLES));
+    }
+    if matches!(sampling, Sampling::Tree { .. } | Sampling::Supersample(_)) || o.maps {
+        r.real("delta", delta, None);
+    }
+    if let Some(map) = &rendered.map {
+        let mean = |g: fn(&render::PixelMeasures) -> f64| {
+            map.measures.iter().map(g).sum::<f64>() / map.measures.len().max(1) as f64
+        };
+        r.real("mean_colour_quality", mean(|m| m.colour_quality), None)
+            .real("mean_geometry_quality", mean(|m| m.geometry_quality), None)
+            .real("mean_contrast", mean(|m| m.contrast), None);
     }
     if o.sampler != "uniform" {
         r.maybe_real("threshold", rendered.threshold, None);

@@ -31,3 +31,5 @@ mod viewpoint;
 mod scene;
 // Sparse channels and Jensen–Shannon equal their dense forms (Part V at 10^6 polygons).
 mod sparse;
+// Part IV eqs. (11), (18), (26)-(27): pixel colour quality/contrast and importance-weighted node contrast.
+mod pixel;

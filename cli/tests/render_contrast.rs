@@ -1,0 +1,135 @@
+//! `itgfx render` with the contrast samplers of Part IV: the importance-weighted
+//! and classic contrast trees (`ic`, `cc-tree`, §6.4), geometry contrast in the
+//! tree (`--delta`, eq. (28)), entropy-based supersampling (`es`, §5) and the
+//! quality and contrast maps (`--maps`, §3–§4). Small images only.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn itgfx(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_itgfx")).args(args).output().expect("run itgfx")
+}
+
+fn temp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("itgfx-contrast-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn json(out: &Output) -> serde_json::Value {
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn fails(args: &[&str], needle: &str) {
+    let out = itgfx(args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: one line: {err}");
+    assert!(err.contains(needle), "{args:?}: {err:?} lacks {needle:?}");
+}
+
+fn render(out: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec!["render", "mirror-room:1", "--out", s(out), "--size", "24x24", "--json"];
+    args.extend_from_slice(extra);
+    json(&itgfx(&args))
+}
+
+#[test]
+fn tree_samplers_spend_the_budget_and_geometry_contrast_refines_edges() {
+    let dir = temp("tree");
+    for sampler in ["ic", "cc-tree"] {
+        let v = render(&dir.join(sampler), &["--spp", "16", "--sampler", sampler]);
+        let mean = v["spp_mean"].as_f64().unwrap();
+        assert!((mean - 16.0).abs() < 4.0, "{sampler}: spent {mean} for a budget of 16");
+        let (lo, hi) = (v["spp_min"].as_u64().unwrap(), v["spp_max"].as_u64().unwrap());
+        assert!(lo >= 8 && hi <= 680 && hi > lo && hi % 8 == 0, "{sampler}: {lo}..{hi}");
+        assert!(v["threshold"].as_f64().unwrap() > 0.0);
+    }
+    // Geometry contrast alone (δ = 0 in eq. (28)): only nodes whose rays hit
+    // different surfaces (or one at very different distances) split, so the
+    // tree refines a few edge pixels and leaves the rest at 8.
+    let geometry = render(&dir.join("g"), &["--spp", "8", "--sampler", "ec", "--threshold", "0.05", "--delta", "0"]);
+    assert!(geometry["spp_max"].as_u64().unwrap() > 8, "geometry edges split");
+    let mean = geometry["spp_mean"].as_f64().unwrap();
+    assert!(mean > 8.0 && mean < 16.0, "only the edges split: {mean}");
+    assert_eq!(geometry["delta"].as_f64().unwrap(), 0.0);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn supersampling_spends_exactly_the_budget_and_any_thread_count_gives_one_image() {
+    let dir = temp("es");
+    let run = |sub: &str, threads: &str| {
+        let out = dir.join(sub);
+        let v = render(&out, &["--spp", "24", "--sampler", "es", "--delta", "0.5", "--threads", threads]);
+        (v, std::fs::read(out.join("image.exr")).unwrap())
+    };
+    let (v, one) = run("one", "1");
+    // N_p (N_s − n_s) extra samples, shared by contrast: the mean is exactly N_s.
+    assert_eq!(v["spp_mean"].as_f64().unwrap(), 24.0);
+    assert_eq!(v["spp_min"], 8, "flat pixels keep the oracle's 8");
+    assert!(v["spp_max"].as_u64().unwrap() > 40, "high-contrast pixels take far more");
+    assert_eq!(v["oracle_spp"], 8);
+    let (_, two) = run("two", "2");
+    assert_eq!(one, two, "same seed, same EXR with 1 and 2 threads");
+    // The cap holds and the budget is still met where the caps leave room.
+    let c = render(&dir.join("cap"), &["--spp", "16", "--sampler", "es", "--max-spp", "20"]);
+    assert!(c["spp_max"].as_u64().unwrap() <= 20);
+    assert_eq!(c["spp_mean"].as_f64().unwrap(), 16.0);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn maps_are_written_and_mark_edges() {
+    let dir = temp("maps");
+    let out = dir.join("m");
+    let v = render(&out, &["--spp", "8", "--maps", "--delta", "0.5"]);
+    for f in [
+        "quality.png",
+        "geometry-quality.png",
+        "contrast.png",
+        "colour-contrast.png",
+        "binary-contrast.png",
+        "geometry-contrast.png",
+    ] {
+        assert_eq!(&std::fs::read(out.join(f)).unwrap()[1..4], b"PNG", "{f}");
+    }
+    let q = v["mean_colour_quality"].as_f64().unwrap();
+    let g = v["mean_geometry_quality"].as_f64().unwrap();
+    let c = v["mean_contrast"].as_f64().unwrap();
+    assert!((0.0..1.0).contains(&q) && q > 0.5, "colour quality {q}");
+    assert!(g > 0.9 && g < 1.0, "geometry is homogeneous but at the edges: {g}");
+    assert!(c > 0.0 && c < 0.5, "contrast {c}");
+    // contrast.exr holds (C^c, C_b^c, C^g): readable, in [0, 1], not all flat.
+    let exr = out.join("contrast.exr");
+    let same = json(&itgfx(&["compare", s(&exr), s(&exr), "--json"]));
+    assert_eq!(same["relMSE"].as_f64().unwrap(), 0.0);
+    let other = json(&itgfx(&["compare", s(&exr), s(&out.join("quality.exr")), "--json"]));
+    assert!(other["RMSE_a"].as_f64().unwrap() > 0.0);
+    // The supersampler's maps are its own oracle: no extra pass, the same values.
+    let es = render(&dir.join("es"), &["--spp", "16", "--maps", "--delta", "0.5", "--sampler", "es"]);
+    assert_eq!(es["mean_contrast"], v["mean_contrast"], "es and a uniform run share the 8-spp oracle");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn contrast_options_are_checked() {
+    let dir = temp("bad");
+    let o = dir.join("o");
+    let o = s(&o);
+    fails(&["render", "cornell-box", "--out", o, "--delta", "1.5", "--sampler", "ec"], "--delta");
+    fails(&["render", "cornell-box", "--out", o, "--delta", "0.5"], "--delta is for");
+    fails(&["render", "cornell-box", "--out", o, "--delta", "0.5", "--sampler", "kl"], "--delta is for");
+    fails(&["render", "cornell-box", "--out", o, "--binary-contrast"], "--binary-contrast");
+    fails(&["render", "cornell-box", "--out", o, "--sampler", "es", "--threshold", "0.1"], "no --threshold");
+    fails(&["render", "cornell-box", "--out", o, "--sampler", "es", "--unbiased"], "no --threshold");
+    fails(&["render", "cornell-box", "--out", o, "--sampler", "ic", "--max-spp", "64"], "depth");
+    fails(&["render", "cornell-box", "--out", o, "--sampler", "es", "--spp", "4"], "at least 8");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -10,13 +10,15 @@
 
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::{
-    __m128i, __m256, _CMP_LE_OQ, _mm_loadl_epi64, _mm256_add_ps, _mm256_cmp_ps, _mm256_cvtepi32_ps,
-    _mm256_cvtepu8_epi32, _mm256_max_ps, _mm256_min_ps, _mm256_movemask_ps, _mm256_mul_ps, _mm256_set1_ps,
+    __m128i, __m256, _CMP_LE_OQ, _mm_cvtsi64_si128, _mm_cvtsi128_si32, _mm_loadl_epi64, _mm_or_si128,
+    _mm_shuffle_epi32, _mm256_add_ps, _mm256_and_si256, _mm256_castps_si256, _mm256_castsi256_si128, _mm256_cmp_ps,
+    _mm256_cvtepi32_ps, _mm256_cvtepu8_epi32, _mm256_extracti128_si256, _mm256_max_ps, _mm256_min_ps, _mm256_mul_ps,
+    _mm256_set1_ps, _mm256_sllv_epi32,
 };
 
 use glam::{UVec2, Vec3A};
 use obvhs::cwbvh::CwBvh;
-use obvhs::cwbvh::node::{CwBvhNode, extract_byte64};
+use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::ray::Ray;
 
 /// obvhs's near cut-off: children nearer than this along the ray are culled
@@ -67,15 +69,16 @@ unsafe fn intersect8(node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
     let tmax = _mm256_min_ps(tmax_x, _mm256_min_ps(tmax_y, tmax_z));
     let tmin = _mm256_max_ps(tmin, _mm256_set1_ps(NODE_EPSILON));
     let tmax = _mm256_min_ps(tmax, _mm256_set1_ps(ray.tmax));
-    let mut mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax)) as u32;
+    let hit = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax));
+    // Branch-free: each hit child's bits shifted to its slot (obvhs's
+    // `child_bits << bit_index` per lane; indices are below 32), OR-reduced.
     let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
-    let mut hit_mask = 0u32;
-    while mask != 0 {
-        let j = mask.trailing_zeros() as usize;
-        mask &= mask - 1;
-        hit_mask |= extract_byte64(child_bits8, j) << extract_byte64(bit_index8, j);
-    }
-    hit_mask
+    let bytes = |x: u64| _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(x as i64));
+    let lanes = _mm256_and_si256(_mm256_sllv_epi32(bytes(child_bits8), bytes(bit_index8)), hit);
+    let x = _mm_or_si128(_mm256_castsi256_si128(lanes), _mm256_extracti128_si256::<1>(lanes));
+    let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b0100_1110>(x));
+    let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b1011_0001>(x));
+    _mm_cvtsi128_si32(x) as u32
 }
 
 /// Walks the BVH along `ray`, calling `prim(k, &mut tmax)` for every

@@ -30,6 +30,7 @@
 //!   importance-driven selection.
 
 pub mod analysis;
+mod coherent;
 pub mod saliency;
 pub mod selection;
 pub mod shard_file;

@@ -34,6 +34,7 @@
 use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
 
+use super::coherent::morton_order;
 use super::{ViewpointAnalysis, ViewpointChannel, ViewpointWeights};
 use crate::lines::Line;
 use crate::tracer::{BackendError, Hit, Prepared, Tracer};
@@ -356,17 +357,34 @@ fn as_d(t: &[Vec3A; 3]) -> [DVec3; 3] {
     t.map(|v| DVec3::new(f64::from(v.x), f64::from(v.y), f64::from(v.z)))
 }
 
-impl View {
-    fn new(
-        p: &Prepared,
-        tracer: &dyn Tracer,
-        adjacency: &[Vec<u32>],
-        eye: DVec3,
-        m: u32,
-    ) -> Result<Self, BackendError> {
+/// What every view of one run shares: the triangles in `f64`, their
+/// centroids, edge adjacency, and the coherent order their shadow rays are
+/// traced in ([`morton_order`]).
+struct Shared {
+    tris: Vec<[DVec3; 3]>,
+    centroids: Vec<DVec3>,
+    adjacency: Vec<Vec<u32>>,
+    order: Vec<u32>,
+}
+
+impl Shared {
+    fn new(p: &Prepared) -> Self {
         let tris: Vec<[DVec3; 3]> = p.triangles.iter().map(as_d).collect();
-        let lines: Vec<Line> = tris.iter().map(|t| towards(eye, (t[0] + t[1] + t[2]) / 3.0)).collect();
-        let visible = unoccluded(tracer, &lines)?;
+        let centroids: Vec<DVec3> = tris.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect();
+        let order = morton_order(&centroids);
+        Self { tris, centroids, adjacency: triangle_adjacency(&p.triangles), order }
+    }
+}
+
+impl View {
+    fn new(p: &Prepared, tracer: &dyn Tracer, shared: &Shared, eye: DVec3, m: u32) -> Result<Self, BackendError> {
+        let (tris, adjacency) = (&shared.tris, &shared.adjacency);
+        // Centroid probes in coherent order, answers scattered back.
+        let lines: Vec<Line> = shared.order.iter().map(|&t| towards(eye, shared.centroids[t as usize])).collect();
+        let mut visible = vec![false; tris.len()];
+        for (&t, seen) in shared.order.iter().zip(unoccluded(tracer, &lines)?) {
+            visible[t as usize] = seen;
+        }
         let mut rays = lines.len() as u64;
         drop(lines);
         let items = ItemBuffer::new(tracer, eye, item_resolution(tris.len()))?;
@@ -382,7 +400,7 @@ impl View {
                 view.whole.push((p.triangle_patch[t], omega));
             }
         }
-        view.sample(tracer, &tris)?;
+        view.sample(tracer, tris)?;
         Ok(view)
     }
 
@@ -676,13 +694,13 @@ fn first_pass(
     m: u32,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<Vec<View>, BackendError> {
-    let adjacency = triangle_adjacency(&prepared.triangles);
+    let shared = Shared::new(prepared);
     let n = directions.len() as u64;
     let wave = (rayon::current_num_threads() * 2).max(2);
     let mut views: Vec<View> = Vec::with_capacity(directions.len());
     for dirs in directions.chunks(wave) {
         let made: Vec<Result<View, BackendError>> =
-            dirs.par_iter().map(|d| View::new(prepared, tracer, &adjacency, d.normalize() * distance, m)).collect();
+            dirs.par_iter().map(|d| View::new(prepared, tracer, &shared, d.normalize() * distance, m)).collect();
         for v in made {
             views.push(v?);
         }

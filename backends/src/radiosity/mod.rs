@@ -16,6 +16,8 @@
 //! (eq. 36), kernel smoothness (eqs. 37, 38), mutual information (eqs.
 //! 76-77), and the f-divergence and variance oracles of Part III-IV Def. 3.
 
+#[cfg(test)]
+mod conservation;
 pub mod element;
 mod gather;
 pub mod link;
@@ -23,6 +25,7 @@ pub mod reference;
 pub mod refine;
 pub mod render;
 pub mod search;
+pub mod spherical;
 
 use std::fmt;
 use std::str::FromStr;

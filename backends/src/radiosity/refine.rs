@@ -19,7 +19,7 @@ use std::fmt;
 use super::Oracle;
 use super::element::{ElementId, Hierarchy};
 use super::gather::{self, Rgb, Surfaces};
-use super::link::{Link, Sampler};
+use super::link::{Link, Sampler, Stage, facing};
 use crate::backend::BackendError;
 use crate::scene::Scene;
 use crate::tracer::{Prepared, Tracer};
@@ -179,14 +179,6 @@ pub fn check_scene(scene: &Scene) -> Result<(), RadiosityError> {
     Ok(())
 }
 
-/// Whether some corner of `b` lies in front of `a`'s plane.
-fn in_front(h: &Hierarchy, a: ElementId, b: ElementId) -> bool {
-    let (ea, eb) = (&h.elements[a as usize], &h.elements[b as usize]);
-    let c = ea.centre();
-    let size = ea.area.sqrt().max(eb.area.sqrt());
-    eb.points[..usize::from(eb.corners)].iter().any(|p| (*p - c).dot(ea.normal) > 1e-9 * size)
-}
-
 /// The seed of the transport estimates: a stream independent of the
 /// refinement decisions' (`seed`).
 fn transport_seed(seed: u64) -> u64 {
@@ -229,12 +221,9 @@ pub fn solve(
         total_area,
     };
     let roots: Vec<ElementId> = h.roots.iter().map(|r| r.element).collect();
-    let pairs: Vec<(ElementId, ElementId)> = roots
-        .iter()
-        .flat_map(|&i| roots.iter().map(move |&j| (i, j)))
-        .filter(|&(i, j)| i != j && in_front(&h, i, j) && in_front(&h, j, i))
-        .collect();
-    let (mut links, mut rays) = sampler.evaluate(&h, &pairs)?;
+    let pairs: Vec<(ElementId, ElementId)> =
+        roots.iter().flat_map(|&i| roots.iter().map(move |&j| (i, j))).filter(|&(i, j)| facing(&h, i, j)).collect();
+    let (mut links, mut rays) = sampler.evaluate(&h, &pairs, Stage::Refine)?;
     let mut evaluations = pairs.len() as u64;
     let (mut b, mut irradiance) = (Vec::new(), Vec::new());
     let mut sweeps =
@@ -288,7 +277,7 @@ pub fn solve(
             if evaluations + pairs.len() as u64 > 64 * settings.max_elements as u64 {
                 capped = true;
             }
-            let (new, r) = sampler.evaluate(&h, &pairs)?;
+            let (new, r) = sampler.evaluate(&h, &pairs, Stage::Refine)?;
             rays += r;
             evaluations += pairs.len() as u64;
             work = new;
@@ -306,7 +295,7 @@ pub fn solve(
     // stream of point pairs, so the decision does not select the estimate.
     let transport = Sampler { seed: transport_seed(settings.seed), ..sampler };
     let pairs: Vec<(ElementId, ElementId)> = links.iter().map(|l| (l.receiver, l.source)).collect();
-    let (fresh, r) = transport.evaluate(&h, &pairs)?;
+    let (fresh, r) = transport.evaluate(&h, &pairs, Stage::Transport)?;
     rays += r;
     evaluations += pairs.len() as u64;
     links = fresh;

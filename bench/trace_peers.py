@@ -1,13 +1,14 @@
 #!/usr/bin/env python3
 """All crossings of the same global lines with Embree and Mitsuba 3, for BENCHMARKS.md.
 
-Usage:  python3 bench/trace_peers.py DIR [--lines N]
+Usage:  python3 bench/trace_peers.py DIR [--lines N] [--no-mitsuba]
 DIR holds scene.obj and lines.f32 written by
   cargo bench -p itgfx-backends --bench trace -- SCENE N --export DIR
 Each peer finds every crossing of each line by repeated closest-hit queries
 (the ray restarted just past each hit), which is the job itgfx's tracer does
 in one traversal. Prints one JSON line per peer: seconds, lines/s, crossings
-found (to check all tracers saw the same crossings).
+found (to check all tracers saw the same crossings); for Embree also the CPU
+seconds of both processes' tracing (the steadier figure on a loaded machine).
 
 Embree: embreex (Embree 4 through its Python binding; one thread per process,
 so the 2-core figure runs two processes on halves of the lines).
@@ -38,7 +39,7 @@ def embree_worker(args):
     raw = raw[lo:hi]
     scene = rtcs.EmbreeScene()
     TriangleMesh(scene, v[f].astype(np.float32))
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     org = raw[:, 0:3].astype(np.float32).copy()
     dirs = raw[:, 3:6].astype(np.float32).copy()
     tmax = raw[:, 6].astype(np.float32)
@@ -54,7 +55,7 @@ def embree_worker(args):
         org[idx] += dirs[idx] * (t + EPS)[:, None]
         tnear[idx] += t + EPS
         alive = idx
-    return time.perf_counter() - t0, crossings
+    return time.perf_counter() - t0, time.process_time() - c0, crossings
 
 
 def embree(d, n, procs=2):
@@ -64,7 +65,7 @@ def embree(d, n, procs=2):
         t0 = time.perf_counter()
         out = p.map(embree_worker, [(d, cuts[k], cuts[k + 1]) for k in range(procs)])
         wall = time.perf_counter() - t0
-    return max(t for t, _ in out), wall, sum(c for _, c in out)
+    return max(t for t, _, _ in out), wall, sum(cpu for _, cpu, _ in out), sum(c for _, _, c in out)
 
 
 def mitsuba(d, n):
@@ -106,8 +107,10 @@ def main():
     n = int(float(sys.argv[sys.argv.index("--lines") + 1])) if "--lines" in sys.argv else None
     _, _, raw = load(d, n)
     n = len(raw)
-    t, wall, c = embree(d, n)
-    print(json.dumps({"impl": "embree (embreex, 2 processes)", "lines": n, "seconds": round(t, 3), "wall_s": round(wall, 3), "mlines_per_s": round(n / t / 1e6, 2), "crossings": c}))
+    t, wall, cpu, c = embree(d, n)
+    print(json.dumps({"impl": "embree (embreex, 2 processes)", "lines": n, "seconds": round(t, 3), "wall_s": round(wall, 3), "cpu_s": round(cpu, 3), "mlines_per_s": round(n / t / 1e6, 2), "crossings": c}))
+    if "--no-mitsuba" in sys.argv:
+        return
     t, c = mitsuba(d, n)
     print(json.dumps({"impl": "mitsuba3 llvm_ad_rgb", "lines": n, "seconds": round(t, 3), "mlines_per_s": round(n / t / 1e6, 2), "crossings": c}))
 

@@ -25,3 +25,4 @@ run cube32-162 cube:32 --tf step --viewpoints 162
 for n in 16 32 64; do run "resolution-$n" "hydrogen:3,2,0,$n" --viewpoints 42; done
 run undersampled-64 hydrogen:3,2,0,64 --viewpoints 42 --size 64
 run hydrogen128-162 hydrogen:3,2,0,128 --viewpoints 162
+run hydrogen256-162 hydrogen:3,2,0,256 --viewpoints 162

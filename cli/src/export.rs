@@ -174,10 +174,11 @@ pub fn write_png(img: &image::RgbImage, path: &Path) -> Result<(), CliError> {
     crate::output::write(path, &bytes)
 }
 
-/// Images side by side in rows of `per_row`, on a dark background.
+/// Images side by side in rows of `per_row`, on a dark background, each in
+/// a cell of the largest image's size (top-left aligned).
 #[must_use]
 pub fn montage(images: &[image::RgbImage], per_row: usize) -> image::RgbImage {
-    let (w, h) = images.first().map_or((1, 1), |i| i.dimensions());
+    let (w, h) = images.iter().fold((1, 1), |(w, h), i| (w.max(i.width()), h.max(i.height())));
     let per_row = per_row.clamp(1, images.len().max(1));
     let rows = images.len().div_ceil(per_row).max(1);
     let mut out = image::RgbImage::from_pixel(
@@ -200,13 +201,26 @@ pub fn montage(images: &[image::RgbImage], per_row: usize) -> image::RgbImage {
 /// red dot.
 #[must_use]
 pub fn sphere_image(directions: &[DVec3], measures: &[&[f64]], mark: DVec3, radius: u32) -> image::RgbImage {
+    let rows: Vec<Vec<[u8; 3]>> = measures.iter().map(|values| colours(values)).collect();
+    sphere_image_coloured(directions, &rows, Some(mark), radius)
+}
+
+/// [`sphere_image`] with a given colour per viewpoint in each row, and an
+/// optional mark.
+#[must_use]
+pub fn sphere_image_coloured(
+    directions: &[DVec3],
+    rows: &[Vec<[u8; 3]>],
+    mark: Option<DVec3>,
+    radius: u32,
+) -> image::RgbImage {
     let side = 2 * radius + 8;
     let mut img = image::RgbImage::from_pixel(
         2 * side,
-        side * measures.len() as u32,
+        side * rows.len() as u32,
         image::Rgb(itgfx_backends::preview::BACKGROUND),
     );
-    let mark = mark.normalize();
+    let mark = mark.map(DVec3::normalize);
     // The nearest viewpoint of every disc pixel, shared by all rows.
     let d = 2 * radius;
     let nearest: Vec<Option<(usize, f64, bool)>> = (0..2 * d * d)
@@ -224,11 +238,10 @@ pub fn sphere_image(directions: &[DVec3], measures: &[&[f64]], mark: DVec3, radi
             let p = DVec3::new(u * sign, v, sign * (1.0 - r2).sqrt());
             let near =
                 directions.iter().enumerate().max_by(|a, b| p.dot(*a.1).total_cmp(&p.dot(*b.1))).map_or(0, |(k, _)| k);
-            Some((near, 0.55 + 0.45 * (1.0 - r2).sqrt(), p.dot(mark) > 0.9995))
+            Some((near, 0.55 + 0.45 * (1.0 - r2).sqrt(), mark.is_some_and(|m| p.dot(m) > 0.9995)))
         })
         .collect();
-    for (row, values) in measures.iter().enumerate() {
-        let cols = colours(values);
+    for (row, cols) in rows.iter().enumerate() {
         for (k, n) in nearest.iter().enumerate() {
             let Some((near, shade, marked)) = *n else { continue };
             let (half, py, px) = (k as u32 / (d * d), (k as u32 / d) % d, k as u32 % d);

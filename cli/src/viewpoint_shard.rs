@@ -163,7 +163,7 @@ pub fn merged(
     }
     let shards = order_shards(named, &scene, &st).map_err(CliError::usage)?;
     if o.estimator == "grid" {
-        return Ok((grid_channel(prepared, &shards, dirs, o.distance, st.resolution), None));
+        return Ok((grid_channel(prepared.patches, &shards, dirs, o.distance, st.resolution), None));
     }
     let ladders: Vec<_> = shards.iter().flat_map(ViewpointShard::ladders).collect();
     for (v, (l, d)) in ladders.iter().zip(dirs).enumerate() {

@@ -251,3 +251,70 @@ fn raw_volumes_and_bad_input() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The report's text without its timings (`channel_seconds`,
+/// `measures_seconds`, `seconds`), which differ from run to run.
+fn untimed(out: &Output) -> String {
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout.clone()).unwrap();
+    let mut kept = String::new();
+    for part in text.split(',') {
+        if !["\"channel_seconds\":", "\"measures_seconds\":", "\"seconds\":"].iter().any(|k| part.starts_with(k)) {
+            kept.push_str(part);
+            kept.push(',');
+        }
+    }
+    kept
+}
+
+fn refused(args: &[&str], needle: &str) {
+    let out = itgfx(args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+    assert!(err.contains(needle), "{args:?}: {err}");
+}
+
+#[test]
+fn shards_merge_into_the_single_run_byte_for_byte() {
+    let dir = temp("shards");
+    let run = ["volume", "phantom:16", "--viewpoints", "12", "--size", "24", "--focus", "left"];
+    let single = untimed(&itgfx(&[&run[..], &["--json"]].concat()));
+    let file = |i: usize, tag: &str| dir.join(format!("{tag}-{i}.shard")).display().to_string();
+    let shard = |spec: &str, i: usize, tag: &str, extra: &[&str]| {
+        let s = format!("{i}/3");
+        let f = file(i, tag);
+        let args = [
+            &["volume", spec, "--viewpoints", "12", "--size", "24"][..],
+            extra,
+            &["--shard", &s, "--save-shard", &f, "--json"],
+        ]
+        .concat();
+        let r = json(&args);
+        assert_eq!(r["shard"], s.as_str());
+        f
+    };
+    let files: Vec<String> = (0..3).map(|i| shard("phantom:16", i, "p", &[])).collect();
+    // Given in any order, the merge is the single run: every measure, selection and object.
+    let list = format!("{},{},{}", files[2], files[0], files[1]);
+    let merged = untimed(&itgfx(&[&run[..], &["--merge", &list, "--json"]].concat()));
+    assert_eq!(merged, single);
+    // Missing, duplicate and foreign shards: one line each.
+    let two = format!("{},{}", files[0], files[2]);
+    refused(&[&run[..], &["--merge", &two]].concat(), "shard 1/3 missing");
+    let dup = format!("{},{},{},{}", files[0], files[1], files[2], files[1]);
+    refused(&[&run[..], &["--merge", &dup]].concat(), "are both shard 1/3");
+    let other = shard("phantom:12", 1, "q", &[]);
+    let foreign = format!("{},{other},{}", files[0], files[2]);
+    refused(&[&run[..], &["--merge", &foreign]].concat(), "a shard of another scene");
+    let far = shard("phantom:16", 1, "d", &["--distance", "4"]);
+    let moved = format!("{},{far},{}", files[0], files[2]);
+    refused(&[&run[..], &["--merge", &moved]].concat(), "--distance 3.0 here, 4.0 in the shard");
+    let step = shard("phantom:16", 1, "s", &["--tf", "step"]);
+    refused(&[&run[..], &["--merge", &format!("{},{step},{}", files[0], files[2])]].concat(), "another scene");
+    // Shard runs save rows only: pictures, the iso route and the focus belong to the merge.
+    let f = file(0, "x");
+    refused(&["volume", "phantom:16", "--shard", "0/2", "--save-shard", &f, "--focus", "left"], "--focus");
+    refused(&["volume", "phantom:16", "--viewpoints", "12", "--shard", "0/13", "--save-shard", &f], "more shards");
+    std::fs::remove_dir_all(dir).ok();
+}

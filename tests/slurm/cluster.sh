@@ -182,5 +182,5 @@ wait_job() {
     [[ $st == COMPLETED ]] || fail "$what (job $id) ended $st"
 }
 # The JSON without its wall-clock times.
-strip() { sed -E 's/,?"(channel_)?seconds":[^,}]*//g' "$1"; }
+strip() { sed -E 's/,?"(channel_|measures_)?seconds":[^,}]*//g' "$1"; }
 

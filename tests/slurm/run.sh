@@ -70,9 +70,19 @@ for case in "|" "|--shard-levels 16" "--estimator grid --resolution 64|"; do
     say "viewpoints ${VP_ARGS:-(solid angle)} $SHARD_ARGS: merged == single run, bit for bit ($(grep -o '"I_VO":[^,]*' "$OUT/viewpoints.json"))"
 done
 
+# volume: 4 shards of a 42-viewpoint run over a labelled phantom.
+export VOLUME=phantom:32 VIEWPOINTS=42 VOL_ARGS="--size 48" MERGE_ARGS="--focus left"
+rm -f "$OUT"/volume*
+submit volume
+# shellcheck disable=SC2086
+"$ITGFX" volume "$VOLUME" --viewpoints "$VIEWPOINTS" $VOL_ARGS $MERGE_ARGS --json > "$T/volume-single.json"
+cmp -s <(strip "$OUT/volume.json") <(strip "$T/volume-single.json") ||
+    fail "volume: merged shards differ from the single run"
+say "volume: merged == single run, bit for bit ($(grep -o '"I_VZ":[^,]*' "$OUT/volume.json"))"
+
 # render: 4 shards (pixel rows) of a tuned adaptive run and of the supersampler; the merged EXR is the single run's.
 for sampler in hl-sqrt es; do
-    export RSCENE=mirror-room:1 RENDER_ARGS="--size 24x20 --spp 16 --sampler $sampler"
+    export RSCENE=mirror-room:1 RENDER_ARGS="--size 24x20 --spp 16 --sampler $sampler" MERGE_ARGS=
     rm -rf "$OUT"/render*
     submit render
     # shellcheck disable=SC2086

@@ -5,9 +5,10 @@ use glam::Vec3A;
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::builder::build_cwbvh;
-use obvhs::ray::{Ray, RayHit};
+use obvhs::ray::Ray;
 
-use super::watertight::{Shear, before, finish, sphere_crossings, sphere_hit, test_triangle, triangle_hit};
+use super::node8;
+use super::watertight::{Shear, before, finish, push_crossing, sphere_crossings, sphere_hit, triangle_hit};
 use super::{BackendError, CrossingBuffer, Hit, Prepared, Tracer};
 use crate::lines::Line;
 
@@ -33,6 +34,12 @@ pub(crate) fn bvh_input(scene: &Prepared) -> (Vec<Aabb>, obvhs::BvhBuildParams) 
 pub struct CpuTracer {
     scene: Prepared,
     bvh: Option<CwBvh>,
+    /// The triangles in BVH order (`ordered[k]` is triangle
+    /// `bvh.primitive_indices[k]`): a leaf's candidates lie side by side in
+    /// memory instead of behind an indirection each.
+    ordered: Vec<[Vec3A; 3]>,
+    /// Whether the 8-lane AVX2 node test is used (`node8`).
+    avx2: bool,
 }
 
 impl CpuTracer {
@@ -43,11 +50,15 @@ impl CpuTracer {
             let (aabbs, params) = bvh_input(scene);
             build_cwbvh(&aabbs, params, &mut std::time::Duration::default())
         });
-        Self { scene: scene.clone(), bvh }
+        let ordered = bvh
+            .as_ref()
+            .map(|b| b.primitive_indices.iter().map(|&i| scene.triangles[i as usize]).collect())
+            .unwrap_or_default();
+        Self { scene: scene.clone(), bvh, ordered, avx2: node8::has_avx2() }
     }
 
-    /// The first crossing of one line: obvhs's closest-hit walk shrinks the
-    /// interval as hits are found, and ties in `t` go to the smaller triangle.
+    /// The first crossing of one line: the walk shrinks the interval as hits
+    /// are found, and ties in `t` go to the smaller triangle.
     pub(crate) fn closest(&self, l: &Line) -> Option<Hit> {
         if let Some(s) = &self.scene.sphere {
             return sphere_hit(s, l);
@@ -55,18 +66,21 @@ impl CpuTracer {
         let bvh = self.bvh.as_ref()?;
         let (shear, dir) = Shear::of(l);
         let mut best: Option<(f32, u32)> = None;
-        let mut rh = RayHit::none();
-        bvh.ray_traverse(Ray::new(Vec3A::from(l.origin), dir, l.tmin, l.tmax), &mut rh, |_, id| {
-            let tri = bvh.primitive_indices[id];
-            match shear.hit(&self.scene.triangles[tri as usize]) {
-                Some(t) if t >= l.tmin && t <= l.tmax => {
-                    if before(t, tri, best) {
-                        best = Some((t, tri));
-                    }
-                    t
+        let ray = Ray::new(Vec3A::from(l.origin), dir, l.tmin, l.tmax);
+        node8::traverse(bvh, &ray, self.avx2, |k, tmax| {
+            if let Some(t) = shear.hit(&self.ordered[k as usize])
+                && t >= l.tmin
+                && t <= l.tmax
+            {
+                let tri = bvh.primitive_indices[k as usize];
+                if before(t, tri, best) {
+                    best = Some((t, tri));
                 }
-                _ => f32::INFINITY,
+                if t < *tmax {
+                    *tmax = t;
+                }
             }
+            false
         });
         best.and_then(|(_, tri)| triangle_hit(&self.scene, l, tri))
     }
@@ -77,13 +91,13 @@ impl CpuTracer {
         }
         let Some(bvh) = &self.bvh else { return false };
         let (shear, dir) = Shear::of(l);
-        !bvh.ray_traverse_miss(Ray::new(Vec3A::from(l.origin), dir, l.tmin, l.tmax), |_, id| {
-            match shear.hit(&self.scene.triangles[bvh.primitive_indices[id] as usize]) {
-                // Any value below the ray's tmax ends the walk as a hit.
-                Some(t) if t >= l.tmin && t <= l.tmax => f32::NEG_INFINITY,
-                _ => f32::INFINITY,
-            }
-        })
+        let mut hit = false;
+        let ray = Ray::new(Vec3A::from(l.origin), dir, l.tmin, l.tmax);
+        node8::traverse(bvh, &ray, self.avx2, |k, _| {
+            hit = matches!(shear.hit(&self.ordered[k as usize]), Some(t) if t >= l.tmin && t <= l.tmax);
+            hit
+        });
+        hit
     }
 }
 
@@ -101,8 +115,14 @@ impl Tracer for CpuTracer {
             } else if let Some(bvh) = &self.bvh {
                 let (shear, dir) = Shear::of(l);
                 let ray = Ray::new(Vec3A::from(l.origin), dir, l.tmin, l.tmax);
-                bvh.ray_traverse_anyhit(ray, |_, id| {
-                    test_triangle(&self.scene, &shear, l, dir, bvh.primitive_indices[id] as usize, &mut hits);
+                node8::traverse(bvh, &ray, self.avx2, |k, _| {
+                    if let Some(t) = shear.hit(&self.ordered[k as usize])
+                        && t >= l.tmin
+                        && t <= l.tmax
+                    {
+                        push_crossing(&self.scene, dir, t, bvh.primitive_indices[k as usize] as usize, &mut hits);
+                    }
+                    false
                 });
             }
             finish(&mut hits, out);

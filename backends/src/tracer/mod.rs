@@ -32,6 +32,7 @@
 //! [`Prepared`]). Design notes: `docs/TRACING.md`.
 
 mod cpu;
+mod node8;
 mod reference;
 pub(crate) mod watertight;
 

@@ -52,7 +52,7 @@ impl Shear {
         (Self::new(org, dir), dir)
     }
 
-    #[inline]
+    #[inline(always)]
     fn raw(&self, v: &[Vec3A; 3]) -> Option<Raw> {
         let [kx, ky, kz] = self.k;
         let [sx, sy, sz] = self.s;
@@ -83,7 +83,7 @@ impl Shear {
 
     /// Parameter `t` of the crossing with triangle `v`, if any. Watertight:
     /// a line through an edge shared by two triangles crosses at least one.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn hit(&self, v: &[Vec3A; 3]) -> Option<f32> {
         self.raw(v).map(|r| r.num / r.det)
     }
@@ -109,9 +109,15 @@ pub(crate) fn test_triangle(
         && t >= l.tmin
         && t <= l.tmax
     {
-        let cos = scene.normals[tri].dot(dir);
-        hits.push(Crossing { t, patch: scene.triangle_patch[tri], cos, primitive: tri as u32 });
+        push_crossing(scene, dir, t, tri, hits);
     }
+}
+
+/// Records a crossing at `t` of a line along `dir` with triangle `tri`.
+#[inline]
+pub(crate) fn push_crossing(scene: &Prepared, dir: Vec3A, t: f32, tri: usize, hits: &mut Vec<Crossing>) {
+    let cos = scene.normals[tri].dot(dir);
+    hits.push(Crossing { t, patch: scene.triangle_patch[tri], cos, primitive: tri as u32 });
 }
 
 /// Whether crossing `(t, primitive)` comes before `(bt, bp)` in a line's

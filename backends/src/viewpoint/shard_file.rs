@@ -16,6 +16,12 @@
 //! back exactly. Everything is checked on reading and on merging: foreign
 //! (another scene or settings), duplicate and missing shards are refused
 //! with one line.
+//!
+//! Volume runs (`itgfx volume --shard`, Part VI's channel over voxels) use
+//! the same file: their rows are [`GridRow`]s with voxels for patches and
+//! visibilities for solid angles, the estimator is `"volume"`, the
+//! resolution is the caster's image side, and the fingerprint is the
+//! volume's ([`MeshFingerprint::volume`]).
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -28,6 +34,34 @@ use crate::tracer::Prepared;
 pub const FORMAT_NAME: &str = "itgfx-viewpoint-shard";
 /// The version written and read.
 pub const FORMAT_VERSION: u32 = 1;
+
+/// The estimator name of volume shards (ray-cast rows over voxels).
+pub const VOLUME_ESTIMATOR: &str = "volume";
+
+/// FNV-1a, 64 bits: the fingerprints' hash.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Fnv(u64);
+
+impl Default for Fnv {
+    fn default() -> Self {
+        Self(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Fnv {
+    /// Hashes `bytes` in.
+    pub fn eat(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+
+    /// The hash as 16 hexadecimal digits.
+    #[must_use]
+    pub fn hex(self) -> String {
+        format!("{:016x}", self.0)
+    }
+}
 
 /// What identifies the scene: a shard of another mesh is refused.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -48,26 +82,24 @@ impl MeshFingerprint {
     /// The fingerprint of a prepared scene named `name`.
     #[must_use]
     pub fn of(name: &str, p: &Prepared) -> Self {
-        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-        let mut eat = |bytes: [u8; 4]| {
-            for b in bytes {
-                h = (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
-            }
-        };
+        let mut h = Fnv::default();
         for (t, &patch) in p.triangles.iter().zip(&p.triangle_patch) {
             for v in t {
                 for c in v.to_array() {
-                    eat(c.to_bits().to_le_bytes());
+                    h.eat(&c.to_bits().to_le_bytes());
                 }
             }
-            eat(patch.to_le_bytes());
+            h.eat(&patch.to_le_bytes());
         }
-        Self {
-            name: name.to_string(),
-            patches: p.patches as u64,
-            triangles: p.triangles.len() as u64,
-            hash: format!("{h:016x}"),
-        }
+        Self { name: name.to_string(), patches: p.patches as u64, triangles: p.triangles.len() as u64, hash: h.hex() }
+    }
+
+    /// A volume's fingerprint: `voxels` outputs, no triangles, and `hash`
+    /// of everything its rows depend on besides the viewpoints (the voxels,
+    /// the transfer function and the sample step: `volume::raycast::Caster::fingerprint`).
+    #[must_use]
+    pub fn volume(name: &str, voxels: usize, hash: Fnv) -> Self {
+        Self { name: name.to_string(), patches: voxels as u64, triangles: 0, hash: hash.hex() }
     }
 }
 
@@ -96,11 +128,12 @@ impl ShardSettings {
     #[must_use]
     pub fn difference(&self, other: &Self) -> Option<String> {
         let d = |name: &str, a: String, b: String| (a != b).then(|| format!("{name} {a} here, {b} in the shard"));
+        let resolution = if self.estimator == VOLUME_ESTIMATOR { "--size" } else { "--resolution" };
         d("--viewpoints", self.viewpoints.to_string(), other.viewpoints.to_string())
             .or_else(|| d("--estimator", self.estimator.clone(), other.estimator.clone()))
             .or_else(|| d("--distance", format!("{:?}", self.distance), format!("{:?}", other.distance)))
             .or_else(|| d("subdivision levels", format!("{:?}", self.levels), format!("{:?}", other.levels)))
-            .or_else(|| d("--resolution", self.resolution.to_string(), other.resolution.to_string()))
+            .or_else(|| d(resolution, self.resolution.to_string(), other.resolution.to_string()))
             .or_else(|| d("--backend", self.backend.clone(), other.backend.clone()))
     }
 }
@@ -280,7 +313,8 @@ impl ViewpointShard {
         let finite = |x: f64| x.is_finite() && x >= 0.0;
         match &self.rows {
             ShardRows::Grid(rows) => {
-                if st.estimator != "grid" || st.resolution == 0 || !st.levels.is_empty() {
+                let grid = st.estimator == "grid" || st.estimator == VOLUME_ESTIMATOR;
+                if !grid || st.resolution == 0 || !st.levels.is_empty() {
                     return Err("grid rows with solid-angle settings".into());
                 }
                 for r in rows {
@@ -367,12 +401,13 @@ pub fn order_shards(
     )
 }
 
-/// The ray-grid channel of shards in order (from [`order_shards`]): rows
-/// concatenated, positions `directions[v]` at `distance` — the channel
-/// [`ViewpointChannel::build`] returns for the whole run.
+/// The ray-grid channel of shards in order (from [`order_shards`]) over
+/// `patches` outputs: rows concatenated, positions `directions[v]` at
+/// `distance` — the channel [`ViewpointChannel::build`] (or, for volumes,
+/// `volume::volume_channel`) returns for the whole run.
 #[must_use]
 pub fn grid_channel(
-    prepared: &Prepared,
+    patches: usize,
     shards: &[ViewpointShard],
     directions: &[DVec3],
     distance: f64,
@@ -397,7 +432,7 @@ pub fn grid_channel(
         patch,
         solid_angle,
         background,
-        patches: prepared.patches,
+        patches,
         rays_per_viewpoint: r * r,
     }
 }

@@ -14,7 +14,11 @@
 //!    centroid: the triangle is visible there when the ray's closest hit is
 //!    the triangle itself;
 //! 2. triangles whose centroid visibility differs from an edge neighbour's
-//!    lie where visibility changes; each is sampled at `m²` stratified
+//!    lie where visibility changes, and so do triangles on which an item
+//!    buffer of about a pixel per triangle (triangle id and depth per pixel)
+//!    shows something else inside them, or a surface in front of their plane
+//!    (a gap behind it, for a hidden one) within a pixel of them; each is
+//!    sampled at `m²` stratified
 //!    points (the centroids of its `m × m` subdivision) and its visible
 //!    fraction is the ratio estimate `f_t = Σ v_i w_i / Σ w_i` with the
 //!    solid-angle density `w_i = |cos θ_i| / r_i²`;
@@ -159,10 +163,10 @@ fn item_resolution(triangles: usize) -> u32 {
 }
 
 /// The triangle seen through each pixel centre of a perspective image that
-/// covers the bounding sphere: where a triangle's projection covers pixel
-/// centres that show something else, part of it is hidden (or, for a
-/// triangle hidden at its centroid, part of it is seen), though its
-/// centroid and its neighbours' agree.
+/// covers the bounding sphere, and how far away it is: where a triangle's
+/// projection covers pixel centres that show something else, part of it is
+/// hidden (or, for a triangle hidden at its centroid, part of it is seen),
+/// though its centroid and its neighbours' agree.
 struct ItemBuffer {
     eye: DVec3,
     forward: DVec3,
@@ -172,7 +176,14 @@ struct ItemBuffer {
     tan: f64,
     r: u32,
     item: Vec<u32>,
+    /// Distance from the eye to the hit of each pixel's ray (∞ for none).
+    depth: Vec<f32>,
 }
+
+/// Pixels around a triangle's projection that the item-buffer test also
+/// reads: an occluder (or a gap) narrower than the pixel spacing is seen by
+/// some pixel near the triangle even when no pixel centre falls inside it.
+const MARGIN_PX: f64 = 1.0;
 
 impl ItemBuffer {
     const NONE: u32 = u32::MAX;
@@ -182,17 +193,13 @@ impl ItemBuffer {
         let (right, up) = forward.any_orthonormal_pair();
         let sin = 1.0 / eye.length();
         let tan = sin / (1.0 - sin * sin).max(0.0).sqrt();
-        let mut ib = Self { eye, forward, right, up, tan, r, item: Vec::new() };
-        let lines: Vec<Line> = (0..r * r)
-            .map(|k| {
-                let (x, y) = (ib.centre(k % r), ib.centre(k / r));
-                let d = (forward + right * (x * tan) + up * (y * tan)).normalize();
-                Line::ray(eye, d, 0.0, 4.0 * eye.length())
-            })
-            .collect();
+        let mut ib = Self { eye, forward, right, up, tan, r, item: Vec::new(), depth: Vec::new() };
+        let lines: Vec<Line> =
+            (0..r * r).map(|k| Line::ray(eye, ib.direction(k % r, k / r), 0.0, 4.0 * eye.length())).collect();
         let mut hits = Vec::new();
         trace(tracer, &lines, &mut hits)?;
         ib.item = hits.iter().map(|h| h.map_or(Self::NONE, |h| h.primitive)).collect();
+        ib.depth = hits.iter().map(|h| h.map_or(f32::INFINITY, |h| h.t)).collect();
         Ok(ib)
     }
 
@@ -205,39 +212,75 @@ impl ItemBuffer {
         2.0 * (f64::from(i) + 0.5) / f64::from(self.r) - 1.0
     }
 
-    /// Whether every pixel centre inside triangle `v`'s projection agrees
-    /// with `visible` (shows triangle `t` when visible, anything else when not).
-    fn uniform(&self, v: &[DVec3; 3], t: u32, visible: bool) -> bool {
+    /// Unit direction of pixel `(x, y)`'s ray.
+    fn direction(&self, x: u32, y: u32) -> DVec3 {
+        (self.forward + self.right * (self.centre(x) * self.tan) + self.up * (self.centre(y) * self.tan)).normalize()
+    }
+
+    /// Whether the pixels on and around triangle `t`'s projection agree with
+    /// its centroid's `visible`: every pixel centre inside shows `t` when
+    /// visible and something else when not; and no pixel within
+    /// [`MARGIN_PX`] of it shows a surface in front of `t`'s plane (when
+    /// visible: an occluder over part of `t` that the pixel centres missed,
+    /// often `t`'s own neighbour at a fold) or behind it or nothing (when
+    /// hidden: a gap through which part of `t` is seen). A flagged triangle
+    /// is only sampled more, so a false alarm costs rays, never accuracy.
+    fn agrees(&self, v: &[DVec3; 3], t: u32, visible: bool) -> bool {
+        let rf = f64::from(self.r);
+        // Pixel coordinates of the projected vertices.
         let proj = v.map(|p| {
             let d = p - self.eye;
             let z = d.dot(self.forward);
-            (d.dot(self.right) / (z * self.tan), d.dot(self.up) / (z * self.tan))
+            let to_px = |c: f64| (c + 1.0) * 0.5 * rf - 0.5;
+            (to_px(d.dot(self.right) / (z * self.tan)), to_px(d.dot(self.up) / (z * self.tan)))
         });
-        let rf = f64::from(self.r);
-        let to_px = |c: f64| (c + 1.0) * 0.5 * rf - 0.5;
-        let (lo_x, hi_x) = (
-            proj.iter().map(|p| p.0).fold(f64::INFINITY, f64::min),
-            proj.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max),
-        );
-        let (lo_y, hi_y) = (
-            proj.iter().map(|p| p.1).fold(f64::INFINITY, f64::min),
-            proj.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max),
-        );
-        let x0 = to_px(lo_x).ceil().max(0.0) as u32;
-        let x1 = to_px(hi_x).floor().min(rf - 1.0);
-        let y0 = to_px(lo_y).ceil().max(0.0) as u32;
-        let y1 = to_px(hi_y).floor().min(rf - 1.0);
-        if x1 < 0.0 || y1 < 0.0 {
+        let lo = |f: fn(&(f64, f64)) -> f64| proj.iter().map(f).fold(f64::INFINITY, f64::min);
+        let hi = |f: fn(&(f64, f64)) -> f64| proj.iter().map(f).fold(f64::NEG_INFINITY, f64::max);
+        let x0 = (lo(|p| p.0) - MARGIN_PX).ceil().max(0.0);
+        let x1 = (hi(|p| p.0) + MARGIN_PX).floor().min(rf - 1.0);
+        let y0 = (lo(|p| p.1) - MARGIN_PX).ceil().max(0.0);
+        let y1 = (hi(|p| p.1) + MARGIN_PX).floor().min(rf - 1.0);
+        if x1 < x0 || y1 < y0 {
             return true;
         }
         let edge = |a: (f64, f64), b: (f64, f64), q: (f64, f64)| (b.0 - a.0) * (q.1 - a.1) - (b.1 - a.1) * (q.0 - a.0);
         let area = edge(proj[0], proj[1], proj[2]);
-        for y in y0..=y1 as u32 {
-            for x in x0..=x1 as u32 {
-                let q = (self.centre(x), self.centre(y));
-                let w = [edge(proj[1], proj[2], q), edge(proj[2], proj[0], q), edge(proj[0], proj[1], q)];
-                let inside = w.iter().all(|&e| e * area > 0.0);
-                if inside && (self.item[(y * self.r + x) as usize] == t) != visible {
+        if area == 0.0 {
+            return true;
+        }
+        let sign = area.signum();
+        let lengths = [0, 1, 2].map(|i| {
+            let (a, b) = (proj[(i + 1) % 3], proj[(i + 2) % 3]);
+            (b.0 - a.0).hypot(b.1 - a.1).max(f64::MIN_POSITIVE)
+        });
+        let n = (v[1] - v[0]).cross(v[2] - v[0]);
+        let plane = n.dot(v[0] - self.eye);
+        for y in y0 as u32..=y1 as u32 {
+            for x in x0 as u32..=x1 as u32 {
+                let q = (f64::from(x), f64::from(y));
+                // Signed distances (pixels, positive inside) to the three edges.
+                let w = [0, 1, 2].map(|i| sign * edge(proj[(i + 1) % 3], proj[(i + 2) % 3], q) / lengths[i]);
+                if w.iter().any(|&e| e < -MARGIN_PX) {
+                    continue;
+                }
+                let k = (y * self.r + x) as usize;
+                let shown = self.item[k];
+                if w.iter().all(|&e| e > 0.0) && (shown == t) != visible {
+                    return false;
+                }
+                if shown == t {
+                    continue;
+                }
+                let d = self.direction(x, y);
+                let along = n.dot(d);
+                if along.abs() < 1e-12 * n.length() {
+                    continue;
+                }
+                let s = plane / along;
+                let hit = f64::from(self.depth[k]);
+                let occluder = visible && hit < s * (1.0 - 1e-4);
+                let gap = !visible && hit > s * (1.0 + 1e-4);
+                if occluder || gap {
                     return false;
                 }
             }
@@ -331,7 +374,7 @@ impl View {
         let mut view = View { eye, whole: Vec::new(), sampled: Vec::new(), m, rays };
         for (t, tri) in tris.iter().enumerate() {
             let boundary = adjacency[t].iter().any(|&n| visible[n as usize] != visible[t])
-                || !items.uniform(tri, t as u32, visible[t]);
+                || !items.agrees(tri, t as u32, visible[t]);
             let omega = triangle_solid_angle(tri[0] - eye, tri[1] - eye, tri[2] - eye);
             if boundary {
                 view.sampled.push(Sampled { tri: t as u32, omega, fraction: 0.0, points: 0 });

@@ -21,7 +21,7 @@ use glam::DVec3;
 use itgfx_core::{Base, Error, entropy, entropy_of_weights};
 use rayon::prelude::*;
 
-use super::raycast::{Caster, View};
+use super::raycast::{Caster, viewpoint_camera};
 use crate::viewpoint::selection::importance_information;
 use crate::viewpoint::{ViewpointAnalysis, ViewpointChannel, ViewpointMeasures, ViewpointWeights};
 
@@ -36,42 +36,37 @@ pub struct VolumeChannelOptions {
     pub size: u32,
 }
 
-/// Voxels that can receive visibility: those within one voxel (in each
-/// axis) of a voxel of positive opacity, since a sample of positive opacity
-/// lies in a cell with such a corner and shares its visibility among that
-/// cell's eight corners. Counted by a separable 3×3×3 dilation.
+/// The voxels that can receive visibility ([`Caster::receiving_voxels`]):
+/// a row of the channel holds at most this many entries.
 #[must_use]
 pub fn seeable_voxels(caster: &Caster<'_>) -> usize {
-    let [nx, ny, nz] = caster.volume.dims;
-    let mut m: Vec<bool> = caster.voxel_opacity.iter().map(|&a| a > 0.0).collect();
-    let strides = [(1, nx), (nx, ny), (nx * ny, nz)];
-    for (stride, n) in strides {
-        let src = m.clone();
-        for (i, out) in m.iter_mut().enumerate() {
-            let c = (i / stride) % n;
-            *out = src[i] || (c > 0 && src[i - stride]) || (c + 1 < n && src[i + stride]);
-        }
-    }
-    m.iter().filter(|&&x| x).count()
+    caster.receiving_voxels().len()
 }
 
-/// Bytes of memory the channel may need at most: one entry (index and
-/// value, twice: the channel and its normalised copy) per viewpoint and
-/// seeable voxel ([`seeable_voxels`]), plus a dense row per viewpoint in
-/// flight (two per worker thread), plus the caster's per-voxel tables
-/// (opacity and active cells, 9 bytes per voxel).
+/// Bytes of memory the channel and its measures may need at most, from the
+/// `seeable` voxels ([`seeable_voxels`]): one 12-byte entry (voxel index and
+/// value) per viewpoint and seeable voxel, held once (the measures normalise
+/// the rows in place, [`ViewpointAnalysis::from_channel`]); per viewpoint in
+/// flight (two per worker thread) a dense row over the seeable voxels and
+/// its sparse copy (20 bytes per seeable voxel); and per voxel of the grid
+/// 13 bytes for the caster (opacity and active cells) and the map from voxel
+/// to seeable slot, plus 72 bytes for the per-voxel measures (`p(z)`, VoMI,
+/// colour VoMI, EVMI's targets and the VoMI pictures).
 #[must_use]
-pub fn channel_memory(caster: &Caster<'_>, viewpoints: usize) -> u64 {
-    let candidates = seeable_voxels(caster) as u64;
+pub fn channel_memory(caster: &Caster<'_>, seeable: usize, viewpoints: usize) -> u64 {
+    let seeable = seeable as u64;
     let threads = rayon::current_num_threads() as u64 * 2;
     let voxels = caster.volume.voxels() as u64;
-    viewpoints as u64 * candidates * 2 * 12 + threads * voxels * 8 + voxels * 9
+    viewpoints as u64 * seeable * 12 + threads * seeable * 20 + voxels * (13 + 72)
 }
 
 /// Casts `size²` rays from every viewpoint and gathers `vis(z|v)`.
 /// Viewpoints are cast in parallel, each by one thread in a fixed order, so
-/// the numbers do not depend on the thread count. `progress(done, total)`
-/// counts viewpoints.
+/// the numbers do not depend on the thread count. A viewpoint in flight sums
+/// its visibility over the seeable voxels only ([`Caster::receiving_voxels`],
+/// a dense row of that length), then keeps its positive entries: the same
+/// sums, in the same order, as a row over every voxel. `progress(done,
+/// total)` counts viewpoints.
 #[must_use]
 pub fn volume_channel(
     caster: &Caster<'_>,
@@ -79,6 +74,11 @@ pub fn volume_channel(
     progress: &mut dyn FnMut(u64, u64),
 ) -> ViewpointChannel {
     let voxels = caster.volume.voxels();
+    let seeable = caster.receiving_voxels();
+    let mut slot = vec![u32::MAX; voxels];
+    for (k, &z) in seeable.iter().enumerate() {
+        slot[z as usize] = k as u32;
+    }
     let total = o.directions.len() as u64;
     let wave = (rayon::current_num_threads() * 2).max(2);
     let mut starts = vec![0];
@@ -87,12 +87,13 @@ pub fn volume_channel(
         let rows: Vec<(Vec<u32>, Vec<f64>, f64)> = dirs
             .par_iter()
             .map(|&d| {
-                let mut vis = vec![0.0; voxels];
-                let bg = caster.visibility(&View::new(d, o.distance), o.size, &mut vis);
+                let mut vis = vec![0.0; seeable.len()];
+                let bg = caster
+                    .visibility_with(&viewpoint_camera(d, o.distance, 1.0), o.size, |z, x| vis[slot[z] as usize] += x);
                 let (mut idx, mut val) = (Vec::new(), Vec::new());
-                for (i, &x) in vis.iter().enumerate() {
+                for (&z, &x) in seeable.iter().zip(&vis) {
                     if x > 0.0 {
-                        idx.push(i as u32);
+                        idx.push(z);
                         val.push(x);
                     }
                 }
@@ -182,25 +183,28 @@ pub struct VolumeMeasures {
 
 /// Every measure of the channel: `directions` are the viewpoints'
 /// (for colour VoMI), `opacity` the voxels' transfer-function opacity,
-/// `focus` an optional importance per voxel.
+/// `focus` an optional importance per voxel. The channel is consumed: its
+/// rows are normalised in place ([`ViewpointAnalysis::from_channel`]), so
+/// the entries are held once.
 ///
 /// # Errors
 /// [`Error::ZeroMass`] when no viewpoint sees anything; core errors.
 pub fn volume_measures(
-    ch: &ViewpointChannel,
+    ch: ViewpointChannel,
     directions: &[DVec3],
     opacity: &[f64],
     focus: Option<&[f64]>,
     weights: ViewpointWeights,
     base: Base,
 ) -> Result<VolumeMeasures, Error> {
-    let an = ViewpointAnalysis::new(ch, weights, false)?;
-    let views = an.measures(&vec![1.0; ch.patches], base)?;
+    let noteworthiness_entropy = noteworthiness_entropy(&ch, opacity, base)?;
+    let an = ViewpointAnalysis::from_channel(ch, weights)?;
+    let views = an.measures(&vec![1.0; an.patches], base)?;
     let h_v = entropy(&an.p_v, base)?;
     let vomi = an.polygonal_information(base)?;
     let sparse = an.channel()?;
-    let mut colour_vomi = vec![[0.0; 3]; ch.patches];
-    let mut part = vec![0.0; ch.patches];
+    let mut colour_vomi = vec![[0.0; 3]; an.patches];
+    let mut part = vec![0.0; an.patches];
     for c in 0..3 {
         let w: Vec<f64> = an.seen.iter().map(|&v| viewpoint_colour(directions[v])[c]).collect();
         sparse.output_specific_information_weighted_into(&an.p_o, &w, base, &mut part)?;
@@ -211,7 +215,6 @@ pub fn volume_measures(
     let evmi_opacity = importance_information(&an, opacity, base)?;
     let evmi_vomi = importance_information(&an, &vomi, base)?;
     let evmi_focus = focus.map(|f| importance_information(&an, f, base)).transpose()?;
-    let noteworthiness_entropy = noteworthiness_entropy(ch, opacity, base)?;
     Ok(VolumeMeasures {
         analysis: an,
         views,
@@ -240,7 +243,7 @@ mod tests {
         let o = VolumeChannelOptions { directions: dirs.clone(), distance: 3.0, size };
         let ch = volume_channel(&c, &o, &mut |_, _| {});
         let m =
-            volume_measures(&ch, &dirs, &c.voxel_opacity, None, ViewpointWeights::ProjectedArea, Base::Bits).unwrap();
+            volume_measures(ch, &dirs, &c.voxel_opacity, None, ViewpointWeights::ProjectedArea, Base::Bits).unwrap();
         (dirs, m)
     }
 
@@ -307,8 +310,35 @@ mod tests {
         let seeable = seeable_voxels(&c);
         let visible = c.voxel_opacity.iter().filter(|&&a| a > 0.0).count();
         assert!(seeable >= visible && seeable < v.voxels());
-        for k in 0..ch.viewpoints() {
+        for (k, &d) in o.directions.iter().enumerate() {
             assert!(ch.row(k).0.len() <= seeable);
+            // The rows summed over the seeable voxels are the rows summed
+            // over every voxel, bit for bit.
+            let mut dense = vec![0.0; v.voxels()];
+            let bg = c.visibility(&viewpoint_camera(d, o.distance, 1.0), o.size, &mut dense);
+            let z: Vec<u32> = (0..v.voxels() as u32).filter(|&z| dense[z as usize] > 0.0).collect();
+            let x: Vec<f64> = z.iter().map(|&z| dense[z as usize]).collect();
+            assert_eq!((ch.row(k).0, ch.row(k).1, ch.background[k]), (&z[..], &x[..], bg), "view {k}");
+        }
+    }
+
+    #[test]
+    fn in_place_normalisation_is_the_copying_one() {
+        let v = built_in("phantom:12").unwrap();
+        let c = Caster::new(&v, &TransferFunction::preset("ramp").unwrap(), 0.5);
+        let o = VolumeChannelOptions { directions: icosphere(0), distance: 3.0, size: 16 };
+        let mut ch = volume_channel(&c, &o, &mut |_, _| {});
+        // A viewpoint that sees nothing: its row is dropped, the rows after it move down.
+        let empty = ch.starts[3]..ch.starts[4];
+        ch.patch.drain(empty.clone());
+        ch.solid_angle.drain(empty.clone());
+        for s in &mut ch.starts[4..] {
+            *s -= empty.len();
+        }
+        for w in [ViewpointWeights::ProjectedArea, ViewpointWeights::Uniform] {
+            let copied = ViewpointAnalysis::new(&ch, w, false).unwrap();
+            assert_eq!(copied.rows(), 11);
+            assert_eq!(ViewpointAnalysis::from_channel(ch.clone(), w).unwrap(), copied);
         }
     }
 

@@ -16,6 +16,8 @@
 use glam::DVec3;
 
 use super::{TransferFunction, Volume};
+use crate::camera::Camera;
+use crate::viewpoint::shard_file::Fnv;
 
 /// Transmittance below which a ray stops (early ray termination).
 pub const EARLY_TERMINATION: f64 = 1e-4;
@@ -23,49 +25,29 @@ pub const EARLY_TERMINATION: f64 = 1e-4;
 /// Entries of the transfer-function table over the normalised scalar.
 const TABLE: usize = 4096;
 
-/// A pinhole camera on the viewpoint sphere, looking at the origin.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct View {
-    /// Eye position (normalised coordinates).
-    pub eye: DVec3,
-    forward: DVec3,
-    right: DVec3,
-    up: DVec3,
-    tan_half: f64,
+/// The camera of the viewpoint along `direction` at `distance` (> 1)
+/// bounding-sphere radii: [`Camera::look_at`] the centre, with the z axis
+/// as up (the y axis for directions within 8° of the poles), and a square
+/// image that just covers the sphere of `radius` (≤ 1) about the centre, a
+/// half angle of `asin(radius/distance)` to its tangents: 1 for the
+/// channel's rays, less for pictures framed on what the transfer function
+/// shows. Pixel `(x, y)` is the ray `Camera::direction(x + 0.5, y + 0.5)`.
+///
+/// # Panics
+/// Never for a finite, non-zero `direction` and a finite `distance > 1`
+/// (the CLI's viewpoints and `--distance`): the camera is then valid.
+#[must_use]
+pub fn viewpoint_camera(direction: DVec3, distance: f64, radius: f64) -> Camera {
+    let d = direction.normalize();
+    let up = if d.z.abs() > 0.99 { DVec3::Y } else { DVec3::Z };
+    let half = (radius.clamp(1e-3, 1.0) / distance).min(1.0).asin();
+    Camera::look_at(d * distance, DVec3::ZERO, up, 2.0 * half.to_degrees())
+        .expect("a viewpoint outside the bounding sphere has a valid camera")
 }
 
-impl View {
-    /// The camera at `distance` (> 1) along `direction`; its up vector is
-    /// the z axis projected on the image plane (the y axis for directions
-    /// within 8° of the poles).
-    #[must_use]
-    pub fn new(direction: DVec3, distance: f64) -> Self {
-        Self::framed(direction, distance, 1.0)
-    }
-
-    /// The camera of [`View::new`] with an image that just covers the
-    /// sphere of `radius` (≤ 1) around the centre: pictures framed on what
-    /// the transfer function shows.
-    #[must_use]
-    pub fn framed(direction: DVec3, distance: f64, radius: f64) -> Self {
-        let d = direction.normalize();
-        let forward = -d;
-        let world_up = if d.z.abs() > 0.99 { DVec3::Y } else { DVec3::Z };
-        let right = forward.cross(world_up).normalize();
-        let up = right.cross(forward);
-        let r = radius.clamp(1e-3, 1.0);
-        let tan_half = r / (distance * distance - r * r).max(1e-12).sqrt();
-        Self { eye: d * distance, forward, right, up, tan_half }
-    }
-
-    /// Direction of the ray through the centre of pixel `(x, y)` of a
-    /// `size × size` image (`y` down).
-    #[must_use]
-    pub fn ray(&self, x: u32, y: u32, size: u32) -> DVec3 {
-        let u = ((f64::from(x) + 0.5) / f64::from(size) * 2.0 - 1.0) * self.tan_half;
-        let v = (1.0 - (f64::from(y) + 0.5) / f64::from(size) * 2.0) * self.tan_half;
-        (self.forward + self.right * u + self.up * v).normalize()
-    }
+/// The ray through the centre of pixel `(x, y)` of a `size × size` image.
+fn pixel_ray(camera: &Camera, x: u32, y: u32, size: u32) -> DVec3 {
+    camera.direction(f64::from(x) + 0.5, f64::from(y) + 0.5, size, size)
 }
 
 /// A volume and a transfer function ready to cast: the opacity (corrected
@@ -135,6 +117,26 @@ impl<'a> Caster<'a> {
         (r + 2.0 * v.voxel_size()).min(1.0)
     }
 
+    /// Hashes in everything a channel row depends on besides the viewpoint
+    /// and the image: the grid (dims, spacing, every value's bits), the
+    /// scalar normalisation, the sample step and the step-corrected opacity
+    /// table of the transfer function. Shards of one run agree on it.
+    pub fn fingerprint(&self, h: &mut Fnv) {
+        let v = self.volume;
+        for d in v.dims {
+            h.eat(&(d as u64).to_le_bytes());
+        }
+        for x in v.spacing.iter().chain([&self.lo, &self.inv_range, &self.step, &self.skip_below]) {
+            h.eat(&x.to_bits().to_le_bytes());
+        }
+        for x in &v.data {
+            h.eat(&x.to_bits().to_le_bytes());
+        }
+        for (a, _) in &self.table {
+            h.eat(&a.to_bits().to_le_bytes());
+        }
+    }
+
     /// Sample step in voxels.
     #[must_use]
     pub fn step_voxels(&self) -> f64 {
@@ -200,14 +202,22 @@ impl<'a> Caster<'a> {
     /// Adds every voxel's visibility from `view` over a `size × size` image
     /// to `vis` (one entry per voxel); returns the rays' total transmittance
     /// left (the background's share).
-    pub fn visibility(&self, view: &View, size: u32, vis: &mut [f64]) -> f64 {
+    pub fn visibility(&self, view: &Camera, size: u32, vis: &mut [f64]) -> f64 {
+        self.visibility_with(view, size, |i, x| vis[i] += x)
+    }
+
+    /// [`Caster::visibility`] through `add(voxel, contribution)`, called for
+    /// the eight corners of every sample in ray order (pixels row by row), so
+    /// a caller may keep the sums wherever it likes (the channel keeps them
+    /// over [`Caster::receiving_voxels`] only); returns the background's share.
+    pub fn visibility_with(&self, view: &Camera, size: u32, mut add: impl FnMut(usize, f64)) -> f64 {
         let mut background = 0.0;
         for y in 0..size {
             for x in 0..size {
-                let d = view.ray(x, y, size);
+                let d = pixel_ray(view, x, y, size);
                 background += self.march(view.eye, d, |corners, c, _, _| {
                     for &(i, w) in corners {
-                        vis[i] += c * w;
+                        add(i, c * w);
                     }
                 });
             }
@@ -215,17 +225,37 @@ impl<'a> Caster<'a> {
         background
     }
 
+    /// The voxels that can receive visibility, in increasing index: the
+    /// corners of the cells a ray samples ([`Volume::corners`] of a point in
+    /// an active cell). Any other voxel's `vis(z|v)` is 0 from every
+    /// viewpoint, by construction of [`Caster::visibility`].
+    #[must_use]
+    pub fn receiving_voxels(&self) -> Vec<u32> {
+        let [nx, ny, nz] = self.volume.dims;
+        let mut m = self.cell_active.clone();
+        // Dilate towards higher indices, one voxel per axis (a cell's far
+        // corners); descending order reads m[i - stride] before it is updated.
+        for (stride, n) in [(1, nx), (nx, ny), (nx * ny, nz)] {
+            for i in (0..m.len()).rev() {
+                if (i / stride) % n > 0 && m[i - stride] {
+                    m[i] = true;
+                }
+            }
+        }
+        m.iter().enumerate().filter(|&(_, &x)| x).map(|(i, _)| i as u32).collect()
+    }
+
     /// An RGB picture from `view`, `size × size`, with headlight shading from
     /// the gradient; `tint`, when given, replaces the transfer function's
     /// colour by a per-voxel colour (sampled trilinearly). Background
     /// `[24, 24, 28]`.
     #[must_use]
-    pub fn render(&self, view: &View, size: u32, tint: Option<&[[f32; 3]]>) -> Vec<[u8; 3]> {
+    pub fn render(&self, view: &Camera, size: u32, tint: Option<&[[f32; 3]]>) -> Vec<[u8; 3]> {
         use rayon::prelude::*;
         (0..size * size)
             .into_par_iter()
             .map(|k| {
-                let d = view.ray(k % size, k / size, size);
+                let d = pixel_ray(view, k % size, k / size, size);
                 let mut acc = [0.0f64; 3];
                 let t = self.march(view.eye, d, |corners, c, colour, g| {
                     let colour = match tint {
@@ -290,7 +320,7 @@ mod tests {
         let v = built_in("cube:16").unwrap();
         let tf = TransferFunction::preset("step").unwrap();
         let c = Caster::new(&v, &tf, 0.5);
-        let view = View::new(DVec3::new(0.3, 0.5, 0.8), 3.0);
+        let view = viewpoint_camera(DVec3::new(0.3, 0.5, 0.8), 3.0, 1.0);
         let mut vis = vec![0.0; v.voxels()];
         let size = 32;
         let bg = c.visibility(&view, size, &mut vis);
@@ -313,7 +343,7 @@ mod tests {
             every.cell_active.iter_mut().for_each(|c| *c = true);
             assert!(fast.cell_active.iter().any(|c| !c), "{spec}: nothing to skip");
             for d in [DVec3::new(0.3, 0.5, 0.8), DVec3::X, DVec3::new(-1.0, 2.0, -0.5)] {
-                let view = View::new(d, 3.0);
+                let view = viewpoint_camera(d, 3.0, 1.0);
                 let (mut a, mut b) = (vec![0.0; v.voxels()], vec![0.0; v.voxels()]);
                 let ba = fast.visibility(&view, 24, &mut a);
                 let bb = every.visibility(&view, 24, &mut b);
@@ -325,9 +355,13 @@ mod tests {
     #[test]
     fn view_frames_are_orthonormal() {
         for d in [DVec3::Z, DVec3::new(1.0, 2.0, 3.0), -DVec3::Z, DVec3::X] {
-            let v = View::new(d, 3.0);
+            let v = viewpoint_camera(d, 3.0, 1.0);
             assert!(v.forward.dot(v.right).abs() < 1e-12 && v.up.dot(v.forward).abs() < 1e-12);
-            assert!((v.ray(16, 16, 33) - v.forward).length() < 1e-12);
+            assert!((pixel_ray(&v, 16, 16, 33) - v.forward).length() < 1e-12);
+            // The image's edge rays graze the bounding sphere.
+            let edge = pixel_ray(&v, 0, 16, 33).angle_between(v.forward);
+            let half = (1.0f64 / 3.0).asin();
+            assert!((edge - half).abs() < half / 33.0 + 1e-9, "{edge} {half}");
         }
     }
 }

@@ -1,0 +1,179 @@
+//! The CPU backend's BVH walk: obvhs's compressed 8-wide BVH traversed with
+//! an 8-lane AVX2 node test (all eight children's slabs in one register)
+//! where the CPU has AVX2, obvhs's own two 4-lane SSE passes otherwise.
+//!
+//! Both node tests do the same IEEE arithmetic in the same order (one
+//! multiply, one add, then max/min in the same operand order; no fused
+//! multiply-add), so they cull exactly the same children: the walk, and
+//! therefore every answer, is the same on any x86-64 CPU. A unit test below
+//! compares the two hit masks on every node of a BVH for many rays.
+
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::{
+    __m128i, __m256, _CMP_LE_OQ, _mm_loadl_epi64, _mm256_add_ps, _mm256_cmp_ps, _mm256_cvtepi32_ps,
+    _mm256_cvtepu8_epi32, _mm256_max_ps, _mm256_min_ps, _mm256_movemask_ps, _mm256_mul_ps, _mm256_set1_ps,
+};
+
+use glam::{UVec2, Vec3A};
+use obvhs::cwbvh::CwBvh;
+use obvhs::cwbvh::node::{CwBvhNode, extract_byte64};
+use obvhs::ray::Ray;
+
+/// obvhs's near cut-off: children nearer than this along the ray are culled
+/// (`obvhs::cwbvh::node::EPSILON`, private there; see `docs/TRACING.md`).
+const NODE_EPSILON: f32 = 0.0001;
+
+/// Whether the AVX2 node test may be used (asked once; std caches it).
+#[must_use]
+pub(crate) fn has_avx2() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// Eight children's slabs at once: the hit mask obvhs's
+/// `CwBvhNode::intersect_ray` returns for the same node and ray.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn intersect8(node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
+    let adj_inv = node.compute_extent() * ray.inv_direction;
+    let adj_org = (Vec3A::from(node.p) - ray.origin) * ray.inv_direction;
+    // The eight quantised planes of one axis side, as f32 (exact).
+    let q = |b: &[u8; 8]| -> __m256 {
+        // SAFETY: `b` is 8 readable bytes, exactly what `_mm_loadl_epi64`
+        // reads (unaligned loads are allowed); AVX2 is enabled here.
+        unsafe { _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(b.as_ptr().cast::<__m128i>()))) }
+    };
+    let axis = |lo: &[u8; 8], hi: &[u8; 8], neg: bool, inv: f32, org: f32| -> (__m256, __m256) {
+        let (near, far) = if neg { (q(hi), q(lo)) } else { (q(lo), q(hi)) };
+        let (inv, org) = (_mm256_set1_ps(inv), _mm256_set1_ps(org));
+        (_mm256_add_ps(_mm256_mul_ps(near, inv), org), _mm256_add_ps(_mm256_mul_ps(far, inv), org))
+    };
+    let d = ray.direction;
+    let (tmin_x, tmax_x) = axis(&node.child_min_x, &node.child_max_x, d.x < 0.0, adj_inv.x, adj_org.x);
+    let (tmin_y, tmax_y) = axis(&node.child_min_y, &node.child_max_y, d.y < 0.0, adj_inv.y, adj_org.y);
+    let (tmin_z, tmax_z) = axis(&node.child_min_z, &node.child_max_z, d.z < 0.0, adj_inv.z, adj_org.z);
+    // Same operand order as obvhs (max/min pick the second operand on NaN).
+    let tmin = _mm256_max_ps(tmin_x, _mm256_max_ps(tmin_y, tmin_z));
+    let tmax = _mm256_min_ps(tmax_x, _mm256_min_ps(tmax_y, tmax_z));
+    let tmin = _mm256_max_ps(tmin, _mm256_set1_ps(NODE_EPSILON));
+    let tmax = _mm256_min_ps(tmax, _mm256_set1_ps(ray.tmax));
+    let mut mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax)) as u32;
+    let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
+    let mut hit_mask = 0u32;
+    while mask != 0 {
+        let j = mask.trailing_zeros() as usize;
+        mask &= mask - 1;
+        hit_mask |= extract_byte64(child_bits8, j) << extract_byte64(bit_index8, j);
+    }
+    hit_mask
+}
+
+/// Walks the BVH along `ray`, calling `prim(k, &mut tmax)` for every
+/// candidate primitive `k` (an index into `bvh.primitive_indices`, i.e.
+/// BVH order); `prim` may shrink `tmax` (closest hit) and returns `true` to
+/// end the walk (any hit).
+#[inline(always)]
+fn walk<const AVX2: bool, F: FnMut(u32, &mut f32) -> bool>(bvh: &CwBvh, ray: &Ray, mut prim: F) {
+    let mut r = *ray;
+    let mut state = bvh.new_traversal(ray.direction);
+    let mut node;
+    'walk: {
+        obvhs::traverse!(
+            bvh,
+            node,
+            state,
+            {
+                #[cfg(target_arch = "x86_64")]
+                if AVX2 {
+                    // SAFETY: `AVX2` is true only in `walk_avx2`, entered
+                    // only after `has_avx2()` said the CPU has it.
+                    unsafe { intersect8(node, &r, state.oct_inv4) }
+                } else {
+                    node.intersect_ray(&r, state.oct_inv4)
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                node.intersect_ray(&r, state.oct_inv4)
+            },
+            {
+                if prim(state.primitive_id, &mut r.tmax) {
+                    break 'walk;
+                }
+            }
+        );
+    }
+}
+
+/// [`walk`] compiled for AVX2.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn walk_avx2<F: FnMut(u32, &mut f32) -> bool>(bvh: &CwBvh, ray: &Ray, prim: F) {
+    walk::<true, F>(bvh, ray, prim);
+}
+
+/// Walks `bvh` along `ray` (see [`walk`]) with the widest node test the CPU
+/// has (`avx2` from [`has_avx2`]).
+#[inline]
+pub(crate) fn traverse<F: FnMut(u32, &mut f32) -> bool>(bvh: &CwBvh, ray: &Ray, avx2: bool, prim: F) {
+    #[cfg(target_arch = "x86_64")]
+    if avx2 {
+        // SAFETY: the caller got `avx2` from `has_avx2()`.
+        unsafe { walk_avx2(bvh, ray, prim) };
+        return;
+    }
+    let _ = avx2;
+    walk::<false, F>(bvh, ray, prim);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lines::global_line;
+    use crate::scene::built_in;
+    use crate::tracer::{Prepared, bvh_input};
+
+    /// The AVX2 node test culls exactly what obvhs's SSE test culls, on
+    /// every node of the BVHs of a tessellated enclosure and a box room,
+    /// for global lines at full length and cut short (closest-hit walks
+    /// shrink `tmax`).
+    #[test]
+    fn avx2_node_test_matches_obvhs() {
+        if !has_avx2() {
+            return;
+        }
+        for spec in ["cube-enclosure:6", "cubes-room:16", "geosphere", "table-chairs:2"] {
+            let scene = built_in(spec).unwrap();
+            let p = Prepared::new(&scene);
+            let (aabbs, params) = bvh_input(&p);
+            let bvh = obvhs::cwbvh::builder::build_cwbvh(&aabbs, params, &mut std::time::Duration::default());
+            let mut tested = 0u64;
+            for i in 0..300 {
+                let l = global_line(5, i, 1.1);
+                for tmax in [l.tmax, l.tmax * 0.5, 0.3] {
+                    let dir = Vec3A::from(l.direction);
+                    let ray = Ray::new(Vec3A::from(l.origin), dir, l.tmin, tmax);
+                    let oct = bvh.new_traversal(dir).oct_inv4;
+                    for node in &bvh.nodes {
+                        // SAFETY: AVX2 checked above.
+                        let wide = unsafe { intersect8(node, &ray, oct) };
+                        assert_eq!(wide, node.intersect_ray(&ray, oct), "{spec} line {i}");
+                        tested += u64::from(wide != 0);
+                    }
+                }
+            }
+            assert!(tested > 100, "{spec}: only {tested} non-empty masks");
+        }
+    }
+}

@@ -1,0 +1,317 @@
+//! `itgfx volume VOLUME`: view selection for volume data (Part VI), the
+//! viewpoint channel over voxels.
+//!
+//! * [`input`]: the volume, the transfer function, the focus, option parsers;
+//! * [`routes`]: the object channel and the iso-surface route;
+//! * [`pictures`]: the pictures of `--out DIR`;
+//! * [`shard`]: `--shard i/n --save-shard F` and `--merge`.
+
+mod input;
+mod pictures;
+mod routes;
+pub mod shard;
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use clap::Args;
+use itgfx_backends::viewpoint::selection::{best_views, exploration};
+use itgfx_backends::viewpoint::{ViewpointWeights, icosphere};
+use itgfx_backends::volume::channel::{channel_memory, seeable_voxels};
+use itgfx_backends::volume::raycast::Caster;
+use itgfx_backends::volume::{TransferFunction, VolumeChannelOptions, volume_channel, volume_measures};
+
+use crate::options::Common;
+use crate::progress::Progress;
+use crate::report::Report;
+use crate::values::{argmin, best_n, capture, distance, explore, out_path, threads, viewpoint_count, viewpoint_level};
+use crate::{CliError, core_err};
+use input::{dims, focus, image_side, iso_value, load, size, spacing, step, transfer, volume_help};
+use pictures::{PICTURES, Shots};
+use routes::{correlation, iso_route, object_measures};
+
+/// Most memory the channel may take (estimated before any ray is cast).
+pub const MEMORY_LIMIT: u64 = 6 << 30;
+
+/// `itgfx volume VOLUME`.
+#[derive(Debug, Args)]
+#[command(after_help = volume_help())]
+pub struct VolumeOptions {
+    /// A built-in volume (hydrogen:3,2,0,64, phantom:64, cube:32, sphere:32), an .nrrd or a raw file
+    #[arg(value_name = "VOLUME")]
+    pub volume: Option<String>,
+    /// Raw file size X,Y,Z in voxels
+    #[arg(long, value_name = "X,Y,Z", value_parser = dims, help_heading = "Raw input")]
+    pub dims: Option<[usize; 3]>,
+    /// Raw value type: u8, u16 or f32 (little-endian)
+    #[arg(long = "type", value_name = "u8|u16|f32", value_parser = ["u8", "u16", "f32"], help_heading = "Raw input")]
+    pub value_type: Option<String>,
+    /// Voxel spacing X,Y,Z (default 1,1,1)
+    #[arg(long, value_name = "X,Y,Z", value_parser = spacing, help_heading = "Raw input")]
+    pub spacing: Option<[f64; 3]>,
+    /// Transfer function: a preset (ramp, step) or a file
+    #[arg(long, value_name = "PRESET|FILE", default_value = "ramp")]
+    pub tf: String,
+    /// Viewpoints: 12, 42, 162, 642 or 2562 points of a subdivided icosahedron
+    #[arg(long, value_name = "N", default_value = "42", value_parser = viewpoint_count, help_heading = "Channel")]
+    pub viewpoints: u32,
+    /// Image side of the ray caster for the channel: N x N rays per viewpoint (8..=1024;
+    /// default twice the volume's largest dimension, at least 32, at most 512: under about two
+    /// rays per voxel the rows alias and I(V;Z) is biased upwards)
+    #[arg(long, value_name = "N", value_parser = size, help_heading = "Channel")]
+    pub size: Option<u32>,
+    /// Sample step along rays, in voxels (0.05..=2)
+    #[arg(long, value_name = "F", default_value = "0.5", value_parser = step, help_heading = "Channel")]
+    pub step: f64,
+    /// Viewpoint distance in bounding-sphere radii (1.05..=1000)
+    #[arg(long, value_name = "D", default_value = "3", value_parser = distance, help_heading = "Channel")]
+    pub distance: f64,
+    /// p(V) uniform instead of proportional to the visibility a viewpoint gathers
+    #[arg(long, help_heading = "Channel")]
+    pub uniform_input: bool,
+    /// Focus on a labelled object (name or number; phantom): EVMI with its voxels as importance
+    #[arg(long, value_name = "LABEL", help_heading = "Channel")]
+    pub focus: Option<String>,
+    /// Also extract the iso-surface at this normalised value (0 < F < 1) and run the polygonal
+    /// viewpoint channel on it (Part VI §2.1), to compare its views with the voxels'
+    #[arg(long, value_name = "F", value_parser = iso_value, help_heading = "Channel")]
+    pub iso: Option<f64>,
+    /// At most N best views, greedy
+    #[arg(long, value_name = "N", default_value = "6", value_parser = best_n, help_heading = "Selection")]
+    pub best_n: usize,
+    /// Stop once the views capture F of I(V;Z), F in (0, 1]
+    #[arg(long, value_name = "F", default_value = "0.9", value_parser = capture, help_heading = "Selection")]
+    pub capture: f64,
+    /// Steps of the guided exploration path from the best view
+    #[arg(long, value_name = "S", default_value = "12", value_parser = explore, help_heading = "Selection")]
+    pub explore: usize,
+    /// Pictures and volume.json in DIR (created if missing)
+    #[arg(long, value_name = "DIR", value_parser = out_path, help_heading = "Pictures")]
+    pub out: Option<PathBuf>,
+    /// Side of the pictures in pixels (16..=2048)
+    #[arg(long, value_name = "N", default_value = "256", value_parser = image_side, help_heading = "Pictures")]
+    pub image: u32,
+    /// Worker threads (default: all cores)
+    #[arg(long, value_name = "T", value_parser = threads)]
+    pub threads: Option<usize>,
+    /// Shards.
+    #[command(flatten)]
+    pub shards: shard::VolumeShardOptions,
+    /// Shared options.
+    #[command(flatten)]
+    pub common: Common,
+}
+
+/// Runs `itgfx volume`.
+///
+/// # Errors
+/// Usage, input and output errors; one line each.
+#[allow(clippy::too_many_lines)]
+pub fn run(o: &VolumeOptions) -> Result<Report, CliError> {
+    let spec = o
+        .volume
+        .clone()
+        .ok_or_else(|| CliError::usage("give a volume: a built-in (hydrogen, phantom, cube, sphere) or a raw file"))?;
+    let base = o.common.base;
+    let unit = Some(base.unit());
+    let tf = transfer(&o.tf)?;
+    let mut created = None;
+    if let Some(d) = &o.out {
+        if std::fs::metadata(d).is_ok_and(|m| !m.is_dir()) {
+            return Err(CliError::usage(format!("--out {d:?}: not a directory")));
+        }
+        if !d.exists() {
+            std::fs::create_dir_all(d).map_err(|e| CliError::usage(format!("--out {d:?}: {e}")))?;
+            created = Some(d.clone());
+        }
+    }
+    let result = run_in(o, &spec, &tf, base, unit);
+    if result.is_err()
+        && let Some(d) = created
+    {
+        // Leave nothing behind: the directory made for --out goes again (only if still empty).
+        let _ = std::fs::remove_dir(d);
+    }
+    result
+}
+
+#[allow(clippy::too_many_lines)]
+fn run_in(
+    o: &VolumeOptions,
+    spec: &str,
+    tf: &TransferFunction,
+    base: itgfx_core::Base,
+    unit: Option<&'static str>,
+) -> Result<Report, CliError> {
+    shard::check(o)?;
+    let outputs: Vec<PathBuf> = o.out.as_ref().map_or_else(Vec::new, |d| PICTURES.iter().map(|n| d.join(n)).collect());
+    for p in &outputs {
+        crate::output::check("--out", p)?;
+    }
+    let volume = load(o, spec)?;
+    let focus = o.focus.as_deref().map(|f| focus(&volume, f)).transpose()?;
+    let (lo, hi) = volume.range();
+    if lo >= hi {
+        return Err(CliError::usage(format!("{}: constant volume (every voxel is {lo}): nothing to see", volume.name)));
+    }
+    let t0 = Instant::now();
+    let caster = Caster::new(&volume, tf, o.step);
+    if caster.voxel_opacity.iter().all(|&a| a <= 0.0) {
+        return Err(CliError::usage(format!("{}: the transfer function makes every voxel transparent", volume.name)));
+    }
+    let dirs = icosphere(viewpoint_level(o.viewpoints));
+    let (first, end) = shard::range(o, dirs.len());
+    let need = channel_memory(&caster, seeable_voxels(&caster), end - first);
+    if need > MEMORY_LIMIT {
+        return Err(CliError::usage(format!(
+            "{}: the channel may need {:.1} GiB (limit {} GiB): fewer --viewpoints or a smaller volume",
+            volume.name,
+            need as f64 / f64::from(1u32 << 30),
+            MEMORY_LIMIT >> 30
+        )));
+    }
+    let largest = volume.dims.iter().copied().max().unwrap_or(1) as u32;
+    let rays = o.size.unwrap_or((2 * largest).clamp(32, 512));
+    if let Some(s) = o.shards.shard {
+        return shard::save(o, s, &caster, &dirs, rays, need);
+    }
+    let ch = if o.shards.merge.is_empty() {
+        let mut progress = Progress::new();
+        let copts = VolumeChannelOptions { directions: dirs.clone(), distance: o.distance, size: rays };
+        volume_channel(&caster, &copts, &mut |d, t| progress.update(d, t))
+    } else {
+        shard::merged(o, &caster, &dirs, rays)?
+    };
+    let t_channel = t0.elapsed().as_secs_f64();
+    if ch.is_blind() {
+        return Err(CliError::usage(format!("{}: no viewpoint sees any voxel", volume.name)));
+    }
+    let weights = if o.uniform_input { ViewpointWeights::Uniform } else { ViewpointWeights::ProjectedArea };
+    let err = |e| core_err("volume channel", e);
+    // What needs the raw rows comes first: the measures normalise them in place.
+    let (entries, rays_per_viewpoint, neighbours) = (ch.patch.len() as u64, ch.rays_per_viewpoint, ch.neighbours(6));
+    let objects =
+        volume.labels.as_ref().map(|l| object_measures(&ch, l, &volume.label_names, weights, base)).transpose()?;
+    let m = volume_measures(ch, &dirs, &caster.voxel_opacity, focus.as_ref().map(|f| f.0.as_slice()), weights, base)
+        .map_err(err)?;
+    let v = &m.views;
+    let t_measures = t0.elapsed().as_secs_f64() - t_channel;
+    let best_n = best_views(&m.analysis, v, o.capture, o.best_n, base).map_err(err)?;
+    let tour = exploration(&m.analysis, &neighbours, v.best, o.explore, base).map_err(err)?;
+    let instability = m.analysis.instability(&neighbours, base).map_err(err)?;
+    let seen = m.analysis.expand(&m.analysis.seen_angle, 0.0);
+    let iso = o.iso.map(|f| iso_route(&volume, f, &dirs, o.distance, rays, base)).transpose()?;
+    let seconds = t0.elapsed().as_secs_f64();
+
+    let mut r = Report::new();
+    r.text("volume", volume.name.clone());
+    r.counts("dims", volume.dims.iter().map(|&d| d as u64).collect());
+    r.count("voxels", volume.voxels() as u64).count("viewpoints", dirs.len() as u64);
+    r.count("rays_per_viewpoint", rays_per_viewpoint).real("step_voxels", o.step, None);
+    r.count("channel_entries", entries);
+    r.count("voxels_seen", m.analysis.p_o.iter().filter(|&&p| p > 0.0).count() as u64);
+    r.text("p_v", if o.uniform_input { "uniform" } else { "visibility gathered" });
+    r.real("H_V", m.h_v, unit).real("H_Z", v.object_entropy, unit).real("H_Z_given_V", v.conditional_entropy, unit);
+    r.real("I_VZ", v.total_mutual_information, unit);
+    r.count("best_view", v.best as u64).count("worst_view", v.worst as u64);
+    r.reals("best_view_direction", dirs[v.best].to_array().to_vec());
+    r.reals("worst_view_direction", dirs[v.worst].to_array().to_vec());
+    let best_evmi = argmin(&m.evmi_opacity);
+    r.count("best_EVMI_opacity_view", best_evmi as u64);
+    r.count("best_EVMI_VoMI_view", argmin(&m.evmi_vomi) as u64);
+    let nw = &m.noteworthiness_entropy;
+    let best_nw = (0..nw.len()).max_by(|&a, &b| nw[a].total_cmp(&nw[b]).then(b.cmp(&a))).unwrap_or(0);
+    r.count("best_noteworthiness_VE_view", best_nw as u64);
+    if let (Some(f), Some((_, name))) = (&m.evmi_focus, &focus) {
+        r.text("focus", name.clone()).count("best_focus_view", argmin(f) as u64);
+        r.reals("best_focus_direction", dirs[argmin(f)].to_array().to_vec());
+    }
+    let vomi_max = m.vomi.iter().copied().fold(0.0, f64::max);
+    let vomi_mean: f64 = m.vomi.iter().zip(&m.analysis.p_o).map(|(i, p)| i * p).sum();
+    r.real("VoMI_max", vomi_max, unit).real("VoMI_mean_pz", vomi_mean, unit);
+    r.counts("best_n_views", best_n.views.iter().map(|&x| x as u64).collect());
+    r.reals("best_n_merged_VMI", best_n.merged_information.clone()).reals("best_n_captured", best_n.captured.clone());
+    r.counts("exploration_path", tour.path.iter().map(|&x| x as u64).collect());
+    if let Some(iso) = &iso {
+        r.real("iso", iso.value, None).count("iso_triangles", iso.triangles as u64);
+        r.real("iso_I_VO", iso.measures.total_mutual_information, unit);
+        r.count("iso_best_view", iso.measures.best as u64).count("iso_worst_view", iso.measures.worst as u64);
+        r.reals("iso_best_direction", dirs[iso.measures.best].to_array().to_vec());
+        let angle = dirs[iso.measures.best].angle_between(dirs[v.best]).to_degrees();
+        r.real("iso_best_angle_to_voxel_best_deg", angle, None);
+        // Symmetric volumes have many equally good views: the rank of the
+        // iso-surface's best view among the voxel route's VMIs says more than the angle.
+        let b = v.mutual_information[iso.measures.best];
+        let rank = v.mutual_information.iter().filter(|&&x| x < b - 1e-9 * b.abs()).count();
+        r.count("iso_best_voxel_rank", rank as u64);
+        r.maybe_real(
+            "iso_voxel_VMI_correlation",
+            correlation(&iso.measures.mutual_information, &v.mutual_information),
+            None,
+        );
+    }
+    if let Some(ob) = &objects {
+        r.real("object_I_VO", ob.measures.total_mutual_information, unit);
+        r.count("object_best_view", ob.measures.best as u64);
+        r.reals("object_best_direction", dirs[ob.measures.best].to_array().to_vec());
+        let recs = volume
+            .label_names
+            .iter()
+            .enumerate()
+            .map(|(k, name)| {
+                let mut x = Report::new();
+                x.text("name", name.clone()).real("p_o", ob.p_o[k], None).real("I_o_V", ob.information[k], unit);
+                if let Some(c) = ob.characteristic[k] {
+                    x.count("characteristic_view", c as u64)
+                        .reals("characteristic_direction", dirs[c].to_array().to_vec());
+                }
+                x
+            })
+            .collect();
+        r.records("objects", recs);
+    }
+    let mut views = Vec::new();
+    for (k, d) in dirs.iter().enumerate() {
+        let mut x = Report::new();
+        x.reals("direction", d.to_array().to_vec());
+        x.real("p_v", v.weight[k], None).real("H_Z_given_v", v.entropy[k], unit).real(
+            "VMI",
+            v.mutual_information[k],
+            unit,
+        );
+        x.real("EVMI_opacity", m.evmi_opacity[k], unit).real("EVMI_VoMI", m.evmi_vomi[k], unit);
+        x.real("VE_noteworthiness", m.noteworthiness_entropy[k], unit);
+        if let Some(f) = &m.evmi_focus {
+            x.real("EVMI_focus", f[k], unit);
+        }
+        if let Some(iso) = &iso {
+            x.real("iso_VMI", iso.measures.mutual_information[k], unit);
+        }
+        if let Some(ob) = &objects {
+            x.real("object_VMI", ob.measures.mutual_information[k], unit);
+        }
+        x.maybe_real("instability", Some(instability[k]).filter(|x| x.is_finite()), unit);
+        x.real("visibility", seen[k] / rays_per_viewpoint as f64, None);
+        views.push(x);
+    }
+    r.records("views", views);
+    r.real("channel_seconds", t_channel, Some("s")).real("measures_seconds", t_measures, Some("s"));
+    r.real("seconds", seconds, Some("s"));
+    r.real("memory_estimate_MiB", need as f64 / f64::from(1u32 << 20), None);
+
+    if let Some(dir) = &o.out {
+        let shots = Shots {
+            caster: &caster,
+            dirs: &dirs,
+            distance: o.distance,
+            side: o.image,
+            radius: caster.content_radius(),
+        };
+        shots.write(dir, &m, &best_n.views)?;
+        let files: Vec<String> = outputs.iter().map(|p| p.display().to_string()).collect();
+        r.texts("wrote", files);
+        let json = r.to_json().to_string();
+        crate::output::write(&dir.join(PICTURES[6]), json.as_bytes())?;
+    }
+    Ok(r)
+}

@@ -1,0 +1,144 @@
+//! `itgfx volume --shard i/n --save-shard F` and `--merge F1,F2,...`: a job
+//! array's tasks each ray-cast a range of viewpoints and save their channel
+//! rows `vis(z|v)` (the viewpoint shard file of
+//! `backends/src/viewpoint/shard_file.rs`, with voxels for patches); the
+//! merge concatenates them into the channel one process builds, bit for
+//! bit, and computes every measure from it (they need every row).
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use clap::Args;
+use glam::DVec3;
+use itgfx_backends::viewpoint::ViewpointChannel;
+use itgfx_backends::viewpoint::shard_file::{
+    Fnv, MeshFingerprint, ShardSettings, VOLUME_ESTIMATOR, ViewpointShard, grid_channel, order_shards, shard_range,
+};
+use itgfx_backends::volume::raycast::Caster;
+use itgfx_backends::volume::{VolumeChannelOptions, volume_channel};
+
+use super::VolumeOptions;
+use crate::CliError;
+use crate::progress::Progress;
+use crate::report::Report;
+use crate::shard::{Shard, parse};
+use crate::values::out_path;
+
+/// The shard options of `itgfx volume`.
+#[derive(Debug, Args)]
+pub struct VolumeShardOptions {
+    /// Shard i of n (0-based): ray-cast viewpoints [i*V/n, (i+1)*V/n) only and save their rows (--save-shard)
+    #[arg(long, value_name = "i/n", value_parser = parse, requires = "save_shard", help_heading = "Shards")]
+    pub shard: Option<Shard>,
+    /// Write the shard's channel rows to F (for --merge)
+    #[arg(long, value_name = "F", value_parser = out_path, requires = "shard", help_heading = "Shards")]
+    pub save_shard: Option<PathBuf>,
+    /// Build the channel from the saved shards F1,F2,... of one run (all n of them) instead of ray casting
+    #[arg(long, value_name = "F1,F2,...", value_delimiter = ',', conflicts_with = "shard", help_heading = "Shards")]
+    pub merge: Vec<PathBuf>,
+}
+
+/// Checks the shard options before any work: a shard saves rows only, so
+/// pictures, the iso-surface route and the focus belong to the merge; there
+/// are at most as many shards as viewpoints.
+///
+/// # Errors
+/// One-line usage errors.
+pub(super) fn check(o: &VolumeOptions) -> Result<(), CliError> {
+    let Some(s) = o.shards.shard else { return Ok(()) };
+    if s.count > u64::from(o.viewpoints) {
+        return Err(CliError::usage(format!(
+            "--shard {s}: more shards than the {} viewpoints (give at most {})",
+            o.viewpoints, o.viewpoints
+        )));
+    }
+    let merge_only = [("--out", o.out.is_some()), ("--iso", o.iso.is_some()), ("--focus", o.focus.is_some())];
+    if let Some((flag, _)) = merge_only.iter().find(|f| f.1) {
+        return Err(CliError::usage(format!("{flag}: a --shard run saves channel rows only; give it to --merge")));
+    }
+    if let Some(p) = &o.shards.save_shard {
+        crate::output::check("--save-shard", p)?;
+    }
+    Ok(())
+}
+
+/// The viewpoint range of this run: shard `i/n`'s, or all of them.
+pub(super) fn range(o: &VolumeOptions, viewpoints: usize) -> (usize, usize) {
+    o.shards.shard.map_or((0, viewpoints), |s| {
+        let (a, b) = shard_range(s.index, s.count, viewpoints as u64);
+        (a as usize, b as usize)
+    })
+}
+
+/// What the rows depend on: the volume, transfer function and step (the
+/// fingerprint) and the viewpoints, distance and rays (the settings).
+fn identity(o: &VolumeOptions, caster: &Caster<'_>, viewpoints: usize, rays: u32) -> (MeshFingerprint, ShardSettings) {
+    let mut h = Fnv::default();
+    caster.fingerprint(&mut h);
+    let name = format!("{} --tf {} --step {}", caster.volume.name, o.tf, o.step);
+    let settings = ShardSettings {
+        viewpoints: viewpoints as u64,
+        estimator: VOLUME_ESTIMATOR.into(),
+        distance: o.distance,
+        levels: Vec::new(),
+        resolution: rays,
+        backend: "cpu".into(),
+    };
+    (MeshFingerprint::volume(&name, caster.volume.voxels(), h), settings)
+}
+
+/// Ray-casts shard `s`'s viewpoints, saves their rows to `--save-shard`,
+/// and reports what was saved.
+///
+/// # Errors
+/// Output errors.
+pub(super) fn save(
+    o: &VolumeOptions,
+    s: Shard,
+    caster: &Caster<'_>,
+    dirs: &[DVec3],
+    rays: u32,
+    memory: u64,
+) -> Result<Report, CliError> {
+    let t0 = Instant::now();
+    let (first, end) = range(o, dirs.len());
+    let (scene, settings) = identity(o, caster, dirs.len(), rays);
+    let copts = VolumeChannelOptions { directions: dirs[first..end].to_vec(), distance: o.distance, size: rays };
+    let mut progress = Progress::new();
+    let ch = volume_channel(caster, &copts, &mut |d, t| progress.update(d, t));
+    let shard = ViewpointShard::grid(scene, settings, (s.index, s.count), &ch);
+    let text = shard.to_json().map_err(|e| CliError::usage(format!("--save-shard: {e}")))?;
+    let path = o.shards.save_shard.as_ref().ok_or_else(|| CliError::usage("--shard needs --save-shard F"))?;
+    crate::output::write(path, text.as_bytes())?;
+    let mut r = Report::new();
+    r.text("volume", caster.volume.name.clone()).text("shard", s.to_string());
+    r.count("first_viewpoint", first as u64).count("end_viewpoint", end as u64);
+    r.count("viewpoints", dirs.len() as u64).count("shard_viewpoints", (end - first) as u64);
+    r.count("channel_entries", ch.patch.len() as u64);
+    r.text("saved", path.display().to_string()).count("bytes", text.len() as u64);
+    r.real("memory_estimate_MiB", memory as f64 / f64::from(1u32 << 20), None);
+    r.real("seconds", t0.elapsed().as_secs_f64(), Some("s"));
+    Ok(r)
+}
+
+/// The channel of the run whose shards are `--merge`d: the one-process
+/// channel, bit for bit.
+///
+/// # Errors
+/// Unreadable, foreign, duplicate or missing shards: one line.
+pub(super) fn merged(
+    o: &VolumeOptions,
+    caster: &Caster<'_>,
+    dirs: &[DVec3],
+    rays: u32,
+) -> Result<ViewpointChannel, CliError> {
+    let (scene, settings) = identity(o, caster, dirs.len(), rays);
+    let mut named = Vec::with_capacity(o.shards.merge.len());
+    for f in &o.shards.merge {
+        let text = std::fs::read_to_string(f).map_err(|e| CliError::usage(format!("--merge {f:?}: {e}")))?;
+        let s = ViewpointShard::from_json(&text).map_err(|e| CliError::usage(format!("--merge {f:?}: {e}")))?;
+        named.push((format!("{f:?}"), s));
+    }
+    let shards = order_shards(named, &scene, &settings).map_err(CliError::usage)?;
+    Ok(grid_channel(caster.volume.voxels(), &shards, dirs, o.distance, rays))
+}

@@ -45,6 +45,38 @@ pub fn order<T>(
     Ok(slots.into_iter().flatten().map(|(_, s)| s).collect())
 }
 
+/// Reads a shard file's JSON text: checks its `format` name and `version`
+/// first (so a file of another kind or version gets a line saying so, not a
+/// serde message), then parses it whole. `kind` names the file in errors
+/// ("render shard file").
+///
+/// # Errors
+/// One line: not JSON, another format, another version, or a field serde
+/// rejects.
+pub fn read_json<T: serde::de::DeserializeOwned>(
+    text: &str,
+    kind: &str,
+    format: &str,
+    version: u32,
+) -> Result<T, String> {
+    #[derive(serde::Deserialize)]
+    struct Head {
+        format: Option<String>,
+        version: Option<u32>,
+    }
+    let head: Head = serde_json::from_str(text).map_err(|_| format!("not a {kind} (JSON)"))?;
+    if head.format.as_deref() != Some(format) {
+        return Err(format!("not a {kind} (format {:?})", head.format.unwrap_or_default()));
+    }
+    if head.version != Some(version) {
+        return Err(format!(
+            "{kind} version {}: this itgfx reads version {version}",
+            head.version.map_or("none".into(), |v| v.to_string())
+        ));
+    }
+    serde_json::from_str(text).map_err(|e| format!("{kind}: {e}"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

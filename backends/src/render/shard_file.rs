@@ -157,22 +157,7 @@ impl RenderShard {
     /// # Errors
     /// One line naming what is wrong.
     pub fn from_json(text: &str) -> Result<Self, String> {
-        #[derive(Deserialize)]
-        struct Head {
-            format: Option<String>,
-            version: Option<u32>,
-        }
-        let head: Head = serde_json::from_str(text).map_err(|_| "not a render shard file (JSON)".to_string())?;
-        if head.format.as_deref() != Some(FORMAT_NAME) {
-            return Err(format!("not a render shard file (format {:?})", head.format.unwrap_or_default()));
-        }
-        if head.version != Some(FORMAT_VERSION) {
-            return Err(format!(
-                "render shard file version {}: this itgfx reads version {FORMAT_VERSION}",
-                head.version.map_or("none".into(), |v| v.to_string())
-            ));
-        }
-        let s: Self = serde_json::from_str(text).map_err(|e| format!("render shard file: {e}"))?;
+        let s: Self = crate::shards::read_json(text, "render shard file", FORMAT_NAME, FORMAT_VERSION)?;
         s.validate()?;
         Ok(s)
     }

@@ -34,6 +34,7 @@ pub mod preview;
 pub mod radiosity;
 pub mod render;
 pub mod scene;
+pub mod shards;
 pub mod simplify;
 pub mod solids;
 pub mod tracer;

@@ -1,34 +1,12 @@
 //! `itgfx render` and `itgfx compare` end to end: small images (≤ 32², ≤ 16 spp).
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn itgfx(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_itgfx")).args(args).output().expect("run itgfx")
-}
+mod common;
+use common::{fails, itgfx, json, s};
 
 fn temp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("itgfx-render-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn json(out: &Output) -> serde_json::Value {
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    serde_json::from_slice(&out.stdout).unwrap()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-fn fails(args: &[&str], needle: &str) {
-    let out = itgfx(args);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
-    assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: one line: {err}");
-    assert!(err.contains(needle), "{args:?}: {err:?} lacks {needle:?}");
+    common::temp("render", name)
 }
 
 /// A closed cube seen from inside, every face diffuse with albedo `a` and

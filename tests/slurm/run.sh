@@ -80,6 +80,19 @@ cmp -s <(strip "$OUT/volume.json") <(strip "$T/volume-single.json") ||
     fail "volume: merged shards differ from the single run"
 say "volume: merged == single run, bit for bit ($(grep -o '"I_VZ":[^,]*' "$OUT/volume.json"))"
 
+# render: 4 shards (pixel rows) of a tuned adaptive run and of the supersampler; the merged EXR is the single run's.
+for sampler in hl-sqrt es; do
+    export RSCENE=mirror-room:1 RENDER_ARGS="--size 24x20 --spp 16 --sampler $sampler" MERGE_ARGS=
+    rm -rf "$OUT"/render*
+    submit render
+    # shellcheck disable=SC2086
+    "$ITGFX" render "$RSCENE" $RENDER_ARGS --out "$T/render-single" --json > /dev/null
+    cmp -s "$OUT/render/image.exr" "$T/render-single/image.exr" ||
+        fail "render $sampler: the merged EXR differs from the single run's"
+    rm -rf "$T/render-single"
+    say "render $sampler: merged EXR == single run, byte for byte ($(grep -o '"spp_mean":[^,]*' "$OUT/render.json"))"
+done
+
 # A failed shard: the merge job never runs (afterok) and is cancelled.
 export SCENE=cube-enclosure:10 LINES=1e6
 ids=$(cd "$T/run" && SHARDS=2 ITGFX=/nonexistent/itgfx "$repo/slurm/submit.sh" complexity) || fail "submit.sh"

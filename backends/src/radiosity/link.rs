@@ -11,7 +11,7 @@
 //! unoccluded factor from `x_k` to the part of `j` in front of it (Lambert's
 //! contour formula), times the visible fraction weighted by the kernel
 //! (`w_k` an unbiased estimate of `a_k` from the ray's direction; see
-//! [`Sampler::evaluate`]). Exact when nothing occludes, consistent when
+//! `Sampler::evaluate`). Exact when nothing occludes, consistent when
 //! something does, never above the unoccluded factor. The plain point-pair
 //! mean `A_j mean_k F(x_k, y_k)` has infinite variance where elements
 //! touch. The oracle is linear in `ρ_i B_j`, so it is evaluated once per

@@ -37,10 +37,14 @@ pub struct View {
     pub height: u32,
     /// Seed of every random draw.
     pub seed: u64,
+    /// The rows `[first, end)` to render (all: `(0, height)`); a shard of a
+    /// run renders a range, and the ranges' rows are the whole run's.
+    pub rows: (u32, u32),
 }
 
-/// A rendered image: mean radiance per pixel (linear RGB, row-major from the
-/// top-left) and the samples each pixel took.
+/// A rendered image (or the rows `view.rows` of one): mean radiance per
+/// pixel (linear RGB, row-major from the top-left) and the samples each
+/// pixel took.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
     /// Width in pixels.
@@ -191,9 +195,11 @@ pub fn render(
     policy: &dyn Policy,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<Frame, BackendError> {
-    let (w, h) = (view.width, view.height);
+    let w = view.width;
+    let (first, end) = view.rows;
+    let h = end - first;
     let done = AtomicU64::new(0);
-    let rows: Vec<Vec<([f64; 3], u32, u32)>> = (0..h)
+    let rows: Vec<Vec<([f64; 3], u32, u32)>> = (first..end)
         .into_par_iter()
         .map(|y| {
             let pixels: Vec<u32> = (y * w..(y + 1) * w).collect();

@@ -20,6 +20,7 @@ pub mod frame;
 pub mod lights;
 pub mod path;
 pub mod room;
+pub mod shard_file;
 pub mod supersample;
 pub mod tree;
 pub mod tune;
@@ -163,7 +164,10 @@ pub struct Rendered {
 /// Renders `scene` seen by `camera` (scene units): checks the camera, tunes
 /// an adaptive sampler's threshold to its budget, then traces. With `maps`,
 /// also the quality and contrast maps of an 8-spp pass (the supersampler's
-/// own oracle pass, so no extra rays for `Sampling::Supersample`).
+/// own oracle pass, so no extra rays for `Sampling::Supersample`). With
+/// `rows = (first, end)`, only those rows are traced (a shard: the frame
+/// holds them alone; thresholds are tuned on the whole image's pilot, and
+/// `es` traces the whole oracle, so every shard decides as the whole run).
 /// `progress` gets (rows done, rows).
 ///
 /// # Errors
@@ -179,11 +183,12 @@ pub fn render(
     seed: u64,
     sampling: &Sampling,
     maps: Option<Oracle>,
+    rows: Option<(u32, u32)>,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<Rendered, RenderError> {
     let camera = views::check_camera(tracer, scene, prepared, camera)?;
     let pt = PathTracer { tracer, prepared, surfaces: &shading.surfaces, lights: &shading.lights, max_depth: 256 };
-    let view = View { camera, width: size.0, height: size.1, seed };
+    let view = View { camera, width: size.0, height: size.1, seed, rows: rows.unwrap_or((0, size.1)) };
     let mut rendered = trace(&pt, &view, sampling, progress)?;
     if let (None, Some(oracle)) = (&rendered.map, maps) {
         rendered.map = Some(supersample::contrast_map(&pt, &view, oracle, &|_, _| {})?);

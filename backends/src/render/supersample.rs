@@ -212,7 +212,9 @@ pub fn allocate(weights: &[f64], total: u64, cap: u32) -> Vec<u32> {
 /// Renders `view` by entropy-based supersampling with an average of `spp`
 /// samples per pixel, none above `max`: the oracle's contrast map, then the
 /// rest of the budget shared by contrast, then the box filter. Returns the
-/// frame and the contrast map. `progress` gets (rows done, rows) of both passes.
+/// frame (of `view.rows`) and the contrast map (of the whole image: the
+/// share of every row depends on every pixel's contrast, so a shard traces
+/// the whole oracle and its own rows' shares). `progress` gets (rows done, rows) of both passes.
 ///
 /// # Errors
 /// Backend failures only.
@@ -226,6 +228,7 @@ pub fn render(
 ) -> Result<(Frame, ContrastMap), BackendError> {
     let h = u64::from(view.height);
     let first = |d: u64, _: u64| progress(d, 2 * h);
+    let mine = u64::from(view.rows.1 - view.rows.0);
     let map = contrast_map(pt, view, oracle, &first)?;
     let pixels = map.measures.len() as u64;
     let extra_total = pixels * u64::from(spp.saturating_sub(ORACLE_SAMPLES));
@@ -233,7 +236,8 @@ pub fn render(
     let extra = allocate(&contrast, extra_total, max.saturating_sub(ORACLE_SAMPLES));
     let w = view.width;
     let done = AtomicU64::new(0);
-    let rows: Vec<Vec<[f64; 3]>> = (0..view.height)
+    let (first_row, end_row) = view.rows;
+    let rows: Vec<Vec<[f64; 3]>> = (first_row..end_row)
         .into_par_iter()
         .map(|y| {
             let batches: Vec<Batch> = (0..w)
@@ -260,14 +264,15 @@ pub fn render(
                 let n = f64::from(ORACLE_SAMPLES + extra[y as usize * w as usize + x]);
                 *c = c.map(|v| v / n);
             }
-            progress(h + done.fetch_add(1, Ordering::Relaxed) + 1, 2 * h);
+            progress(h + (done.fetch_add(1, Ordering::Relaxed) + 1) * h / mine.max(1), 2 * h);
             Ok(row)
         })
         .collect::<Result<_, BackendError>>()?;
-    let samples: Vec<u32> = extra.iter().map(|e| e + ORACLE_SAMPLES).collect();
+    let range = (first_row * w) as usize..(end_row * w) as usize;
+    let samples: Vec<u32> = extra[range].iter().map(|e| e + ORACLE_SAMPLES).collect();
     let frame = Frame {
         width: view.width,
-        height: view.height,
+        height: end_row - first_row,
         rgb: rows.into_iter().flatten().collect(),
         pilot_samples: vec![0; samples.len()],
         samples,

@@ -386,39 +386,19 @@ pub fn order_shards(
     scene: &MeshFingerprint,
     settings: &ShardSettings,
 ) -> Result<Vec<ViewpointShard>, String> {
-    let Some(n) = named.first().map(|s| s.1.shards) else {
-        return Err("--merge: no shard files".into());
-    };
-    let mut slots: Vec<Option<(String, ViewpointShard)>> = Vec::new();
-    for (name, s) in named {
-        if s.scene != *scene {
-            return Err(format!(
-                "{name}: a shard of another scene ({:?}, {} patches, hash {}), not of {:?} ({} patches, hash {})",
-                s.scene.name, s.scene.patches, s.scene.hash, scene.name, scene.patches, scene.hash
-            ));
-        }
-        if let Some(d) = settings.difference(&s.settings) {
-            return Err(format!("{name}: a shard of another run ({d})"));
-        }
-        if s.shards != n {
-            return Err(format!("{name}: shard {}/{} among shards of {n}", s.shard, s.shards));
-        }
-        if slots.is_empty() {
-            slots.resize_with(n as usize, || None);
-        }
-        let i = s.shard as usize;
-        if let Some((other, _)) = &slots[i] {
-            return Err(format!("{name} and {other} are both shard {i}/{n}"));
-        }
-        slots[i] = Some((name, s));
-    }
-    let missing: Vec<String> =
-        slots.iter().enumerate().filter(|(_, s)| s.is_none()).map(|(i, _)| format!("{i}/{n}")).collect();
-    if !missing.is_empty() {
-        let more = if missing.len() > 8 { format!(" and {} more", missing.len() - 8) } else { String::new() };
-        return Err(format!("--merge: shard {}{more} missing", missing[..missing.len().min(8)].join(", ")));
-    }
-    Ok(slots.into_iter().flatten().map(|(_, s)| s).collect())
+    crate::shards::order(
+        named,
+        |s| (s.shard, s.shards),
+        |s| {
+            if s.scene != *scene {
+                return Some(format!(
+                    "a shard of another scene ({:?}, {} patches, hash {}), not of {:?} ({} patches, hash {})",
+                    s.scene.name, s.scene.patches, s.scene.hash, scene.name, scene.patches, scene.hash
+                ));
+            }
+            settings.difference(&s.settings).map(|d| format!("a shard of another run ({d})"))
+        },
+    )
 }
 
 /// The ray-grid channel of shards in order (from [`order_shards`]) over

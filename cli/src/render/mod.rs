@@ -5,8 +5,9 @@ mod export_scene;
 pub mod images;
 pub mod maps;
 mod metrics;
+mod shard;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::Instant;
 
@@ -15,7 +16,7 @@ use glam::DVec3;
 use itgfx_backends::camera::Camera;
 use itgfx_backends::open;
 use itgfx_backends::render::{
-    self, Criterion, Oracle, Sampling, Shading, Supersampling, TreeContrast, criteria, supersample, tree, views,
+    self, Criterion, Frame, Oracle, Sampling, Shading, Supersampling, TreeContrast, criteria, supersample, tree, views,
 };
 use itgfx_backends::tracer::Prepared;
 
@@ -102,6 +103,9 @@ pub struct RenderOptions {
     #[command(flatten)]
     #[allow(missing_docs)]
     pub tracing: Tracing,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub shards: shard::RenderShardOptions,
     #[command(flatten)]
     #[allow(missing_docs)]
     pub common: Common,
@@ -220,6 +224,9 @@ fn out_dir(o: &RenderOptions) -> Result<(PathBuf, bool), CliError> {
 /// # Errors
 /// Usage, scene, camera and backend errors, one line each.
 pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
+    if !o.shards.merge.is_empty() {
+        return shard::run_merge(o);
+    }
     let spec =
         o.scene.clone().ok_or_else(|| CliError::usage("give a scene: cornell-box, mirror-room or an .obj file"))?;
     if let Some(r) = &o.reference
@@ -264,9 +271,13 @@ pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
             criteria::BATCH
         )));
     }
+    shard::check(o)?;
     memory_check(o)?;
+    if o.shards.shard.is_some() {
+        return render_into(o, &spec, None);
+    }
     let (dir, made) = out_dir(o)?;
-    let result = render_into(o, &spec, &dir);
+    let result = render_into(o, &spec, Some(&dir));
     if result.is_err() && made {
         // Leave nothing behind: the directory made for --out goes again (only if still empty).
         let _ = std::fs::remove_dir(&dir);
@@ -274,20 +285,65 @@ pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
     result
 }
 
-fn render_into(o: &RenderOptions, spec: &str, dir: &std::path::Path) -> Result<Report, CliError> {
-    let files = [dir.join("image.exr"), dir.join("image.png"), dir.join("density.png")];
-    for f in files.iter().chain(&if o.maps { maps::files(dir) } else { Vec::new() }) {
-        crate::output::check("--out", f)?;
-    }
+/// The image files of a render in `dir`.
+fn image_files(dir: &Path) -> [PathBuf; 3] {
+    [dir.join("image.exr"), dir.join("image.png"), dir.join("density.png")]
+}
+
+/// Reads `--reference` and checks its size against the render's.
+fn read_reference(o: &RenderOptions, size: (u32, u32)) -> Result<Option<Radiance>, CliError> {
     let reference = o.reference.as_deref().map(images::read_exr).transpose()?;
     if let Some(r) = &reference
-        && (r.width, r.height) != (o.size.0 as usize, o.size.1 as usize)
+        && (r.width, r.height) != (size.0 as usize, size.1 as usize)
     {
         return Err(CliError::usage(format!(
             "--reference is {} x {}, the render {} x {}",
-            r.width, r.height, o.size.0, o.size.1
+            r.width, r.height, size.0, size.1
         )));
     }
+    Ok(reference)
+}
+
+/// Writes `frame`'s EXR, PNG and density map into `dir`; returns the
+/// image as the EXR holds it (f32 values) and the files written.
+fn write_frame(frame: &Frame, exposure: f64, dir: &Path) -> Result<(Radiance, Vec<PathBuf>), CliError> {
+    let files = image_files(dir);
+    // The values the EXR holds (f32), so --reference and compare agree.
+    let rgb = frame.rgb.iter().map(|c| c.map(|v| f64::from(v as f32))).collect();
+    let image = Radiance { width: frame.width as usize, height: frame.height as usize, rgb };
+    images::write_exr(&image, &files[0])?;
+    images::write_display_png(&image, exposure, &files[1])?;
+    images::write_density_png(&frame.samples, image.width, image.height, &files[2])?;
+    Ok((image, files.to_vec()))
+}
+
+/// The samples spent, the image's mean and the metrics against `reference`.
+fn frame_stats(
+    r: &mut Report,
+    frame: &Frame,
+    image: Option<&Radiance>,
+    reference: Option<&Radiance>,
+    exposure: f64,
+) -> Result<(), CliError> {
+    r.real("spp_mean", frame.mean_samples(), None)
+        .real("spp_traced_mean", frame.mean_traced(), None)
+        .count("spp_min", u64::from(frame.samples.iter().copied().min().unwrap_or(0)))
+        .count("spp_max", u64::from(frame.samples.iter().copied().max().unwrap_or(0)));
+    let mean = metrics::mean_rgb(image.map_or(&frame.rgb, |i| &i.rgb));
+    r.reals("mean_radiance", mean.to_vec()).real("mean_luminance", itgfx_core::pixel::luminance(mean), None);
+    if let (Some(image), Some(reference)) = (image, reference) {
+        compare_images(image, reference, exposure)?.report(r);
+    }
+    Ok(())
+}
+
+fn render_into(o: &RenderOptions, spec: &str, dir: Option<&Path>) -> Result<Report, CliError> {
+    if let Some(dir) = dir {
+        for f in image_files(dir).iter().chain(&if o.maps { maps::files(dir) } else { Vec::new() }) {
+            crate::output::check("--out", f)?;
+        }
+    }
+    let reference = read_reference(o, o.size)?;
     let scene = load_scene(spec, 1)?;
     let prepared = Prepared::new(&scene);
     let shading = Shading::new(&scene, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
@@ -329,29 +385,35 @@ fn render_into(o: &RenderOptions, spec: &str, dir: &std::path::Path) -> Result<R
         o.seed,
         &sampling,
         o.maps.then_some(Oracle { delta, binary: o.binary_contrast }),
+        o.shards.shard.map(|s| shard::rows(s, o.size.1)),
         &tick,
     )
     .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
     let frame = &rendered.frame;
     let seconds = t0.elapsed().as_secs_f64();
-    // The values the EXR holds (f32), so --reference and compare agree.
-    let rgb = frame.rgb.iter().map(|c| c.map(|v| f64::from(v as f32))).collect();
-    let image = Radiance { width: frame.width as usize, height: frame.height as usize, rgb };
-    images::write_exr(&image, &files[0])?;
-    images::write_display_png(&image, o.exposure, &files[1])?;
-    images::write_density_png(&frame.samples, image.width, image.height, &files[2])?;
-    let mut wrote: Vec<PathBuf> = files.to_vec();
-    if o.maps
-        && let Some(map) = &rendered.map
-    {
-        maps::write_maps(map, dir)?;
-        wrote.extend(maps::files(dir));
-    }
-    if o.export_scene {
-        wrote.extend(export_scene::export_scene(&scene, &camera, o.size, dir)?);
-    }
-
     let mut r = Report::new();
+    let (image, wrote) = match (dir, o.shards.shard, &o.shards.save_shard) {
+        (_, Some(s), Some(path)) => {
+            let st = shard::settings(o, &sampling, delta, &camera, tracer.name());
+            shard::save(path, &scene.name, &prepared, st, s, rendered.threshold, frame, &mut r)?;
+            (None, vec![path.clone()])
+        }
+        (Some(dir), _, _) => {
+            let (image, mut wrote) = write_frame(frame, o.exposure, dir)?;
+            if o.maps
+                && let Some(map) = &rendered.map
+            {
+                maps::write_maps(map, dir)?;
+                wrote.extend(maps::files(dir));
+            }
+            if o.export_scene {
+                wrote.extend(export_scene::export_scene(&scene, &camera, o.size, dir)?);
+            }
+            (Some(image), wrote)
+        }
+        _ => return Err(CliError::usage("give --out DIR for the images")),
+    };
+
     r.text("scene", scene.name.clone()).text("backend", tracer.name()).text("sampler", o.sampler.clone());
     r.count("width", u64::from(frame.width)).count("height", u64::from(frame.height)).count("seed", o.seed);
     r.reals("camera_eye", camera.eye.to_array().to_vec())
@@ -380,17 +442,8 @@ fn render_into(o: &RenderOptions, spec: &str, dir: &std::path::Path) -> Result<R
             r.count("pilot_pixels", u64::from(t.pilot_pixels)).real("pilot_spp_mean", t.pilot_mean, None);
         }
     }
-    r.count("spp_requested", u64::from(o.spp))
-        .real("spp_mean", frame.mean_samples(), None)
-        .real("spp_traced_mean", frame.mean_traced(), None)
-        .count("spp_min", u64::from(frame.samples.iter().copied().min().unwrap_or(0)))
-        .count("spp_max", u64::from(frame.samples.iter().copied().max().unwrap_or(0)));
-    let mean = metrics::mean_rgb(&image.rgb);
-    r.reals("mean_radiance", mean.to_vec()).real("mean_luminance", itgfx_core::pixel::luminance(mean), None);
-    if let Some(reference) = &reference {
-        let m = compare_images(&image, reference, o.exposure)?;
-        m.report(&mut r);
-    }
+    r.count("spp_requested", u64::from(o.spp));
+    frame_stats(&mut r, frame, image.as_ref(), reference.as_ref(), o.exposure)?;
     let traced: f64 = frame.samples.iter().chain(&frame.pilot_samples).map(|&s| f64::from(s)).sum();
     r.real("seconds", seconds, Some("s")).real("Msamples_per_s", traced / seconds.max(1e-9) / 1e6, None);
     r.texts("wrote", wrote.iter().map(|p| p.display().to_string()).collect());

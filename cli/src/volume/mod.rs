@@ -1,9 +1,9 @@
 //! `itgfx volume VOLUME`: view selection for volume data (Part VI), the
 //! viewpoint channel over voxels.
 //!
-//! * [`input`]: the volume, the transfer function, the focus, option parsers;
-//! * [`routes`]: the object channel and the iso-surface route;
-//! * [`pictures`]: the pictures of `--out DIR`;
+//! * `input`: the volume, the transfer function, the focus, option parsers;
+//! * `routes`: the object channel and the iso-surface route;
+//! * `pictures`: the pictures of `--out DIR`;
 //! * [`shard`]: `--shard i/n --save-shard F` and `--merge`.
 
 mod input;

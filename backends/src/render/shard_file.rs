@@ -1,0 +1,296 @@
+//! The render shard file: the pixel rows `[⌊i·H/n⌋, ⌊(i+1)·H/n⌋)` of a
+//! run, saved as versioned JSON (serde), so that the shards of one run
+//! (`--shard i/n`, one per job-array task) merge into the frame the single
+//! run renders, bit for bit.
+//!
+//! Rows, not sample ranges: a pixel's value is the mean of its samples
+//! summed in index order, and its samples are a pure function of (seed,
+//! pixel), so whole rows merge exactly for every sampler (partial sums of
+//! sample ranges would round differently). Adaptive thresholds are tuned
+//! on the whole image's pilot grid in every shard (the same threshold, which
+//! the merge checks), and `es` traces the whole 8-spp oracle in every shard
+//! (its shares depend on every pixel's contrast).
+//!
+//! Version 1 holds the format name and version, the scene's fingerprint
+//! ([`MeshFingerprint`]), the settings the pixels depend on
+//! ([`RenderSettings`]), the shard `i/n`, its rows, the threshold used, and
+//! per pixel the mean radiance (f64, written so it reads back exactly), the
+//! samples in the image and the pilot samples. Everything is checked on
+//! reading; foreign, duplicate and missing shards are refused with one line
+//! (see [`crate::shards::order`]).
+
+use serde::{Deserialize, Serialize};
+
+use super::frame::Frame;
+pub use crate::viewpoint::shard_file::MeshFingerprint;
+
+/// The `format` field of a render shard file.
+pub const FORMAT_NAME: &str = "itgfx-render-shard";
+/// The version written and read.
+pub const FORMAT_VERSION: u32 = 1;
+
+/// The settings a shard's pixels depend on: every shard of a run must agree on all of them.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderSettings {
+    /// `--sampler`.
+    pub sampler: String,
+    /// `--spp`.
+    pub spp: u32,
+    /// Cap on a pixel's samples (adaptive samplers and `es`; 0 otherwise).
+    pub max_spp: u32,
+    /// `--threshold` as given (`None`: tuned).
+    pub threshold: Option<f64>,
+    /// `--unbiased`.
+    pub unbiased: bool,
+    /// `--delta`.
+    pub delta: f64,
+    /// `--binary-contrast`.
+    pub binary_contrast: bool,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// `--seed`.
+    pub seed: u64,
+    /// The camera: eye, forward, up (normalised coordinates) and vertical field of view (radians).
+    pub camera: [f64; 10],
+    /// The tracing backend's name.
+    pub backend: String,
+}
+
+impl RenderSettings {
+    /// The first setting that differs from `other`'s, as `name A here, B there`.
+    #[must_use]
+    pub fn difference(&self, other: &Self) -> Option<String> {
+        let d = |name: &str, a: String, b: String| (a != b).then(|| format!("{name} {a} here, {b} there"));
+        d("--sampler", self.sampler.clone(), other.sampler.clone())
+            .or_else(|| d("--spp", self.spp.to_string(), other.spp.to_string()))
+            .or_else(|| d("--max-spp", self.max_spp.to_string(), other.max_spp.to_string()))
+            .or_else(|| d("--threshold", format!("{:?}", self.threshold), format!("{:?}", other.threshold)))
+            .or_else(|| d("--unbiased", self.unbiased.to_string(), other.unbiased.to_string()))
+            .or_else(|| d("--delta", format!("{:?}", self.delta), format!("{:?}", other.delta)))
+            .or_else(|| d("--binary-contrast", self.binary_contrast.to_string(), other.binary_contrast.to_string()))
+            .or_else(|| {
+                d("--size", format!("{}x{}", self.width, self.height), format!("{}x{}", other.width, other.height))
+            })
+            .or_else(|| d("--seed", self.seed.to_string(), other.seed.to_string()))
+            .or_else(|| d("--camera", format!("{:?}", self.camera), format!("{:?}", other.camera)))
+            .or_else(|| d("--backend", self.backend.clone(), other.backend.clone()))
+    }
+}
+
+/// A shard: rows `first_row..end_row` of a run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderShard {
+    /// [`FORMAT_NAME`].
+    pub format: String,
+    /// [`FORMAT_VERSION`].
+    pub version: u32,
+    /// The scene.
+    pub scene: MeshFingerprint,
+    /// The settings.
+    pub settings: RenderSettings,
+    /// `i` of `i/n`.
+    pub shard: u64,
+    /// `n` of `i/n`.
+    pub shards: u64,
+    /// First row.
+    pub first_row: u32,
+    /// One past the last row.
+    pub end_row: u32,
+    /// The threshold the sampler used (tuned or given), if it has one.
+    pub threshold_used: Option<f64>,
+    /// Mean radiance of each pixel of the rows, row-major.
+    pub rgb: Vec<[f64; 3]>,
+    /// Samples in each pixel's value.
+    pub samples: Vec<u32>,
+    /// Decision-only samples of each pixel (`--unbiased`).
+    pub pilot_samples: Vec<u32>,
+}
+
+/// Rows `[⌊i·H/n⌋, ⌊(i+1)·H/n⌋)` of shard `i` of `n`.
+#[must_use]
+pub fn shard_rows(i: u64, n: u64, height: u32) -> (u32, u32) {
+    let at = |k: u64| (u128::from(k) * u128::from(height) / u128::from(n.max(1))) as u32;
+    (at(i), at(i + 1))
+}
+
+impl RenderShard {
+    /// The shard `(i, n)` of `frame` (which holds its rows only).
+    #[must_use]
+    pub fn new(
+        scene: MeshFingerprint,
+        settings: RenderSettings,
+        (shard, shards): (u64, u64),
+        threshold_used: Option<f64>,
+        frame: &Frame,
+    ) -> Self {
+        let (first_row, end_row) = shard_rows(shard, shards, settings.height);
+        Self {
+            format: FORMAT_NAME.into(),
+            version: FORMAT_VERSION,
+            scene,
+            settings,
+            shard,
+            shards,
+            first_row,
+            end_row,
+            threshold_used,
+            rgb: frame.rgb.clone(),
+            samples: frame.samples.clone(),
+            pilot_samples: frame.pilot_samples.clone(),
+        }
+    }
+
+    /// The file's text.
+    ///
+    /// # Errors
+    /// Serialisation errors (none for finite values).
+    pub fn to_json(&self) -> Result<String, String> {
+        serde_json::to_string(self).map_err(|e| e.to_string())
+    }
+
+    /// Reads and checks a shard file's text.
+    ///
+    /// # Errors
+    /// One line naming what is wrong.
+    pub fn from_json(text: &str) -> Result<Self, String> {
+        #[derive(Deserialize)]
+        struct Head {
+            format: Option<String>,
+            version: Option<u32>,
+        }
+        let head: Head = serde_json::from_str(text).map_err(|_| "not a render shard file (JSON)".to_string())?;
+        if head.format.as_deref() != Some(FORMAT_NAME) {
+            return Err(format!("not a render shard file (format {:?})", head.format.unwrap_or_default()));
+        }
+        if head.version != Some(FORMAT_VERSION) {
+            return Err(format!(
+                "render shard file version {}: this itgfx reads version {FORMAT_VERSION}",
+                head.version.map_or("none".into(), |v| v.to_string())
+            ));
+        }
+        let s: Self = serde_json::from_str(text).map_err(|e| format!("render shard file: {e}"))?;
+        s.validate()?;
+        Ok(s)
+    }
+
+    /// Checks the invariants the merge relies on.
+    ///
+    /// # Errors
+    /// One line naming the first violation.
+    pub fn validate(&self) -> Result<(), String> {
+        let st = &self.settings;
+        if st.width == 0 || st.height == 0 {
+            return Err("an empty image".into());
+        }
+        if self.shards == 0 || self.shard >= self.shards || self.shards > u64::from(st.height) {
+            return Err(format!("shard {}/{} of {} rows is not a shard", self.shard, self.shards, st.height));
+        }
+        if (self.first_row, self.end_row) != shard_rows(self.shard, self.shards, st.height) {
+            return Err(format!("shard {}/{} holds the wrong rows", self.shard, self.shards));
+        }
+        let pixels = u64::from(self.end_row - self.first_row) * u64::from(st.width);
+        if [self.rgb.len(), self.samples.len(), self.pilot_samples.len()].iter().any(|&l| l as u64 != pixels) {
+            return Err(format!("not {pixels} pixels for rows {}..{}", self.first_row, self.end_row));
+        }
+        if !self.rgb.iter().flatten().all(|v| v.is_finite() && *v >= 0.0) {
+            return Err("a pixel's radiance is not finite and non-negative".into());
+        }
+        Ok(())
+    }
+}
+
+/// The frame of the shards of one run (in any order): rows concatenated —
+/// the frame the single run renders — and the threshold they used.
+///
+/// # Errors
+/// One line: foreign shards (another scene or settings than the first, or
+/// another threshold), duplicates, missing ones.
+pub fn merge(named: Vec<(String, RenderShard)>) -> Result<(RenderShard, Frame), String> {
+    let first = named.first().map(|s| s.1.clone()).ok_or_else(|| "--merge: no shard files".to_string())?;
+    let foreign = |s: &RenderShard| {
+        if s.scene != first.scene {
+            return Some(format!(
+                "a shard of another scene ({:?}, hash {}), not of {:?} (hash {})",
+                s.scene.name, s.scene.hash, first.scene.name, first.scene.hash
+            ));
+        }
+        if let Some(d) = first.settings.difference(&s.settings) {
+            return Some(format!("a shard of another run ({d})"));
+        }
+        (s.threshold_used != first.threshold_used)
+            .then(|| format!("a shard that used threshold {:?}, not {:?}", s.threshold_used, first.threshold_used))
+    };
+    let shards = crate::shards::order(named, |s| (s.shard, s.shards), foreign)?;
+    let mut frame = Frame {
+        width: first.settings.width,
+        height: first.settings.height,
+        rgb: Vec::new(),
+        samples: Vec::new(),
+        pilot_samples: Vec::new(),
+    };
+    for s in shards {
+        frame.rgb.extend_from_slice(&s.rgb);
+        frame.samples.extend_from_slice(&s.samples);
+        frame.pilot_samples.extend_from_slice(&s.pilot_samples);
+    }
+    Ok((first, frame))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn shard(i: u64, n: u64, seed: u64) -> RenderShard {
+        let settings = RenderSettings {
+            sampler: "uniform".into(),
+            spp: 4,
+            max_spp: 0,
+            threshold: None,
+            unbiased: false,
+            delta: 1.0,
+            binary_contrast: false,
+            width: 2,
+            height: 5,
+            seed,
+            camera: [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 1.0],
+            backend: "cpu".into(),
+        };
+        let (a, b) = shard_rows(i, n, 5);
+        let px = ((b - a) * 2) as usize;
+        let frame = Frame {
+            width: 2,
+            height: b - a,
+            rgb: (0..px).map(|k| [f64::from(a) + 0.1 * k as f64, 0.3, 1.0 / 3.0]).collect(),
+            samples: vec![4; px],
+            pilot_samples: vec![0; px],
+        };
+        let scene = MeshFingerprint { name: "s".into(), patches: 1, triangles: 1, hash: "0".into() };
+        RenderShard::new(scene, settings, (i, n), None, &frame)
+    }
+
+    #[test]
+    fn round_trip_and_merge() {
+        let parts: Vec<RenderShard> = (0..3).map(|i| shard(i, 3, 1)).collect();
+        let back: Vec<(String, RenderShard)> = parts
+            .iter()
+            .rev()
+            .map(|s| (format!("f{}", s.shard), RenderShard::from_json(&s.to_json().unwrap()).unwrap()))
+            .collect();
+        assert_eq!(back[0].1, parts[2], "floats read back exactly");
+        let (_, frame) = merge(back).unwrap();
+        assert_eq!(frame.height, 5);
+        let want: Vec<[f64; 3]> = parts.iter().flat_map(|s| s.rgb.clone()).collect();
+        assert_eq!(frame.rgb, want);
+        let err = merge(vec![("a".into(), shard(0, 3, 1)), ("b".into(), shard(1, 3, 2))]).unwrap_err();
+        assert_eq!(err, "b: a shard of another run (--seed 1 here, 2 there)");
+        assert!(merge(vec![("a".into(), shard(0, 3, 1))]).unwrap_err().contains("1/3, 2/3 missing"));
+        let mut bad = shard(1, 3, 1);
+        bad.first_row = 0;
+        assert!(RenderShard::from_json(&bad.to_json().unwrap()).unwrap_err().contains("wrong rows"));
+        assert!(RenderShard::from_json("{\"format\":\"itgfx-counts\"}").unwrap_err().contains("not a render shard"));
+    }
+}

@@ -1,0 +1,177 @@
+//! `itgfx render SCENE ... --shard i/n --save-shard F` and
+//! `itgfx render --merge F1,F2,... --out DIR`: a job array's tasks each
+//! render a range of pixel rows and save them; the merge concatenates the
+//! rows into the single run's frame (bit for bit, every sampler) and writes
+//! its images. See `backends/src/render/shard_file.rs` for why rows.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use clap::Args;
+use itgfx_backends::camera::Camera;
+use itgfx_backends::render::shard_file::{MeshFingerprint, RenderSettings, RenderShard, merge, shard_rows};
+use itgfx_backends::render::{Frame, Sampling};
+use itgfx_backends::tracer::Prepared;
+
+use super::RenderOptions;
+use crate::CliError;
+use crate::report::Report;
+use crate::shard::{Shard, parse};
+use crate::values::out_path;
+
+/// Largest shard file read.
+const MAX_SHARD_BYTES: u64 = 4 << 30;
+
+/// The shard options of `itgfx render`.
+#[derive(Debug, Args)]
+pub struct RenderShardOptions {
+    /// Shard i of n (0-based): render pixel rows [i*H/n, (i+1)*H/n) only and save them (--save-shard)
+    #[arg(long, value_name = "i/n", value_parser = parse, requires = "save_shard", help_heading = "Shards")]
+    pub shard: Option<Shard>,
+    /// Write the shard's pixels to F (for --merge)
+    #[arg(long, value_name = "F", value_parser = out_path, requires = "shard", help_heading = "Shards")]
+    pub save_shard: Option<PathBuf>,
+    /// Write the images of the saved shards F1,F2,... (all n of one run) to --out instead of
+    /// rendering; no SCENE or sampler options (the shards carry them)
+    #[arg(long, value_name = "F1,F2,...", value_delimiter = ',', num_args = 1..,
+          conflicts_with_all = ["shard", "scene", "sampler", "spp", "size", "seed", "camera", "threshold", "unbiased",
+                                "delta", "binary_contrast", "maps", "max_spp", "export_scene"],
+          help_heading = "Shards")]
+    pub merge: Vec<PathBuf>,
+}
+
+/// Checks the shard options before any work.
+///
+/// # Errors
+/// One-line usage errors.
+pub fn check(o: &RenderOptions) -> Result<(), CliError> {
+    if let Some(s) = o.shards.shard {
+        if s.count > u64::from(o.size.1) {
+            return Err(CliError::usage(format!(
+                "--shard {s}: more shards than the {} rows of the image (give at most {})",
+                o.size.1, o.size.1
+            )));
+        }
+        if o.out.is_some() || o.reference.is_some() || o.maps || o.export_scene {
+            return Err(CliError::usage(
+                "--shard saves pixel rows only: give --out, --reference, --maps, --export-scene to the --merge run (maps: a single run)",
+            ));
+        }
+    }
+    if let Some(p) = &o.shards.save_shard {
+        crate::output::check("--save-shard", p)?;
+    }
+    Ok(())
+}
+
+/// The settings a shard's pixels depend on.
+#[must_use]
+pub fn settings(o: &RenderOptions, sampling: &Sampling, delta: f64, camera: &Camera, backend: &str) -> RenderSettings {
+    let max_spp = match sampling {
+        Sampling::Adaptive { max, .. } => *max,
+        Sampling::Supersample(es) => es.max,
+        _ => 0,
+    };
+    let (e, f, u) = (camera.eye, camera.forward, camera.up);
+    RenderSettings {
+        sampler: o.sampler.clone(),
+        spp: o.spp,
+        max_spp,
+        threshold: o.threshold,
+        unbiased: o.unbiased,
+        delta,
+        binary_contrast: o.binary_contrast,
+        width: o.size.0,
+        height: o.size.1,
+        seed: o.seed,
+        camera: [e.x, e.y, e.z, f.x, f.y, f.z, u.x, u.y, u.z, camera.fov_y],
+        backend: backend.to_string(),
+    }
+}
+
+/// The rows shard `s` renders.
+#[must_use]
+pub fn rows(s: Shard, height: u32) -> (u32, u32) {
+    shard_rows(s.index, s.count, height)
+}
+
+/// Saves a shard's rendered rows to `--save-shard`.
+///
+/// # Errors
+/// Output errors.
+#[allow(clippy::too_many_arguments)]
+pub fn save(
+    path: &Path,
+    name: &str,
+    prepared: &Prepared,
+    st: RenderSettings,
+    s: Shard,
+    threshold: Option<f64>,
+    frame: &Frame,
+    r: &mut Report,
+) -> Result<(), CliError> {
+    let shard = RenderShard::new(MeshFingerprint::of(name, prepared), st, (s.index, s.count), threshold, frame);
+    let text = shard.to_json().map_err(|e| CliError::usage(format!("--save-shard: {e}")))?;
+    crate::output::write(path, text.as_bytes())?;
+    r.text("shard", s.to_string()).count("first_row", u64::from(shard.first_row));
+    r.count("end_row", u64::from(shard.end_row));
+    r.text("saved", path.display().to_string()).count("bytes", text.len() as u64);
+    Ok(())
+}
+
+/// Reads and merges `--merge`'s shards: the run's settings (from the first
+/// shard) and the whole frame.
+///
+/// # Errors
+/// Unreadable, foreign, duplicate or missing shards: one line.
+pub fn merged(files: &[PathBuf]) -> Result<(RenderShard, Frame, f64), CliError> {
+    let t0 = Instant::now();
+    let mut named = Vec::with_capacity(files.len());
+    for f in files {
+        let bytes = itgfx_backends::obj::read_limited(f, MAX_SHARD_BYTES)
+            .map_err(|e| CliError::usage(format!("--merge {f:?}: {e}")))?;
+        let text = String::from_utf8(bytes).map_err(|_| CliError::usage(format!("--merge {f:?}: not UTF-8 text")))?;
+        let s = RenderShard::from_json(&text).map_err(|e| CliError::usage(format!("--merge {f:?}: {e}")))?;
+        named.push((format!("{f:?}"), s));
+    }
+    let (first, frame) = merge(named).map_err(CliError::usage)?;
+    Ok((first, frame, t0.elapsed().as_secs_f64()))
+}
+
+/// Runs `itgfx render --merge F1,F2,... --out DIR`: the images of the
+/// merged shards, and the report a single run gives (but the tuning pilot).
+///
+/// # Errors
+/// Shard errors, output errors, one line each.
+pub fn run_merge(o: &RenderOptions) -> Result<Report, CliError> {
+    if let Some(r) = &o.reference
+        && !r.is_file()
+    {
+        return Err(CliError::usage(format!("--reference {r:?}: not a regular file")));
+    }
+    let (dir, made) = super::out_dir(o)?;
+    let result = merge_into(o, &dir);
+    if result.is_err() && made {
+        let _ = std::fs::remove_dir(&dir);
+    }
+    result
+}
+
+fn merge_into(o: &RenderOptions, dir: &Path) -> Result<Report, CliError> {
+    for f in super::image_files(dir) {
+        crate::output::check("--out", &f)?;
+    }
+    let (first, frame, seconds) = merged(&o.shards.merge)?;
+    let st = &first.settings;
+    let reference = super::read_reference(o, (st.width, st.height))?;
+    let (image, wrote) = super::write_frame(&frame, o.exposure, dir)?;
+    let mut r = Report::new();
+    r.text("scene", first.scene.name.clone()).text("backend", st.backend.clone()).text("sampler", st.sampler.clone());
+    r.count("width", u64::from(st.width)).count("height", u64::from(st.height)).count("seed", st.seed);
+    r.count("shards", first.shards).maybe_real("threshold", first.threshold_used, None);
+    r.count("spp_requested", u64::from(st.spp));
+    super::frame_stats(&mut r, &frame, Some(&image), reference.as_ref(), o.exposure)?;
+    r.real("seconds", seconds, Some("s"));
+    r.texts("wrote", wrote.iter().map(|p| p.display().to_string()).collect());
+    Ok(r)
+}

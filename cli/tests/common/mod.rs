@@ -1,0 +1,39 @@
+//! Helpers shared by the end-to-end tests that run the `itgfx` binary.
+//! Each test file is its own crate and uses a subset of these.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Runs the binary under test with `args`.
+pub fn itgfx(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_itgfx")).args(args).output().expect("run itgfx")
+}
+
+/// A fresh, empty directory for one test, unique to this process.
+pub fn temp(prefix: &str, name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("itgfx-{prefix}-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The JSON a successful run printed.
+pub fn json(out: &Output) -> serde_json::Value {
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+/// A path as the `&str` argument the CLI takes.
+pub fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Asserts that `args` fail with exit 2 and one line on stderr containing `needle`.
+pub fn fails(args: &[&str], needle: &str) {
+    let out = itgfx(args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: one line: {err}");
+    assert!(err.contains(needle), "{args:?}: {err:?} lacks {needle:?}");
+}

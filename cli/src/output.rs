@@ -63,6 +63,24 @@ fn dir_of(target: &Path) -> &Path {
     target.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."))
 }
 
+/// Prepares `--out DIR`: refuses a path that exists and is not a directory,
+/// creates a missing one (and its parents). Returns the directory when this
+/// call created it, so that a run that then fails can remove it again (only
+/// if still empty: nothing is left behind, nothing a user had is touched).
+///
+/// # Errors
+/// `--out` names a file, or the directory cannot be created.
+pub fn out_dir(dir: &Path) -> Result<Option<PathBuf>, CliError> {
+    if fs::metadata(dir).is_ok_and(|m| !m.is_dir()) {
+        return Err(CliError::usage(format!("--out {dir:?}: not a directory")));
+    }
+    if dir.exists() {
+        return Ok(None);
+    }
+    fs::create_dir_all(dir).map_err(|e| CliError::usage(format!("--out {dir:?}: {e}")))?;
+    Ok(Some(dir.to_path_buf()))
+}
+
 /// Checks, before any work, that `path` can be written: not empty, not a
 /// directory, its directory exists and accepts a new file (probed with a
 /// temporary file, removed at once); devices must open for writing (FIFOs

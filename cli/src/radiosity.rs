@@ -147,18 +147,12 @@ fn usage(e: impl std::fmt::Display) -> CliError {
 /// The output files of a run, checked before any work.
 fn outputs(o: &RadiosityOptions) -> Result<Vec<(&'static str, PathBuf)>, CliError> {
     let Some(dir) = &o.out else { return Ok(Vec::new()) };
-    if std::fs::metadata(dir).is_ok_and(|m| !m.is_dir()) {
-        return Err(CliError::usage(format!("--out {dir:?}: not a directory")));
-    }
     let names: &[&'static str] = if o.path_trace.is_some() {
         &["reference.pfm", "reference-even.pfm", "reference-odd.pfm", "reference.png", "reference.json"]
     } else {
         &["radiosity.png", "mesh.png", "radiosity.pfm", "elements.csv", "radiosity.json"]
     };
-    let created = !dir.exists();
-    if created {
-        std::fs::create_dir_all(dir).map_err(|e| CliError::usage(format!("--out {dir:?}: {e}")))?;
-    }
+    let created = crate::output::out_dir(dir)?.is_some();
     let list: Vec<(&'static str, PathBuf)> = names.iter().map(|n| (*n, dir.join(n))).collect();
     for (_, p) in &list {
         if let Err(e) = crate::output::check("--out", p) {

@@ -58,16 +58,10 @@ pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
     crate::viewpoint_shard::check(o, &pictures(o))?;
     let resolution = o.resolution.unwrap_or(128);
     let (distance, capture, max_views, steps, rounds) = (o.distance, o.capture, o.best_n, o.explore, o.smooth);
-    let mut created = None;
-    if let Some(d) = &o.out {
-        if std::fs::metadata(d).is_ok_and(|m| !m.is_dir()) {
-            return Err(CliError::usage(format!("--out {d:?}: not a directory")));
-        }
-        if !d.exists() {
-            std::fs::create_dir_all(d).map_err(|e| CliError::usage(format!("--out {d:?}: {e}")))?;
-            created = Some(d);
-        }
-    }
+    let created = match &o.out {
+        Some(d) => crate::output::out_dir(d)?,
+        None => None,
+    };
     let outputs = pictures(o);
     let checked =
         outputs.iter().try_for_each(|(flag, _, p)| p.as_ref().map_or(Ok(()), |p| crate::output::check(flag, p)));

@@ -267,13 +267,8 @@ fn untimed(out: &Output) -> String {
     kept
 }
 
-fn refused(args: &[&str], needle: &str) {
-    let out = itgfx(args);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
-    assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
-    assert!(err.contains(needle), "{args:?}: {err}");
-}
+mod common;
+use common::fails as refused;
 
 #[test]
 fn shards_merge_into_the_single_run_byte_for_byte() {

@@ -192,13 +192,7 @@ pub struct SegmentOptions {
 /// # Errors
 /// One line naming `--out` or the file.
 pub fn prepare_out(dir: &Path, names: &[&str]) -> Result<Vec<PathBuf>, CliError> {
-    if std::fs::metadata(dir).is_ok_and(|m| !m.is_dir()) {
-        return Err(CliError::usage(format!("--out {dir:?}: not a directory")));
-    }
-    let created = !dir.exists();
-    if created {
-        std::fs::create_dir_all(dir).map_err(|e| CliError::usage(format!("--out {dir:?}: {e}")))?;
-    }
+    let created = crate::output::out_dir(dir)?.is_some();
     let paths: Vec<PathBuf> = names.iter().map(|n| dir.join(n)).collect();
     if let Err(e) = paths.iter().try_for_each(|p| crate::output::check("--out", p)) {
         if created {

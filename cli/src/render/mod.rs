@@ -209,14 +209,8 @@ fn memory_check(o: &RenderOptions) -> Result<(), CliError> {
 /// Returns it and whether it was made here.
 fn out_dir(o: &RenderOptions) -> Result<(PathBuf, bool), CliError> {
     let d = o.out.clone().ok_or_else(|| CliError::usage("give --out DIR for the images"))?;
-    if std::fs::metadata(&d).is_ok_and(|m| !m.is_dir()) {
-        return Err(CliError::usage(format!("--out {d:?}: not a directory")));
-    }
-    if d.exists() {
-        return Ok((d, false));
-    }
-    std::fs::create_dir_all(&d).map_err(|e| CliError::usage(format!("--out {d:?}: {e}")))?;
-    Ok((d, true))
+    let made = crate::output::out_dir(&d)?.is_some();
+    Ok((d, made))
 }
 
 /// Runs `itgfx render`.

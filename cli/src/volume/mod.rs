@@ -115,16 +115,10 @@ pub fn run(o: &VolumeOptions) -> Result<Report, CliError> {
     let base = o.common.base;
     let unit = Some(base.unit());
     let tf = transfer(&o.tf)?;
-    let mut created = None;
-    if let Some(d) = &o.out {
-        if std::fs::metadata(d).is_ok_and(|m| !m.is_dir()) {
-            return Err(CliError::usage(format!("--out {d:?}: not a directory")));
-        }
-        if !d.exists() {
-            std::fs::create_dir_all(d).map_err(|e| CliError::usage(format!("--out {d:?}: {e}")))?;
-            created = Some(d.clone());
-        }
-    }
+    let created = match &o.out {
+        Some(d) => crate::output::out_dir(d)?,
+        None => None,
+    };
     let result = run_in(o, &spec, &tf, base, unit);
     if result.is_err()
         && let Some(d) = created

@@ -141,8 +141,8 @@ pub fn solved_patch_means(h: &Hierarchy, radiosity: &[Rgb], patches: usize) -> V
     for e in h.leaves() {
         let el = &h.elements[e as usize];
         let a = &mut acc[h.patch(e) as usize];
-        for c in 0..3 {
-            a.0[c] += el.area * radiosity[e as usize][c];
+        for (s, b) in a.0.iter_mut().zip(radiosity[e as usize]) {
+            *s += el.area * b;
         }
         a.1 += el.area;
     }

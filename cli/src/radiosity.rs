@@ -152,7 +152,14 @@ fn usage(e: impl std::fmt::Display) -> CliError {
 fn outputs(o: &RadiosityOptions) -> Result<Vec<(&'static str, PathBuf)>, CliError> {
     let Some(dir) = &o.out else { return Ok(Vec::new()) };
     let names: &[&'static str] = if o.path_trace.is_some() {
-        &["reference.exr", "reference.pfm", "reference-even.pfm", "reference-odd.pfm", "reference.png", "reference.json"]
+        &[
+            "reference.exr",
+            "reference.pfm",
+            "reference-even.pfm",
+            "reference-odd.pfm",
+            "reference.png",
+            "reference.json",
+        ]
     } else {
         &["radiosity.png", "mesh.png", "radiosity.exr", "radiosity.pfm", "mesh.ply", "elements.csv", "radiosity.json"]
     };

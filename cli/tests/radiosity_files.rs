@@ -10,7 +10,17 @@ use common::{fails, itgfx, json, s, temp};
 fn exr_ply_and_an_exr_reference() {
     let dir = temp("radiosity-files", "solution");
     let reference = temp("radiosity-files", "reference");
-    let r = json(&itgfx(&["radiosity", "cornell-box", "--path-trace", "8", "--size", "16", "--out", s(&reference), "--json"]));
+    let r = json(&itgfx(&[
+        "radiosity",
+        "cornell-box",
+        "--path-trace",
+        "8",
+        "--size",
+        "16",
+        "--out",
+        s(&reference),
+        "--json",
+    ]));
     assert_eq!(r["walks_per_pixel"], 8);
     let score = |file: &str| {
         json(&itgfx(&[

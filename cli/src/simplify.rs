@@ -251,12 +251,7 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
         check_memory(n, icosphere(viewpoint_level(o.viewpoints)).len())
             .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
     }
-    if !out.exists() {
-        std::fs::create_dir_all(&out).map_err(|e| CliError::usage(format!("--out {out:?}: {e}")))?;
-    }
-    for name in ["original.png", "compare.png"] {
-        crate::output::check("--out", &out.join(name))?;
-    }
+    crate::output::out_files(&out, &["original.png", "compare.png"])?;
 
     let t0 = Instant::now();
     let unit = Some(o.common.base.unit());

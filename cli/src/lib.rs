@@ -11,6 +11,7 @@ pub mod measure;
 pub mod measure_options;
 pub mod options;
 pub mod output;
+pub mod plot;
 pub mod progress;
 pub mod radiosity;
 pub mod radiosity_mesh;

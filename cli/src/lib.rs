@@ -13,6 +13,7 @@ pub mod options;
 pub mod output;
 pub mod progress;
 pub mod radiosity;
+pub mod radiosity_mesh;
 pub mod render;
 pub mod report;
 pub mod scene;

@@ -45,6 +45,48 @@ fn inner_rays(n: u64, seed: u64) -> Vec<Line> {
         .collect()
 }
 
+/// Shadow rays as the viewpoint channel casts them, in coherent groups of
+/// eight from one eye (outside the scene or inside its box) towards points
+/// of one triangle each: its vertices (where edge functions are exactly
+/// zero), edge midpoints, centroid and random points, stopping just short
+/// of the point, at it, or beyond it. Groups of eight are what the CPU
+/// backend walks as one packet.
+fn coherent_rays(p: &Prepared, n: u64, seed: u64) -> Vec<Line> {
+    let tris = &p.triangles;
+    if tris.is_empty() {
+        return Vec::new(); // the analytic sphere
+    }
+    let d = |v: glam::Vec3A| DVec3::new(f64::from(v.x), f64::from(v.y), f64::from(v.z));
+    (0..n.div_ceil(8))
+        .flat_map(|g| {
+            let r = LineRng::new(seed, g);
+            let eye = if g % 3 == 0 {
+                DVec3::new(r.uniform(0), r.uniform(1), r.uniform(2)) - 0.5
+            } else {
+                r.sphere_point(10) * 3.0
+            };
+            let t = tris[(r.uniform(5) * tris.len() as f64) as usize % tris.len()].map(d);
+            let stop = [1.0 - 1e-5, 1.0, 1.5][(g % 3) as usize];
+            (0..8).map(move |i| {
+                let q = match i {
+                    0..3 => t[i],
+                    3..6 => (t[i - 3] + t[(i - 2) % 3]) * 0.5,
+                    6 => (t[0] + t[1] + t[2]) / 3.0,
+                    _ => {
+                        let (a, b) = (r.uniform(6), r.uniform(7));
+                        let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
+                        t[0] + (t[1] - t[0]) * a + (t[2] - t[0]) * b
+                    }
+                };
+                let to = q - eye;
+                let len = to.length().max(1e-9);
+                Line::ray(eye, to / len, 0.0, len * stop)
+            })
+        })
+        .take(n as usize)
+        .collect()
+}
+
 fn queries(t: &dyn Tracer, ls: &[Line]) -> (CrossingBuffer, Vec<Option<Hit>>, Vec<bool>) {
     let (mut all, mut first, mut any) = (CrossingBuffer::default(), Vec::new(), Vec::new());
     t.trace_all(ls, &mut all).unwrap();
@@ -62,7 +104,7 @@ fn queries(t: &dyn Tracer, ls: &[Line]) -> (CrossingBuffer, Vec<Option<Hit>>, Ve
 fn agrees(scene: &Scene, n: u64) {
     let p = Prepared::new(scene);
     let reference = open(BackendChoice::Reference, &p).unwrap();
-    for ls in [lines(n, 11), inner_rays(n, 12)] {
+    for ls in [lines(n, 11), inner_rays(n, 12), coherent_rays(&p, n, 13)] {
         let (r_all, r_first, r_any) = queries(reference.as_ref(), &ls);
         for (i, l) in ls.iter().enumerate() {
             let line = r_all.line(i);

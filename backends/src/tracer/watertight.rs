@@ -14,7 +14,7 @@ use crate::scene::SphereCells;
 
 /// Per-ray constants of the watertight test.
 pub(crate) struct Shear {
-    org: Vec3A,
+    pub(crate) org: Vec3A,
     pub(crate) k: [usize; 3],
     pub(crate) s: [f32; 3],
 }

@@ -73,8 +73,9 @@ impl Packet {
         if lines.len() < 2 || lines.len() > LANES {
             return None;
         }
-        let oct_inv4 = octant_inv4(Vec3A::from(lines[0].direction));
-        if lines.iter().any(|l| octant_inv4(Vec3A::from(l.direction)) != oct_inv4) {
+        // Traversal directions as the single-ray walk takes them (no -0.0: see `Shear::of`).
+        let oct_inv4 = octant_inv4(Shear::of(&lines[0]).1);
+        if lines.iter().any(|l| octant_inv4(Shear::of(l).1) != oct_inv4) {
             return None;
         }
         // Unused lanes repeat the first line (they are never active).
@@ -82,7 +83,7 @@ impl Packet {
         let shears: [Shear; LANES] = std::array::from_fn(|i| Shear::of(line(i)).0);
         let rays = std::array::from_fn(|i| {
             let l = line(i);
-            Ray::new(Vec3A::from(l.origin), Vec3A::from(l.direction), l.tmin, l.tmax)
+            Ray::new(Vec3A::from(l.origin), Shear::of(l).1, l.tmin, l.tmax)
         });
         let k = shears[0].k;
         let axes = shears.iter().all(|s| s.k == k).then_some(k);

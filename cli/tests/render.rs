@@ -308,14 +308,32 @@ fn vulkan_renders_the_cpu_image_where_a_device_exists() {
         return;
     }
     let dir = temp("vulkan");
-    let run = |backend: &str| {
-        let out = dir.join(backend);
-        let args =
-            ["render", "cornell-box", "--out", s(&out), "--size", "12x8", "--spp", "2", "--backend", backend, "--json"];
+    let run = |backend: &str, scene: &str, sampler: &str, spp: &str| {
+        let out = dir.join(format!("{backend}-{sampler}"));
+        let args = [
+            "render",
+            scene,
+            "--out",
+            s(&out),
+            "--size",
+            "12x8",
+            "--spp",
+            spp,
+            "--sampler",
+            sampler,
+            "--backend",
+            backend,
+            "--json",
+        ];
         json(&itgfx(&args));
         std::fs::read(out.join("image.exr")).unwrap()
     };
-    // Both backends return the same closest hits (the seam's conformance), so the same image.
-    assert_eq!(run("vulkan"), run("cpu"), "vulkan and cpu EXRs differ");
+    // Both backends return the same closest hits (the seam's conformance), so
+    // the same image; adaptive samplers then take the same decisions.
+    for (scene, sampler, spp) in
+        [("cornell-box", "uniform", "2"), ("mirror-room:1", "hl-sqrt", "32"), ("mirror-room:1", "ec", "32")]
+    {
+        assert_eq!(run("vulkan", scene, sampler, spp), run("cpu", scene, sampler, spp), "{sampler}: EXRs differ");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

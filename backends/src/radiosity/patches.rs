@@ -95,9 +95,11 @@ pub fn traced_patch_means(
                 }
                 let el = &h.elements[h.roots[root as usize].element as usize];
                 let x = prepared.to_normalised(el.sample(u.uniform(1), u.uniform(2)));
-                // Slightly off the normal: the CPU backend misses an axis-aligned
-                // patch from a ray with an exactly zero component (measured on
-                // cornell-box's floor); a diffuse patch looks the same from any side.
+                // Slightly off the normal (a diffuse patch looks the same from any
+                // side). It began as a workaround for rays with a -0.0 component
+                // missing axis-aligned walls on the CPU backend, fixed since in the
+                // tracer (tests/tests/backends.rs, `head_on_rays`); kept so that the
+                // figures in docs/RADIOSITY.md stay those of this code.
                 let (t1, t2) = el.normal.any_orthonormal_pair();
                 let direction = -(el.normal + t1 * 0.1 + t2 * 0.07).normalize();
                 (Start { origin: x - direction * LIFT, direction, rng: LineRng::new(seed, id) }, patch as u32)

@@ -81,6 +81,21 @@ pub struct Tracing {
     pub threads: Option<usize>,
 }
 
+/// Best views and guided exploration (Part V §4), shared by `viewpoints`
+/// (channel V -> O) and `volume` (channel V -> Z).
+#[derive(Debug, Clone, Copy, Args)]
+pub struct Selection {
+    /// At most N best views, greedy
+    #[arg(long, value_name = "N", default_value = "6", value_parser = best_n, help_heading = "Selection")]
+    pub best_n: usize,
+    /// Stop once the views capture F of the channel's I(V;O) or I(V;Z), F in (0, 1]
+    #[arg(long, value_name = "F", default_value = "0.9", value_parser = capture, help_heading = "Selection")]
+    pub capture: f64,
+    /// Steps of the guided exploration path from the best view
+    #[arg(long, value_name = "S", default_value = "12", value_parser = explore, help_heading = "Selection")]
+    pub explore: usize,
+}
+
 /// The built-in scenes, one per line with its description (the registry of backends).
 #[must_use]
 pub fn scene_list() -> String {
@@ -186,15 +201,9 @@ pub struct ViewpointsOptions {
     #[command(flatten)]
     #[allow(missing_docs)]
     pub tracing: Tracing,
-    /// At most N best views, greedy
-    #[arg(long, value_name = "N", default_value = "6", value_parser = best_n, help_heading = "Selection")]
-    pub best_n: usize,
-    /// Stop once the views capture F of I(V;O), F in (0, 1]
-    #[arg(long, value_name = "F", default_value = "0.9", value_parser = capture, help_heading = "Selection")]
-    pub capture: f64,
-    /// Steps of the guided exploration path from the best view
-    #[arg(long, value_name = "S", default_value = "12", value_parser = explore, help_heading = "Selection")]
-    pub explore: usize,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub selection: Selection,
     /// Every picture below under its default name in DIR
     #[arg(long, value_name = "DIR", value_parser = out_path, help_heading = "Pictures")]
     pub out: Option<PathBuf>,

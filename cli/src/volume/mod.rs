@@ -26,9 +26,7 @@ use itgfx_backends::volume::{TransferFunction, VolumeChannelOptions, volume_chan
 use crate::options::Common;
 use crate::progress::Progress;
 use crate::report::Report;
-use crate::values::{
-    argmin, backend, best_n, capture, distance, explore, out_path, threads, viewpoint_count, viewpoint_level,
-};
+use crate::values::{argmin, backend, distance, out_path, threads, viewpoint_count, viewpoint_level};
 use crate::{CliError, core_err};
 use input::{dims, focus, image_side, iso_value, load, size, spacing, step, transfer, volume_help};
 use pictures::{PICTURES, Shots};
@@ -80,15 +78,9 @@ pub struct VolumeOptions {
     /// viewpoint channel on it (Part VI §2.1), to compare its views with the voxels'
     #[arg(long, value_name = "F", value_parser = iso_value, help_heading = "Channel")]
     pub iso: Option<f64>,
-    /// At most N best views, greedy
-    #[arg(long, value_name = "N", default_value = "6", value_parser = best_n, help_heading = "Selection")]
-    pub best_n: usize,
-    /// Stop once the views capture F of I(V;Z), F in (0, 1]
-    #[arg(long, value_name = "F", default_value = "0.9", value_parser = capture, help_heading = "Selection")]
-    pub capture: f64,
-    /// Steps of the guided exploration path from the best view
-    #[arg(long, value_name = "S", default_value = "12", value_parser = explore, help_heading = "Selection")]
-    pub explore: usize,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub selection: crate::options::Selection,
     /// Pictures and volume.json in DIR (created if missing)
     #[arg(long, value_name = "DIR", value_parser = out_path, help_heading = "Pictures")]
     pub out: Option<PathBuf>,
@@ -202,8 +194,8 @@ fn run_in(
         .map_err(err)?;
     let v = &m.views;
     let t_measures = t0.elapsed().as_secs_f64() - t_channel;
-    let best_n = best_views(&m.analysis, v, o.capture, o.best_n, base).map_err(err)?;
-    let tour = exploration(&m.analysis, &neighbours, v.best, o.explore, base).map_err(err)?;
+    let best_n = best_views(&m.analysis, v, o.selection.capture, o.selection.best_n, base).map_err(err)?;
+    let tour = exploration(&m.analysis, &neighbours, v.best, o.selection.explore, base).map_err(err)?;
     let instability = m.analysis.instability(&neighbours, base).map_err(err)?;
     let seen = m.analysis.expand(&m.analysis.seen_angle, 0.0);
     let iso = o.iso.map(|f| iso_route(&volume, f, &dirs, o.distance, rays, base)).transpose()?;

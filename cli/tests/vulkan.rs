@@ -105,6 +105,7 @@ fn volume_matches_the_cpu_backend() {
         let mut gpu = json_on(args, "vulkan");
         let (c, g) = (cpu.as_object_mut().unwrap(), gpu.as_object_mut().unwrap());
         let (mc, mg) = (c.remove("memory_estimate_MiB").unwrap(), g.remove("memory_estimate_MiB").unwrap());
+        assert!(g.remove("vulkan_rays_finished_on_host").unwrap().is_u64(), "{args:?}");
         assert!(mg.as_f64().unwrap() > mc.as_f64().unwrap(), "{args:?}: the device's buffers are counted");
         assert_eq!(cpu, gpu, "{args:?}");
     }

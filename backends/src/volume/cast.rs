@@ -35,6 +35,12 @@ pub trait VolumeCaster: Sync {
     /// # Errors
     /// Device failures.
     fn visibility_row(&self, view: &Camera, size: u32, slot: &[u32], row: &mut [f64]) -> Result<f64, BackendError>;
+
+    /// Rays a device handed back to the host to finish (more samples than
+    /// it keeps per ray); 0 on the CPU.
+    fn rays_finished_on_host(&self) -> u64 {
+        0
+    }
 }
 
 impl VolumeCaster for Caster<'_> {
@@ -62,6 +68,10 @@ impl<T: VolumeCaster + ?Sized> VolumeCaster for &T {
 
     fn visibility_row(&self, view: &Camera, size: u32, slot: &[u32], row: &mut [f64]) -> Result<f64, BackendError> {
         (**self).visibility_row(view, size, slot, row)
+    }
+
+    fn rays_finished_on_host(&self) -> u64 {
+        (**self).rays_finished_on_host()
     }
 }
 

@@ -36,8 +36,11 @@ use crate::volume::raycast::{Caster, EARLY_TERMINATION, pixel_ray};
 const SPIRV: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/volume.spv"));
 /// Samples kept per ray on the device, at most.
 pub const MAX_SAMPLES: usize = 256;
-/// Bytes of samples per chunk of rays (half of lavapipe's 128 MiB per buffer).
-const SAMPLE_BYTES: usize = 64 << 20;
+/// Bytes of samples per chunk of rays: 2048 rays of 256 samples. Small
+/// enough that a 256³ volume at 162 viewpoints (a 5.8 GiB channel) stays
+/// under the CLI's 6 GiB limit with two streams on lavapipe, whose device
+/// memory is the host's; a discrete GPU would want larger chunks.
+const SAMPLE_BYTES: usize = 16 << 20;
 /// Rays per chunk, at most.
 const MAX_CHUNK: usize = 1 << 16;
 /// Where the opacity table starts in the constants buffer.
@@ -276,6 +279,10 @@ impl VolumeCaster for VulkanVolumeCaster<'_> {
 
     fn caster(&self) -> &Caster<'_> {
         self.caster
+    }
+
+    fn rays_finished_on_host(&self) -> u64 {
+        self.host_resumed()
     }
 
     fn visibility_row(&self, view: &Camera, size: u32, slot: &[u32], row: &mut [f64]) -> Result<f64, BackendError> {

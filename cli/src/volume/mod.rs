@@ -172,11 +172,15 @@ fn run_in(
     if let Some(s) = o.shards.shard {
         return shard::save(o, s, &*open(o.backend, &caster).map_err(backend_err)?, &dirs, rays, need);
     }
+    // Rays a device handed back to the host (reported for vulkan only).
+    let mut host_rays = None;
     let ch = if o.shards.merge.is_empty() {
         let backend = open(o.backend, &caster).map_err(backend_err)?;
         let mut progress = Progress::new();
         let copts = VolumeChannelOptions { directions: dirs.clone(), distance: o.distance, size: rays };
-        volume_channel(&*backend, &copts, &mut |d, t| progress.update(d, t)).map_err(backend_err)?
+        let ch = volume_channel(&*backend, &copts, &mut |d, t| progress.update(d, t)).map_err(backend_err)?;
+        host_rays = (o.backend == BackendChoice::Vulkan).then(|| backend.rays_finished_on_host());
+        ch
     } else {
         shard::merged(o, &caster, &dirs, rays)?
     };
@@ -296,6 +300,9 @@ fn run_in(
     r.real("channel_seconds", t_channel, Some("s")).real("measures_seconds", t_measures, Some("s"));
     r.real("seconds", seconds, Some("s"));
     r.real("memory_estimate_MiB", need as f64 / f64::from(1u32 << 20), None);
+    if let Some(n) = host_rays {
+        r.count("vulkan_rays_finished_on_host", n);
+    }
 
     if let Some(dir) = &o.out {
         let shots = Shots {

@@ -14,6 +14,7 @@ pub mod output;
 pub mod plot;
 pub mod progress;
 pub mod radiosity;
+pub mod radiosity_check;
 pub mod radiosity_mesh;
 pub mod render;
 pub mod report;

@@ -29,6 +29,30 @@ pub struct Cli {
     pub command: Command,
 }
 
+impl Cli {
+    /// The command-line parser: [`Cli`]'s, with every option that takes a
+    /// value also taking a negative number (`--delta -1`), so that the value's
+    /// own check answers ("must be in ...") instead of "unknown option -1".
+    #[must_use]
+    pub fn parser() -> clap::Command {
+        fn negatives(c: clap::Command) -> clap::Command {
+            c.mut_args(|a| if a.get_action().takes_values() { a.allow_negative_numbers(true) } else { a })
+                .mut_subcommands(negatives)
+        }
+        negatives(<Self as clap::CommandFactory>::command())
+    }
+
+    /// Parses `words` (the program name first) with [`Cli::parser`].
+    ///
+    /// # Errors
+    /// clap's error for a bad command line.
+    pub fn parse_words(words: &[std::ffi::OsString]) -> Result<Self, clap::Error> {
+        let mut cmd = Self::parser();
+        let m = cmd.try_get_matches_from_mut(words)?;
+        <Self as clap::FromArgMatches>::from_arg_matches(&m).map_err(|e| e.format(&mut cmd))
+    }
+}
+
 /// The commands.
 #[derive(Debug, Subcommand)]
 pub enum Command {

@@ -30,8 +30,9 @@ use crate::values::{count, out_path};
 #[command(after_help = "SCENE is an .obj file (with MTL Kd/Ke) or a built-in (see itgfx complexity --help); \
                         cornell-box's light emits.\n\
                         --out DIR gets radiosity.png (Gouraud), mesh.png, radiosity.exr and radiosity.pfm (linear), \
-                        mesh.ply (leaf elements, vertex radiosities), elements.csv and radiosity.json; with \
-                        --path-trace W it gets reference.exr and reference.pfm (+ -even/-odd halves, PFM), \
+                        mesh.ply (leaf elements, vertex radiosities), elements.csv (+ patches.csv with \
+                        --check-paths) and radiosity.json; with --path-trace W it gets reference.exr and \
+                        reference.pfm (+ -even/-odd halves, PFM), \
                         reference.png and reference.json instead.")]
 pub struct RadiosityOptions {
     /// A built-in scene name (e.g. cornell-box) or an .obj file
@@ -76,6 +77,9 @@ pub struct RadiosityOptions {
     /// Make the reference instead: W random walks per pixel (no mesh, no oracle)
     #[arg(long, value_name = "W", value_parser = walks, conflicts_with_all = ["elements", "epsilon"])]
     pub path_trace: Option<u32>,
+    /// Check the solution patch by patch: N paths of the renderer's path tracer per patch
+    #[arg(long, value_name = "N", value_parser = walks, conflicts_with = "path_trace")]
+    pub check_paths: Option<u32>,
     /// Write the pictures and files into DIR
     #[arg(long, value_name = "DIR", value_parser = out_path)]
     pub out: Option<PathBuf>,
@@ -159,6 +163,17 @@ fn outputs(o: &RadiosityOptions) -> Result<Vec<(&'static str, PathBuf)>, CliErro
             "reference-odd.pfm",
             "reference.png",
             "reference.json",
+        ]
+    } else if o.check_paths.is_some() {
+        &[
+            "radiosity.png",
+            "mesh.png",
+            "radiosity.exr",
+            "radiosity.pfm",
+            "mesh.ply",
+            "elements.csv",
+            "patches.csv",
+            "radiosity.json",
         ]
     } else {
         &["radiosity.png", "mesh.png", "radiosity.exr", "radiosity.pfm", "mesh.ply", "elements.csv", "radiosity.json"]
@@ -380,6 +395,12 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
     r.real("power_emitted", lum(emitted), None).real("power_absorbed", lum(absorbed), None);
     r.real("balance", if lum(emitted) > 0.0 { lum(absorbed) / lum(emitted) } else { 0.0 }, None);
     r.real("solve_seconds", solve_seconds, Some("s"));
+    if let Some(paths) = o.check_paths {
+        let csv = crate::radiosity_check::check(&mut r, &scene, &prepared, tracer.as_ref(), &solution, paths, o.seed)?;
+        if let Some(p) = file("patches.csv") {
+            crate::output::write(&p, csv.as_bytes())?;
+        }
+    }
 
     let v = view(&scene, &prepared, tracer.as_ref(), h, &camera, (o.size, o.size)).map_err(usage)?;
     let (gouraud, leaf) = picture(h, &solution.radiosity, &v, true);

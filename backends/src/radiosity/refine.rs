@@ -319,7 +319,7 @@ pub fn solve(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use glam::DVec3;
 
     use super::*;

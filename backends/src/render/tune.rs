@@ -20,7 +20,8 @@ const STEPS: u32 = 14;
 pub struct Tuned {
     /// The threshold found.
     pub threshold: f64,
-    /// Average samples per pixel it spends on the pilot.
+    /// Average rays per pixel it traces on the pilot (decision and image
+    /// samples together).
     pub pilot_mean: f64,
     /// Pilot pixels.
     pub pilot_pixels: u32,
@@ -40,18 +41,28 @@ pub fn pilot_pixels(width: u32, height: u32) -> Vec<u32> {
     out
 }
 
-/// The threshold at which `criterion` spends on average `target` samples
-/// per pixel (capped at `max` per pixel) on the pilot grid. An unbiased
-/// run spends the same: its pilot decides exactly as a plain run would.
+/// The threshold at which `criterion` traces on average `target` rays per
+/// pixel (at most `max` samples a pixel in its estimate) on the pilot grid.
+/// In the `unbiased` form every decision sample is counted with the image's
+/// (a pixel that decides on `n` samples traces `2n`), so `target` is the
+/// whole cost in either form.
 ///
 /// # Errors
 /// Backend failures only.
-pub fn tune(pt: &PathTracer, view: &View, criterion: Criterion, target: f64, max: u32) -> Result<Tuned, BackendError> {
-    tune_policy(pt, view, target, &|eps| Box::new(Adaptive { criterion, threshold: eps, max, unbiased: false }))
+pub fn tune(
+    pt: &PathTracer,
+    view: &View,
+    criterion: Criterion,
+    target: f64,
+    max: u32,
+    unbiased: bool,
+) -> Result<Tuned, BackendError> {
+    tune_policy(pt, view, target, &|eps| Box::new(Adaptive { criterion, threshold: eps, max, unbiased }))
 }
 
-/// The threshold at which the policy `make(ε)` spends on average `target`
-/// samples per pixel on the pilot grid (spend must fall as `ε` grows).
+/// The threshold at which the policy `make(ε)` traces on average `target`
+/// rays per pixel on the pilot grid, decision samples included (spend must
+/// fall as `ε` grows).
 ///
 /// # Errors
 /// Backend failures only.

@@ -15,8 +15,10 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
+use itgfx_backends::BackendChoice;
 use itgfx_backends::viewpoint::selection::{best_views, exploration};
 use itgfx_backends::viewpoint::{ViewpointWeights, icosphere};
+use itgfx_backends::volume::cast::{backend_memory, open};
 use itgfx_backends::volume::channel::{channel_memory, seeable_voxels};
 use itgfx_backends::volume::raycast::Caster;
 use itgfx_backends::volume::{TransferFunction, VolumeChannelOptions, volume_channel, volume_measures};
@@ -24,7 +26,7 @@ use itgfx_backends::volume::{TransferFunction, VolumeChannelOptions, volume_chan
 use crate::options::Common;
 use crate::progress::Progress;
 use crate::report::Report;
-use crate::values::{argmin, distance, out_path, threads, viewpoint_count, viewpoint_level};
+use crate::values::{argmin, backend, distance, out_path, threads, viewpoint_count, viewpoint_level};
 use crate::{CliError, core_err};
 use input::{dims, focus, image_side, iso_value, load, size, spacing, step, transfer, volume_help};
 use pictures::{PICTURES, Shots};
@@ -88,6 +90,9 @@ pub struct VolumeOptions {
     /// Worker threads (default: all cores)
     #[arg(long, value_name = "T", value_parser = threads)]
     pub threads: Option<usize>,
+    /// Ray-casting backend for the channel: cpu or vulkan (the same rows, bit for bit)
+    #[arg(long, value_name = "cpu|vulkan", default_value = "cpu", value_parser = backend)]
+    pub backend: BackendChoice,
     /// Shards.
     #[command(flatten)]
     pub shards: shard::VolumeShardOptions,
@@ -149,7 +154,12 @@ fn run_in(
     }
     let dirs = icosphere(viewpoint_level(o.viewpoints));
     let (first, end) = shard::range(o, dirs.len());
-    let need = channel_memory(&caster, seeable_voxels(&caster), end - first);
+    let largest = volume.dims.iter().copied().max().unwrap_or(1) as u32;
+    let rays = o.size.unwrap_or((2 * largest).clamp(32, 512));
+    // The device's buffers too when it casts: on lavapipe they are host memory.
+    let casting = if o.shards.merge.is_empty() { u64::from(rays) * u64::from(rays) } else { 0 };
+    let need = channel_memory(&caster, seeable_voxels(&caster), end - first)
+        + if casting > 0 { backend_memory(o.backend, &caster, casting) } else { 0 };
     if need > MEMORY_LIMIT {
         return Err(CliError::usage(format!(
             "{}: the channel may need {:.1} GiB (limit {} GiB): fewer --viewpoints or a smaller volume",
@@ -158,15 +168,19 @@ fn run_in(
             MEMORY_LIMIT >> 30
         )));
     }
-    let largest = volume.dims.iter().copied().max().unwrap_or(1) as u32;
-    let rays = o.size.unwrap_or((2 * largest).clamp(32, 512));
+    let backend_err = |e: itgfx_backends::BackendError| CliError::usage(e.to_string());
     if let Some(s) = o.shards.shard {
-        return shard::save(o, s, &caster, &dirs, rays, need);
+        return shard::save(o, s, &*open(o.backend, &caster).map_err(backend_err)?, &dirs, rays, need);
     }
+    // Rays a device handed back to the host (reported for vulkan only).
+    let mut host_rays = None;
     let ch = if o.shards.merge.is_empty() {
+        let backend = open(o.backend, &caster).map_err(backend_err)?;
         let mut progress = Progress::new();
         let copts = VolumeChannelOptions { directions: dirs.clone(), distance: o.distance, size: rays };
-        volume_channel(&caster, &copts, &mut |d, t| progress.update(d, t))
+        let ch = volume_channel(&*backend, &copts, &mut |d, t| progress.update(d, t)).map_err(backend_err)?;
+        host_rays = (o.backend == BackendChoice::Vulkan).then(|| backend.rays_finished_on_host());
+        ch
     } else {
         shard::merged(o, &caster, &dirs, rays)?
     };
@@ -192,7 +206,7 @@ fn run_in(
     let seconds = t0.elapsed().as_secs_f64();
 
     let mut r = Report::new();
-    r.text("volume", volume.name.clone());
+    r.text("volume", volume.name.clone()).text("backend", o.backend.name());
     r.counts("dims", volume.dims.iter().map(|&d| d as u64).collect());
     r.count("voxels", volume.voxels() as u64).count("viewpoints", dirs.len() as u64);
     r.count("rays_per_viewpoint", rays_per_viewpoint).real("step_voxels", o.step, None);
@@ -286,6 +300,9 @@ fn run_in(
     r.real("channel_seconds", t_channel, Some("s")).real("measures_seconds", t_measures, Some("s"));
     r.real("seconds", seconds, Some("s"));
     r.real("memory_estimate_MiB", need as f64 / f64::from(1u32 << 20), None);
+    if let Some(n) = host_rays {
+        r.count("vulkan_rays_finished_on_host", n);
+    }
 
     if let Some(dir) = &o.out {
         let shots = Shots {

@@ -56,7 +56,8 @@ fn every_sampler_keeps_the_uniform_mean_and_the_tutorial_form_does_not() {
         let (v, y) = render(&dir.join(sampler), &["--sampler", sampler, "--seed", "2"]);
         assert_eq!(v["form"], "unbiased", "{sampler}: the default form");
         let traced = v["spp_traced_mean"].as_f64().unwrap();
-        assert!((traced - 32.0).abs() < 4.0, "{sampler}: traced {traced} a pixel for --spp 32, pilot included");
+        // Tuned on a pilot of 576 pixels of another seed; a tree's split costs 56 rays or more.
+        assert!((traced - 32.0).abs() < 8.0, "{sampler}: traced {traced} a pixel for --spp 32, pilot included");
         assert!(v["spp_mean"].as_f64().unwrap() < traced, "{sampler}: decision samples are not in the image");
         let z = z_score(&y, &uniform);
         let (t, yt) =

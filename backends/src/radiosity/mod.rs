@@ -21,6 +21,7 @@
 #[cfg(test)]
 mod conservation;
 pub mod element;
+mod front;
 mod gather;
 pub mod link;
 pub mod patches;

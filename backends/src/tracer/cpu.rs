@@ -7,9 +7,9 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::ray::Ray;
 
-use super::node8;
 use super::watertight::{Shear, before, finish, push_crossing, sphere_crossings, sphere_hit, triangle_hit};
 use super::{BackendError, CrossingBuffer, Hit, Prepared, Tracer};
+use super::{node8, packet};
 use crate::lines::Line;
 
 /// Triangle boxes and build parameters shared by the CPU and Vulkan BVHs:
@@ -101,6 +101,29 @@ impl CpuTracer {
     }
 }
 
+impl CpuTracer {
+    /// Occlusion of up to [`packet::LANES`] coherent lines walked as one
+    /// packet (`packet.rs`), appended to `out`; `false` (nothing appended)
+    /// where a packet does not apply: no AVX2, a sphere scene, a single
+    /// line, or directions in different octants. Each answer is
+    /// [`CpuTracer::any`]'s.
+    fn occluded_packet(&self, lines: &[Line], stack: &mut Vec<(u32, u8)>, out: &mut Vec<bool>) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(bvh) = &self.bvh
+            && self.avx2
+            && self.scene.sphere.is_none()
+            && let Some(p) = packet::Packet::new(lines)
+        {
+            // SAFETY: `self.avx2` came from `has_avx2()`.
+            let done = unsafe { packet::occluded(bvh, &self.ordered, &p, stack) };
+            out.extend((0..p.len()).map(|i| done >> i & 1 == 1));
+            return true;
+        }
+        let _ = (lines, stack, out);
+        false
+    }
+}
+
 impl Tracer for CpuTracer {
     fn name(&self) -> &'static str {
         "cpu"
@@ -138,7 +161,12 @@ impl Tracer for CpuTracer {
 
     fn occluded(&self, lines: &[Line], out: &mut Vec<bool>) -> Result<(), BackendError> {
         out.clear();
-        out.extend(lines.iter().map(|l| self.any(l)));
+        let mut stack = Vec::with_capacity(256);
+        for chunk in lines.chunks(packet::LANES) {
+            if !self.occluded_packet(chunk, &mut stack, out) {
+                out.extend(chunk.iter().map(|l| self.any(l)));
+            }
+        }
         Ok(())
     }
 }

@@ -33,6 +33,7 @@
 
 mod cpu;
 mod node8;
+mod packet;
 mod reference;
 pub(crate) mod watertight;
 

@@ -46,7 +46,7 @@ pub(crate) fn has_avx2() -> bool {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn intersect8(node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
+pub(super) unsafe fn intersect8(node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
     let adj_inv = node.compute_extent() * ray.inv_direction;
     let adj_org = (Vec3A::from(node.p) - ray.origin) * ray.inv_direction;
     // The eight quantised planes of one axis side, as f32 (exact).

@@ -4,6 +4,8 @@
 
 use itgfx_core::{Base, Error, SparseChannel, jensen_shannon_sparse};
 
+use rayon::prelude::*;
+
 use super::ViewpointChannel;
 
 /// How the input distribution `p(V)` is chosen (Part V §3.1).
@@ -288,15 +290,19 @@ impl ViewpointAnalysis {
     /// # Errors
     /// None in practice.
     pub fn instability(&self, neighbours: &[Vec<usize>], base: Base) -> Result<Vec<f64>, Error> {
-        let mut out = vec![f64::NAN; self.viewpoints];
-        for (x, &v) in self.seen.iter().enumerate() {
-            let near: Vec<usize> = neighbours[v].iter().filter_map(|&u| self.row_of(u)).collect();
-            let mut s = 0.0;
-            for &y in &near {
-                s += self.dissimilarity(x, y, base)?;
-            }
-            out[v] = if near.is_empty() { 0.0 } else { s / near.len() as f64 };
-        }
-        Ok(out)
+        // One task per viewpoint; each sums its own neighbours in order, so
+        // the values do not depend on the thread count.
+        let rows: Vec<f64> = (0..self.seen.len())
+            .into_par_iter()
+            .map(|x| {
+                let near: Vec<usize> = neighbours[self.seen[x]].iter().filter_map(|&u| self.row_of(u)).collect();
+                let mut s = 0.0;
+                for &y in &near {
+                    s += self.dissimilarity(x, y, base)?;
+                }
+                Ok(if near.is_empty() { 0.0 } else { s / near.len() as f64 })
+            })
+            .collect::<Result<_, Error>>()?;
+        Ok(self.expand(&rows, f64::NAN))
     }
 }

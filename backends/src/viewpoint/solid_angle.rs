@@ -179,6 +179,9 @@ struct ItemBuffer {
     item: Vec<u32>,
     /// Distance from the eye to the hit of each pixel's ray (∞ for none).
     depth: Vec<f32>,
+    /// Each pixel's unit direction ([`ItemBuffer::direction`]), computed
+    /// once: the margin test reads each pixel for several triangles.
+    dirs: Vec<DVec3>,
 }
 
 /// Pixels around a triangle's projection that the item-buffer test also
@@ -194,9 +197,9 @@ impl ItemBuffer {
         let (right, up) = forward.any_orthonormal_pair();
         let sin = 1.0 / eye.length();
         let tan = sin / (1.0 - sin * sin).max(0.0).sqrt();
-        let mut ib = Self { eye, forward, right, up, tan, r, item: Vec::new(), depth: Vec::new() };
-        let lines: Vec<Line> =
-            (0..r * r).map(|k| Line::ray(eye, ib.direction(k % r, k / r), 0.0, 4.0 * eye.length())).collect();
+        let mut ib = Self { eye, forward, right, up, tan, r, item: Vec::new(), depth: Vec::new(), dirs: Vec::new() };
+        ib.dirs = (0..r * r).map(|k| ib.direction(k % r, k / r)).collect();
+        let lines: Vec<Line> = ib.dirs.iter().map(|&d| Line::ray(eye, d, 0.0, 4.0 * eye.length())).collect();
         let mut hits = Vec::new();
         trace(tracer, &lines, &mut hits)?;
         ib.item = hits.iter().map(|h| h.map_or(Self::NONE, |h| h.primitive)).collect();
@@ -256,6 +259,7 @@ impl ItemBuffer {
         });
         let n = (v[1] - v[0]).cross(v[2] - v[0]);
         let plane = n.dot(v[0] - self.eye);
+        let flat = 1e-12 * n.length();
         for y in y0 as u32..=y1 as u32 {
             for x in x0 as u32..=x1 as u32 {
                 let q = (f64::from(x), f64::from(y));
@@ -272,9 +276,8 @@ impl ItemBuffer {
                 if shown == t {
                     continue;
                 }
-                let d = self.direction(x, y);
-                let along = n.dot(d);
-                if along.abs() < 1e-12 * n.length() {
+                let along = n.dot(self.dirs[k]);
+                if along.abs() < flat {
                     continue;
                 }
                 let s = plane / along;

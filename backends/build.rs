@@ -5,7 +5,7 @@ use std::path::Path;
 
 fn main() {
     let out = std::env::var("OUT_DIR").expect("OUT_DIR");
-    for name in ["trace", "xlogy", "axis_sum"] {
+    for name in ["trace", "xlogy", "axis_sum", "volume"] {
         let src_path = format!("shaders/{name}.wgsl");
         println!("cargo::rerun-if-changed={src_path}");
         let src = std::fs::read_to_string(&src_path).expect("read shader");

@@ -3,7 +3,6 @@
 use std::io::Write;
 use std::process::ExitCode;
 
-use clap::Parser;
 use clap::error::ErrorKind;
 use itgfx_cli::options::{Cli, Command};
 use itgfx_cli::{CliError, complexity, devices, imaging, measure, simplify, viewpoints, volume};
@@ -70,7 +69,7 @@ fn one_line(s: &str) -> String {
 
 fn main() -> ExitCode {
     let words: Vec<std::ffi::OsString> = std::env::args_os().collect();
-    let cli = match Cli::try_parse_from(&words) {
+    let cli = match Cli::parse_words(&words) {
         Ok(cli) => cli,
         Err(e) => {
             return match e.kind() {

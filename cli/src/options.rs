@@ -29,6 +29,30 @@ pub struct Cli {
     pub command: Command,
 }
 
+impl Cli {
+    /// The command-line parser: [`Cli`]'s, with every option that takes a
+    /// value also taking a negative number (`--delta -1`), so that the value's
+    /// own check answers ("must be in ...") instead of "unknown option -1".
+    #[must_use]
+    pub fn parser() -> clap::Command {
+        fn negatives(c: clap::Command) -> clap::Command {
+            c.mut_args(|a| if a.get_action().takes_values() { a.allow_negative_numbers(true) } else { a })
+                .mut_subcommands(negatives)
+        }
+        negatives(<Self as clap::CommandFactory>::command())
+    }
+
+    /// Parses `words` (the program name first) with [`Cli::parser`].
+    ///
+    /// # Errors
+    /// clap's error for a bad command line.
+    pub fn parse_words(words: &[std::ffi::OsString]) -> Result<Self, clap::Error> {
+        let mut cmd = Self::parser();
+        let m = cmd.try_get_matches_from_mut(words)?;
+        <Self as clap::FromArgMatches>::from_arg_matches(&m).map_err(|e| e.format(&mut cmd))
+    }
+}
+
 /// The commands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
@@ -79,6 +103,21 @@ pub struct Tracing {
     /// Worker threads (default: all cores)
     #[arg(long, value_name = "T", value_parser = threads)]
     pub threads: Option<usize>,
+}
+
+/// Best views and guided exploration (Part V §4), shared by `viewpoints`
+/// (channel V -> O) and `volume` (channel V -> Z).
+#[derive(Debug, Clone, Copy, Args)]
+pub struct Selection {
+    /// At most N best views, greedy
+    #[arg(long, value_name = "N", default_value = "6", value_parser = best_n, help_heading = "Selection")]
+    pub best_n: usize,
+    /// Stop once the views capture F of the channel's I(V;O) or I(V;Z), F in (0, 1]
+    #[arg(long, value_name = "F", default_value = "0.9", value_parser = capture, help_heading = "Selection")]
+    pub capture: f64,
+    /// Steps of the guided exploration path from the best view
+    #[arg(long, value_name = "S", default_value = "12", value_parser = explore, help_heading = "Selection")]
+    pub explore: usize,
 }
 
 /// The built-in scenes, one per line with its description (the registry of backends).
@@ -186,15 +225,9 @@ pub struct ViewpointsOptions {
     #[command(flatten)]
     #[allow(missing_docs)]
     pub tracing: Tracing,
-    /// At most N best views, greedy
-    #[arg(long, value_name = "N", default_value = "6", value_parser = best_n, help_heading = "Selection")]
-    pub best_n: usize,
-    /// Stop once the views capture F of I(V;O), F in (0, 1]
-    #[arg(long, value_name = "F", default_value = "0.9", value_parser = capture, help_heading = "Selection")]
-    pub capture: f64,
-    /// Steps of the guided exploration path from the best view
-    #[arg(long, value_name = "S", default_value = "12", value_parser = explore, help_heading = "Selection")]
-    pub explore: usize,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub selection: Selection,
     /// Every picture below under its default name in DIR
     #[arg(long, value_name = "DIR", value_parser = out_path, help_heading = "Pictures")]
     pub out: Option<PathBuf>,

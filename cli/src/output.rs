@@ -81,6 +81,33 @@ pub fn out_dir(dir: &Path) -> Result<Option<PathBuf>, CliError> {
     Ok(Some(dir.to_path_buf()))
 }
 
+/// [`out_dir`], then `checks` (typically [`check`] on each file the run will
+/// write); when they fail, the directory this call made goes again (only if
+/// still empty). Returns whether the directory was made here.
+///
+/// # Errors
+/// The first error of [`out_dir`] or `checks`.
+pub fn out_dir_checked(dir: &Path, checks: impl FnOnce() -> Result<(), CliError>) -> Result<bool, CliError> {
+    let created = out_dir(dir)?;
+    if let Err(e) = checks() {
+        if let Some(d) = &created {
+            let _ = fs::remove_dir(d);
+        }
+        return Err(e);
+    }
+    Ok(created.is_some())
+}
+
+/// [`out_dir_checked`] for files named `names` in `dir`: their paths.
+///
+/// # Errors
+/// One line naming `--out` or the file.
+pub fn out_files(dir: &Path, names: &[&str]) -> Result<Vec<PathBuf>, CliError> {
+    let paths: Vec<PathBuf> = names.iter().map(|n| dir.join(n)).collect();
+    out_dir_checked(dir, || paths.iter().try_for_each(|p| check("--out", p)))?;
+    Ok(paths)
+}
+
 /// Checks, before any work, that `path` can be written: not empty, not a
 /// directory, its directory exists and accepts a new file (probed with a
 /// temporary file, removed at once); devices must open for writing (FIFOs

@@ -9,7 +9,9 @@ use clap::Args;
 use itgfx_backends::open;
 use itgfx_backends::radiosity::reference::{Reference, path_traced};
 use itgfx_backends::radiosity::refine::check_scene;
-use itgfx_backends::radiosity::render::{View, default_camera, mesh_picture, picture, tonemap, view, white_point};
+use itgfx_backends::radiosity::render::{
+    View, default_camera, leaf_mesh, mesh_picture, picture, tonemap, view, white_point,
+};
 use itgfx_backends::radiosity::search::search_epsilon;
 use itgfx_backends::radiosity::{Oracle, Rgb, Settings, Solution, element::Hierarchy, solve};
 use itgfx_backends::tracer::Prepared;
@@ -18,6 +20,7 @@ use itgfx_core::pixel::{SRGB_LUMINANCE_WEIGHTS, image_error};
 use crate::CliError;
 use crate::options::{Common, Tracing};
 use crate::progress::Progress;
+use crate::render::images::{Radiance, read_exr, write_exr};
 use crate::report::Report;
 use crate::scene::load_scene;
 use crate::values::{count, out_path};
@@ -26,8 +29,10 @@ use crate::values::{count, out_path};
 #[derive(Debug, Args)]
 #[command(after_help = "SCENE is an .obj file (with MTL Kd/Ke) or a built-in (see itgfx complexity --help); \
                         cornell-box's light emits.\n\
-                        --out DIR gets radiosity.png (Gouraud), mesh.png, radiosity.pfm (linear), elements.csv \
-                        and radiosity.json; with --path-trace W it gets reference.pfm (+ -even/-odd halves), \
+                        --out DIR gets radiosity.png (Gouraud), mesh.png, radiosity.exr and radiosity.pfm (linear), \
+                        mesh.ply (leaf elements, vertex radiosities), elements.csv (+ patches.csv with \
+                        --check-paths) and radiosity.json; with --path-trace W it gets reference.exr and \
+                        reference.pfm (+ -even/-odd halves, PFM), \
                         reference.png and reference.json instead.")]
 pub struct RadiosityOptions {
     /// A built-in scene name (e.g. cornell-box) or an .obj file
@@ -54,7 +59,7 @@ pub struct RadiosityOptions {
     /// Smallest element as a fraction of the total area (RenderPark: 1e-6)
     #[arg(long, value_name = "F", default_value = "1e-6", value_parser = min_area)]
     pub min_area: f64,
-    /// Stop refining at this many elements (memory grows with the links: 1.3 GB measured at 65k elements)
+    /// Stop refining at this many elements (memory grows with the links: 0.44 GiB measured at 67k elements, 1.05 GiB at 114k)
     #[arg(long, value_name = "N", default_value = "200000", value_parser = max_elements)]
     pub max_elements: usize,
     /// Seed; same seed, same mesh and numbers, any thread count
@@ -66,12 +71,15 @@ pub struct RadiosityOptions {
     /// Picture width and height in pixels (8..=2048)
     #[arg(long, value_name = "W", default_value = "256", value_parser = size)]
     pub size: u32,
-    /// Score the solution against a path-traced reference (reference.pfm of --path-trace)
-    #[arg(long, value_name = "R.pfm", value_parser = out_path, conflicts_with = "path_trace")]
+    /// Score the solution against a path-traced reference (reference.exr or .pfm of --path-trace)
+    #[arg(long, value_name = "R.exr", value_parser = out_path, conflicts_with = "path_trace")]
     pub reference: Option<PathBuf>,
     /// Make the reference instead: W random walks per pixel (no mesh, no oracle)
     #[arg(long, value_name = "W", value_parser = walks, conflicts_with_all = ["elements", "epsilon"])]
     pub path_trace: Option<u32>,
+    /// Check the solution patch by patch: N paths of the renderer's path tracer per patch
+    #[arg(long, value_name = "N", value_parser = walks, conflicts_with = "path_trace")]
+    pub check_paths: Option<u32>,
     /// Write the pictures and files into DIR
     #[arg(long, value_name = "DIR", value_parser = out_path)]
     pub out: Option<PathBuf>,
@@ -148,9 +156,27 @@ fn usage(e: impl std::fmt::Display) -> CliError {
 fn outputs(o: &RadiosityOptions) -> Result<Vec<(&'static str, PathBuf)>, CliError> {
     let Some(dir) = &o.out else { return Ok(Vec::new()) };
     let names: &[&'static str] = if o.path_trace.is_some() {
-        &["reference.pfm", "reference-even.pfm", "reference-odd.pfm", "reference.png", "reference.json"]
+        &[
+            "reference.exr",
+            "reference.pfm",
+            "reference-even.pfm",
+            "reference-odd.pfm",
+            "reference.png",
+            "reference.json",
+        ]
+    } else if o.check_paths.is_some() {
+        &[
+            "radiosity.png",
+            "mesh.png",
+            "radiosity.exr",
+            "radiosity.pfm",
+            "mesh.ply",
+            "elements.csv",
+            "patches.csv",
+            "radiosity.json",
+        ]
     } else {
-        &["radiosity.png", "mesh.png", "radiosity.pfm", "elements.csv", "radiosity.json"]
+        &["radiosity.png", "mesh.png", "radiosity.exr", "radiosity.pfm", "mesh.ply", "elements.csv", "radiosity.json"]
     };
     let created = crate::output::out_dir(dir)?.is_some();
     let list: Vec<(&'static str, PathBuf)> = names.iter().map(|n| (*n, dir.join(n))).collect();
@@ -176,6 +202,28 @@ fn pfm(px: &[Rgb], width: u32, height: u32) -> Vec<u8> {
         }
     }
     out
+}
+
+/// A linear RGB picture as OpenEXR (f32, the renderer's writer).
+fn exr(px: &[Rgb], width: u32, height: u32, path: &Path) -> Result<(), CliError> {
+    let image = Radiance { width: width as usize, height: height as usize, rgb: px.to_vec() };
+    write_exr(&image, path)
+}
+
+/// Reads `--reference`: OpenEXR (by its magic number) or the PFM of [`pfm`].
+fn read_reference(path: &Path) -> Result<(u32, u32, Vec<Rgb>), CliError> {
+    let mut magic = [0u8; 4];
+    let is_exr = std::fs::File::open(path)
+        .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut magic))
+        .is_ok_and(|()| magic == [0x76, 0x2f, 0x31, 0x01]);
+    if !is_exr {
+        return read_pfm(path);
+    }
+    let image = read_exr(path).map_err(|e| CliError::usage(format!("--reference {e}")))?;
+    if let Some(bad) = image.rgb.iter().flatten().find(|v| !(v.is_finite() && **v >= 0.0)) {
+        return Err(CliError::usage(format!("--reference {path:?}: a pixel value {bad} (want finite, >= 0)")));
+    }
+    Ok((image.width as u32, image.height as u32, image.rgb))
 }
 
 /// Reads a PFM written by [`pfm`] (colour, little-endian).
@@ -270,7 +318,7 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
             h0.roots.len()
         )));
     }
-    let reference = o.reference.as_ref().map(|p| read_pfm(p)).transpose()?;
+    let reference = o.reference.as_ref().map(|p| read_reference(p)).transpose()?;
     if let Some((w, hh, _)) = &reference
         && (*w != o.size || *hh != o.size)
     {
@@ -347,6 +395,12 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
     r.real("power_emitted", lum(emitted), None).real("power_absorbed", lum(absorbed), None);
     r.real("balance", if lum(emitted) > 0.0 { lum(absorbed) / lum(emitted) } else { 0.0 }, None);
     r.real("solve_seconds", solve_seconds, Some("s"));
+    if let Some(paths) = o.check_paths {
+        let csv = crate::radiosity_check::check(&mut r, &scene, &prepared, tracer.as_ref(), &solution, paths, o.seed)?;
+        if let Some(p) = file("patches.csv") {
+            crate::output::write(&p, csv.as_bytes())?;
+        }
+    }
 
     let v = view(&scene, &prepared, tracer.as_ref(), h, &camera, (o.size, o.size)).map_err(usage)?;
     let (gouraud, leaf) = picture(h, &solution.radiosity, &v, true);
@@ -377,8 +431,14 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
     if let Some(p) = file("mesh.png") {
         png(&mesh_picture(&flat, &leaf, o.size, white), o.size, o.size, &p)?;
     }
+    if let Some(p) = file("radiosity.exr") {
+        exr(&dense(&gouraud), o.size, o.size, &p)?;
+    }
     if let Some(p) = file("radiosity.pfm") {
         crate::output::write(&p, &pfm(&dense(&gouraud), o.size, o.size))?;
+    }
+    if let Some(p) = file("mesh.ply") {
+        crate::radiosity_mesh::write(&leaf_mesh(h, &solution.radiosity), &scene.name, white, &p)?;
     }
     if let Some(p) = file("elements.csv") {
         let mut s = String::from("element,patch,level,area,x,y,z,B_r,B_g,B_b\n");
@@ -449,6 +509,9 @@ fn reference_report(
     r.real("noise_RMSE_a", na / 2.0, None).real("noise_RMSE_p", np / 2.0, None);
     r.real("seconds", t0.elapsed().as_secs_f64(), Some("s"));
     let (w, h) = (v.width, v.height);
+    if let Some(p) = file("reference.exr") {
+        exr(&mean, w, h, &p)?;
+    }
     if let Some(p) = file("reference.pfm") {
         crate::output::write(&p, &pfm(&mean, w, h))?;
     }

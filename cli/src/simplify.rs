@@ -14,6 +14,7 @@ use itgfx_backends::viewpoint::icosphere;
 use crate::CliError;
 use crate::export::{montage, write_png};
 use crate::options::{Common, Tracing};
+use crate::plot::{Axis, Style, chart};
 use crate::report::Report;
 use crate::scene::load_scene;
 use crate::values::{distance, max_subdivision, out_path, tolerance, viewpoint_count, viewpoint_level};
@@ -251,12 +252,7 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
         check_memory(n, icosphere(viewpoint_level(o.viewpoints)).len())
             .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
     }
-    if !out.exists() {
-        std::fs::create_dir_all(&out).map_err(|e| CliError::usage(format!("--out {out:?}: {e}")))?;
-    }
-    for name in ["original.png", "compare.png"] {
-        crate::output::check("--out", &out.join(name))?;
-    }
+    crate::output::out_files(&out, &["original.png", "compare.png"])?;
 
     let t0 = Instant::now();
     let unit = Some(o.common.base.unit());
@@ -391,96 +387,18 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
     Ok(r)
 }
 
-/// 3 × 5 pixel glyphs of the characters plot labels use (rows top down,
-/// three bits each, the high bit on the left).
-fn glyph(c: char) -> Option<[u8; 5]> {
-    Some(match c {
-        '0' => [7, 5, 5, 5, 7],
-        '1' => [2, 6, 2, 2, 7],
-        '2' => [7, 1, 7, 4, 7],
-        '3' => [7, 1, 7, 1, 7],
-        '4' => [5, 5, 7, 1, 1],
-        '5' => [7, 4, 7, 1, 7],
-        '6' => [7, 4, 7, 5, 7],
-        '7' => [7, 1, 1, 1, 1],
-        '8' => [7, 5, 7, 5, 7],
-        '9' => [7, 5, 7, 1, 7],
-        '.' => [0, 0, 0, 0, 2],
-        _ => return None,
-    })
-}
-
-/// Draws `text` (digits and dots) with its top-left corner at `(x, y)`, pixels doubled.
-fn label(img: &mut image::RgbImage, x: i64, y: i64, text: &str, colour: [u8; 3]) {
-    for (i, c) in text.chars().enumerate() {
-        let Some(g) = glyph(c) else { continue };
-        for (row, bits) in g.iter().enumerate() {
-            for col in 0..3 {
-                if bits >> (2 - col) & 1 == 1 {
-                    for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                        let (px, py) = (x + 8 * i as i64 + 2 * col + dx, y + 2 * row as i64 + dy);
-                        if px >= 0 && py >= 0 && px < i64::from(img.width()) && py < i64::from(img.height()) {
-                            img.put_pixel(px as u32, py as u32, image::Rgb(colour));
-                        }
-                    }
-                }
-            }
-        }
-    }
-}
-
-/// A line from `a` to `b` (pixel centres), one pixel wide.
-fn line(img: &mut image::RgbImage, a: (f64, f64), b: (f64, f64), colour: [u8; 3]) {
-    let n = (b.0 - a.0).abs().max((b.1 - a.1).abs()).ceil().max(1.0) as usize;
-    for k in 0..=n {
-        let t = k as f64 / n as f64;
-        let (x, y) = (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t);
-        if x >= 0.0 && y >= 0.0 && x < f64::from(img.width()) && y < f64::from(img.height()) {
-            img.put_pixel(x as u32, y as u32, image::Rgb(colour));
-        }
-    }
-}
-
 /// Error against triangles for a sweep: image RMSE (white) and silhouette
 /// RMSE (orange) on a logarithmic triangle axis from the fewest triangles
-/// to the input's; the axis ends and the largest error are labelled.
+/// to the input's (which has no error: both curves end at zero there).
 fn error_plot(points: &[(usize, f64, f64)], input: usize) -> image::RgbImage {
-    let (w, h, m) = (480u32, 300u32, 40.0);
-    let mut img = image::RgbImage::from_pixel(w, h, image::Rgb(itgfx_backends::preview::BACKGROUND));
     let lo = points.iter().map(|p| p.0).min().unwrap_or(1).max(1) as f64;
     let hi = (input as f64).max(lo * 1.01);
     let top = points.iter().map(|p| p.1.max(p.2)).fold(0.0, f64::max).max(1e-6) * 1.1;
-    let at = |t: usize, e: f64| {
-        let x = m + (f64::from(w) - 2.0 * m) * ((t.max(1) as f64).ln() - lo.ln()) / (hi.ln() - lo.ln());
-        (x, f64::from(h) - m - (f64::from(h) - 2.0 * m) * e / top)
-    };
-    let grey = [150, 150, 155];
-    line(&mut img, (m, f64::from(h) - m), (f64::from(w) - m, f64::from(h) - m), grey);
-    line(&mut img, (m, m), (m, f64::from(h) - m), grey);
-    // The input itself has no error: every curve ends at (input, 0).
-    let mut curves = points.to_vec();
-    curves.push((input, 0.0, 0.0));
-    curves.sort_by_key(|p| p.0);
-    for (pick, colour) in [(1usize, [235, 235, 235]), (2, [255, 150, 40])] {
-        let value = |p: &(usize, f64, f64)| if pick == 1 { p.1 } else { p.2 };
-        for pair in curves.windows(2) {
-            line(&mut img, at(pair[0].0, value(&pair[0])), at(pair[1].0, value(&pair[1])), colour);
-        }
-        for p in &curves {
-            let (x, y) = at(p.0, value(p));
-            for (dx, dy) in [(-1.0, 0.0), (1.0, 0.0), (0.0, -1.0), (0.0, 1.0), (0.0, 0.0)] {
-                line(&mut img, (x + dx, y + dy), (x + dx, y + dy), colour);
-            }
-        }
-    }
-    label(&mut img, m as i64, f64::from(h) as i64 - 28, &format!("{}", lo as usize), grey);
-    label(
-        &mut img,
-        f64::from(w) as i64 - 40 - 8 * input.to_string().len() as i64 + 8,
-        f64::from(h) as i64 - 28,
-        &input.to_string(),
-        grey,
-    );
-    label(&mut img, 4, m as i64 - 14, &format!("{:.3}", top), grey);
-    img
+    let mut all = points.to_vec();
+    all.push((input, 0.0, 0.0));
+    all.sort_by_key(|p| p.0);
+    let curve =
+        |pick: fn(&(usize, f64, f64)) -> f64, colour| (all.iter().map(|p| (p.0 as f64, pick(p))).collect(), colour);
+    let curves = [curve(|p| p.1, [235, 235, 235]), curve(|p| p.2, [255, 150, 40])];
+    chart(&curves, Axis::log(lo, hi), Axis::linear(0.0, top), (480, 300), &Style::DARK)
 }

@@ -57,20 +57,14 @@ pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
     }
     crate::viewpoint_shard::check(o, &pictures(o))?;
     let resolution = o.resolution.unwrap_or(128);
-    let (distance, capture, max_views, steps, rounds) = (o.distance, o.capture, o.best_n, o.explore, o.smooth);
-    let created = match &o.out {
-        Some(d) => crate::output::out_dir(d)?,
-        None => None,
-    };
+    let (distance, capture, max_views, steps, rounds) =
+        (o.distance, o.selection.capture, o.selection.best_n, o.selection.explore, o.smooth);
     let outputs = pictures(o);
     let checked =
-        outputs.iter().try_for_each(|(flag, _, p)| p.as_ref().map_or(Ok(()), |p| crate::output::check(flag, p)));
-    if let Err(e) = checked {
-        // Leave nothing behind: the directory made for --out goes again (only if still empty).
-        if let Some(d) = created {
-            let _ = std::fs::remove_dir(d);
-        }
-        return Err(e);
+        || outputs.iter().try_for_each(|(flag, _, p)| p.as_ref().map_or(Ok(()), |p| crate::output::check(flag, p)));
+    match &o.out {
+        Some(d) => crate::output::out_dir_checked(d, checked).map(|_| ())?,
+        None => checked()?,
     }
     let path = |flag: &str| outputs.iter().find(|x| x.0 == flag).and_then(|x| x.2.clone());
     let weights = if o.uniform_input { ViewpointWeights::Uniform } else { ViewpointWeights::ProjectedArea };

@@ -149,3 +149,16 @@ fn grouping_labels_are_compacted() {
     assert!((v["h_in"].as_f64().unwrap() + v["h_out"].as_f64().unwrap() - 1.5).abs() < 1e-12);
     fails_with(&["measure", "grouping", "--p", "0.5,0.5", "--groups", "0,1.5"], &["--groups", "1.5"]);
 }
+
+/// A negative number after an option is that option's value, checked by its
+/// own parser (it was "unknown option -1"); a true unknown short option is
+/// still named as such.
+#[test]
+fn negative_values_reach_their_option() {
+    fails_with(&["render", "mirror-room", "--delta", "-1", "--size", "8x8"], &["--delta", "0..=1", "-1"]);
+    fails_with(&["complexity", "cube", "--lines", "-5"], &["--lines", "-5"]);
+    fails_with(&["viewpoints", "cube", "--distance", "-3"], &["--distance", "1.05..=1000"]);
+    fails_with(&["volume", "hydrogen", "--step", "-1"], &["--step", "0.05..=2"]);
+    fails_with(&["radiosity", "cornell-box", "--samples", "-3"], &["--samples", "-3"]);
+    fails_with(&["complexity", "cube", "-x"], &["unknown option -x"]);
+}

@@ -22,9 +22,12 @@ fn render(out: &Path, extra: &[&str]) -> serde_json::Value {
 fn tree_samplers_spend_the_budget_and_geometry_contrast_refines_edges() {
     let dir = temp("tree");
     for sampler in ["ic", "cc-tree"] {
-        let v = render(&dir.join(sampler), &["--spp", "16", "--sampler", sampler]);
-        let mean = v["spp_mean"].as_f64().unwrap();
-        assert!((mean - 16.0).abs() < 4.0, "{sampler}: spent {mean} for a budget of 16");
+        // The default form: the pilot tree (8 a node) decides, 8 fresh samples a leaf estimate.
+        let v = render(&dir.join(sampler), &["--spp", "32", "--sampler", sampler]);
+        let traced = v["spp_traced_mean"].as_f64().unwrap();
+        // Tuned on 144 pilot pixels of another seed, and a split costs 56 rays (4 pilot nodes,
+        // 3 more leaves): within a quarter.
+        assert!((traced - 32.0).abs() < 8.0, "{sampler}: traced {traced} for a budget of 32");
         let (lo, hi) = (v["spp_min"].as_u64().unwrap(), v["spp_max"].as_u64().unwrap());
         assert!(lo >= 8 && hi <= 680 && hi > lo && hi % 8 == 0, "{sampler}: {lo}..{hi}");
         assert!(v["threshold"].as_f64().unwrap() > 0.0);
@@ -49,17 +52,24 @@ fn supersampling_spends_exactly_the_budget_and_any_thread_count_gives_one_image(
         (v, std::fs::read(out.join("image.exr")).unwrap())
     };
     let (v, one) = run("one", "1");
-    // N_p (N_s − n_s) extra samples, shared by contrast: the mean is exactly N_s.
-    assert_eq!(v["spp_mean"].as_f64().unwrap(), 24.0);
-    assert_eq!(v["spp_min"], 8, "flat pixels keep the oracle's 8");
-    assert!(v["spp_max"].as_u64().unwrap() > 40, "high-contrast pixels take far more");
+    // The default form: the oracle's 8 only decide; 8 fresh a pixel and N_p (N_s − 16)
+    // more shared by contrast: exactly N_s traced, N_s − 8 in the image.
+    assert_eq!(v["form"], "unbiased");
+    assert_eq!(v["spp_traced_mean"].as_f64().unwrap(), 24.0);
+    assert_eq!(v["spp_mean"].as_f64().unwrap(), 16.0);
+    assert_eq!(v["spp_min"], 8, "flat pixels keep 8 fresh samples");
+    assert!(v["spp_max"].as_u64().unwrap() > 32, "high-contrast pixels take far more");
     assert_eq!(v["oracle_spp"], 8);
+    // The tutorial form: N_p (N_s − 8) shared, the oracle's samples kept in the image.
+    let t = render(&dir.join("tutorial"), &["--spp", "24", "--sampler", "es", "--delta", "0.5", "--tutorial-form"]);
+    assert_eq!((t["spp_mean"].as_f64().unwrap(), t["spp_traced_mean"].as_f64().unwrap()), (24.0, 24.0));
+    assert_eq!(t["spp_min"], 8, "flat pixels keep the oracle's 8");
     let (_, two) = run("two", "2");
     assert_eq!(one, two, "same seed, same EXR with 1 and 2 threads");
     // The cap holds and the budget is still met where the caps leave room.
-    let c = render(&dir.join("cap"), &["--spp", "16", "--sampler", "es", "--max-spp", "20"]);
-    assert!(c["spp_max"].as_u64().unwrap() <= 20);
-    assert_eq!(c["spp_mean"].as_f64().unwrap(), 16.0);
+    let c = render(&dir.join("cap"), &["--spp", "24", "--sampler", "es", "--max-spp", "24"]);
+    assert!(c["spp_max"].as_u64().unwrap() <= 24);
+    assert_eq!(c["spp_traced_mean"].as_f64().unwrap(), 24.0);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -106,8 +116,9 @@ fn contrast_options_are_checked() {
     fails(&["render", "cornell-box", "--out", o, "--delta", "0.5", "--sampler", "kl"], "--delta is for");
     fails(&["render", "cornell-box", "--out", o, "--binary-contrast"], "--binary-contrast");
     fails(&["render", "cornell-box", "--out", o, "--sampler", "es", "--threshold", "0.1"], "no --threshold");
-    fails(&["render", "cornell-box", "--out", o, "--sampler", "es", "--unbiased"], "no --threshold");
+    fails(&["render", "cornell-box", "--out", o, "--sampler", "es", "--unbiased"], "the default now");
     fails(&["render", "cornell-box", "--out", o, "--sampler", "ic", "--max-spp", "64"], "depth");
     fails(&["render", "cornell-box", "--out", o, "--sampler", "es", "--spp", "4"], "at least 8");
+    fails(&["render", "cornell-box", "--out", o, "--sampler", "es", "--spp", "12"], "--tutorial-form");
     std::fs::remove_dir_all(&dir).unwrap();
 }

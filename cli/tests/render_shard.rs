@@ -12,7 +12,8 @@ fn temp(name: &str) -> PathBuf {
     common::temp("render-shard", name)
 }
 
-const BASE: [&str; 6] = ["render", "mirror-room:1", "--size", "20x17", "--spp", "16"];
+// 24 rays a pixel: the default (unbiased) form's 16 a pixel to decide and estimate, and 8 more to share.
+const BASE: [&str; 6] = ["render", "mirror-room:1", "--size", "20x17", "--spp", "24"];
 
 fn shards(dir: &Path, sampler: &str, n: u32, seed: &str) -> Vec<PathBuf> {
     (0..n)
@@ -36,6 +37,10 @@ fn merged_shards_give_the_single_run_exr_for_every_sampler() {
         let mut args = BASE.to_vec();
         args.extend(["--sampler", sampler, "--out", s(&single), "--json"]);
         let one = ok(&itgfx(&args));
+        if sampler != "uniform" {
+            assert_eq!(one["form"], "unbiased", "{sampler}: the default form");
+            assert!(one["spp_max"].as_u64() > one["spp_min"].as_u64(), "{sampler}: the pixels' counts vary");
+        }
         let files = shards(&dir, sampler, 3, "1");
         // Any order, comma- or space-separated.
         let merged = dir.join(format!("merged-{sampler}"));

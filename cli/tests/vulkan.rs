@@ -28,7 +28,11 @@ fn have_vulkan() -> bool {
 #[test]
 fn missing_vulkan_is_a_clear_error() {
     let hidden = [("ITGFX_VULKAN_LIBRARY", "/nonexistent/libvulkan.so.1")];
-    for args in [&["devices"][..], &["complexity", "cube", "--lines", "100", "--backend", "vulkan"][..]] {
+    for args in [
+        &["devices"][..],
+        &["complexity", "cube", "--lines", "100", "--backend", "vulkan"][..],
+        &["volume", "cube:8", "--backend", "vulkan"][..],
+    ] {
         let out = itgfx(args, &hidden);
         assert_eq!(out.status.code(), Some(2), "{args:?}");
         let err = String::from_utf8_lossy(&out.stderr);
@@ -81,4 +85,57 @@ fn viewpoints_match_the_cpu_backend() {
     }
     let args = ["viewpoints", "table-chairs", "--viewpoints", "42", "--estimator", "grid", "--resolution", "32"];
     assert_eq!(json_on(&args, "cpu"), json_on(&args, "vulkan"));
+}
+
+/// The volume channel ray-cast by the Vulkan kernel gives the CPU's JSON
+/// (every measure, selection and object of the built-in volumes), but for
+/// the backend's name, the timings and the memory estimate (which counts
+/// the device's buffers).
+#[test]
+fn volume_matches_the_cpu_backend() {
+    if !have_vulkan() {
+        return;
+    }
+    for args in [
+        &["volume", "hydrogen:3,2,0,20", "--viewpoints", "42"][..],
+        &["volume", "phantom:16", "--viewpoints", "12", "--focus", "left"][..],
+        &["volume", "cube:12", "--tf", "step", "--viewpoints", "12", "--size", "40"][..],
+    ] {
+        let mut cpu = json_on(args, "cpu");
+        let mut gpu = json_on(args, "vulkan");
+        let (c, g) = (cpu.as_object_mut().unwrap(), gpu.as_object_mut().unwrap());
+        let (mc, mg) = (c.remove("memory_estimate_MiB").unwrap(), g.remove("memory_estimate_MiB").unwrap());
+        assert!(g.remove("vulkan_rays_finished_on_host").unwrap().is_u64(), "{args:?}");
+        assert!(mg.as_f64().unwrap() > mc.as_f64().unwrap(), "{args:?}: the device's buffers are counted");
+        assert_eq!(cpu, gpu, "{args:?}");
+    }
+}
+
+/// Shards cast on different backends merge into the CPU's single run.
+#[test]
+fn volume_shards_mix_backends() {
+    if !have_vulkan() {
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("itgfx-vulkan-volume-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let run = ["volume", "hydrogen:3,2,0,16", "--viewpoints", "12"];
+    let files: Vec<String> = ["vulkan", "cpu"]
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let f = dir.join(format!("{i}.shard")).display().to_string();
+            let shard = format!("{i}/2");
+            let out = itgfx(&[&run[..], &["--backend", b, "--shard", &shard, "--save-shard", &f]].concat(), &[]);
+            assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+            f
+        })
+        .collect();
+    let merged = json_on(&[&run[..], &["--merge", &files.join(",")]].concat(), "cpu");
+    let mut single = json_on(&run, "cpu");
+    single.as_object_mut().unwrap().remove("memory_estimate_MiB");
+    let mut merged = merged;
+    merged.as_object_mut().unwrap().remove("memory_estimate_MiB");
+    assert_eq!(merged, single);
+    let _ = std::fs::remove_dir_all(&dir);
 }

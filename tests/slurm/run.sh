@@ -82,7 +82,7 @@ say "volume: merged == single run, bit for bit ($(grep -o '"I_VZ":[^,]*' "$OUT/v
 
 # render: 4 shards (pixel rows) of a tuned adaptive run and of the supersampler; the merged EXR is the single run's.
 for sampler in hl-sqrt es; do
-    export RSCENE=mirror-room:1 RENDER_ARGS="--size 24x20 --spp 16 --sampler $sampler" MERGE_ARGS=
+    export RSCENE=mirror-room:1 RENDER_ARGS="--size 24x20 --spp 24 --sampler $sampler" MERGE_ARGS=
     rm -rf "$OUT"/render*
     submit render
     # shellcheck disable=SC2086

@@ -87,6 +87,67 @@ fn coherent_rays(p: &Prepared, n: u64, seed: u64) -> Vec<Line> {
         .collect()
 }
 
+/// Rays with exactly zero direction components, positive and negative
+/// (along the axes and in the coordinate planes), from points whose
+/// coordinates are often on a grid of eighths: boxes flat across an axis
+/// seen head-on, and the slab test's sign-of-zero cases.
+fn axis_rays(n: u64, seed: u64) -> Vec<Line> {
+    let dirs: Vec<DVec3> = {
+        let mut d = Vec::new();
+        for a in [-1.0, -0.0, 0.0, 1.0] {
+            for b in [-1.0, -0.0, 0.0, 1.0] {
+                for c in [-1.0, -0.0, 0.0, 1.0] {
+                    let v = DVec3::new(a, b, c);
+                    if v.length() > 0.0 {
+                        // Keep each zero's sign: normalise the non-zero parts only.
+                        let n = v.length();
+                        d.push(DVec3::new(a / n, b / n, c / n));
+                    }
+                }
+            }
+        }
+        d
+    };
+    (0..n)
+        .map(|i| {
+            let r = LineRng::new(seed, i);
+            // Each coordinate on a grid of eighths half the time, random otherwise.
+            let c = |k: u32| {
+                let u = r.uniform(k);
+                if r.uniform(k + 10) < 0.5 { (u * 8.0).floor() / 8.0 - 0.5 } else { u - 0.5 }
+            };
+            let o = DVec3::new(c(0), c(1), c(2));
+            let d = dirs[(r.uniform(3) * dirs.len() as f64) as usize % dirs.len()];
+            Line::ray(o, d, 0.0, 4.0)
+        })
+        .collect()
+}
+
+/// Rays at every triangle of `scene` along its normal, from both sides and
+/// just off the surface: a wall met head-on. (obvhs missed axis-aligned walls
+/// from rays with a `-0.0` direction component; the radiosity patch check
+/// found it on cornell-box.)
+fn head_on_rays(scene: &Scene, p: &Prepared, per_triangle: u64) -> Vec<Line> {
+    let mut ls = Vec::new();
+    for (t, tri) in scene.triangles.iter().enumerate() {
+        let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize();
+        let mut back = Vec::new();
+        for k in 0..per_triangle {
+            let r = LineRng::new(5, k + per_triangle * t as u64);
+            let (mut a, mut b) = (r.uniform(0), r.uniform(1));
+            if a + b > 1.0 {
+                (a, b) = (1.0 - a, 1.0 - b);
+            }
+            let x = p.to_normalised(tri[0] + (tri[1] - tri[0]) * a + (tri[2] - tri[0]) * b);
+            ls.push(Line::ray(x + n * 1e-3, -n, 0.0, 2e-3));
+            back.push(Line::ray(x - n * 1e-3, n, 0.0, 2e-3));
+        }
+        // Parallel runs of one direction: what the CPU walks as packets.
+        ls.append(&mut back);
+    }
+    ls
+}
+
 fn queries(t: &dyn Tracer, ls: &[Line]) -> (CrossingBuffer, Vec<Option<Hit>>, Vec<bool>) {
     let (mut all, mut first, mut any) = (CrossingBuffer::default(), Vec::new(), Vec::new());
     t.trace_all(ls, &mut all).unwrap();
@@ -104,7 +165,8 @@ fn queries(t: &dyn Tracer, ls: &[Line]) -> (CrossingBuffer, Vec<Option<Hit>>, Ve
 fn agrees(scene: &Scene, n: u64) {
     let p = Prepared::new(scene);
     let reference = open(BackendChoice::Reference, &p).unwrap();
-    for ls in [lines(n, 11), inner_rays(n, 12), coherent_rays(&p, n, 13)] {
+    let head_on = head_on_rays(scene, &p, (n / scene.triangles.len().max(1) as u64).clamp(2, 50));
+    for ls in [lines(n, 11), inner_rays(n, 12), coherent_rays(&p, n, 13), axis_rays(n, 14), head_on] {
         let (r_all, r_first, r_any) = queries(reference.as_ref(), &ls);
         for (i, l) in ls.iter().enumerate() {
             let line = r_all.line(i);

@@ -9,6 +9,8 @@
 //!   and normalised, is not below `ε`; the larger of its two elements is split;
 //! * [`search`]: `ε` bisected so every oracle ends near the same element count;
 //! * [`render`]: the Gouraud-shaded solution and the mesh from a camera;
+//! * [`patches`]: each patch's mean radiosity by the renderer's path
+//!   tracer, to check a solution patch by patch;
 //! * [`reference`](mod@reference): an independent path-traced estimate of the radiosity
 //!   seen through each pixel, with its standard error.
 //!
@@ -19,8 +21,10 @@
 #[cfg(test)]
 mod conservation;
 pub mod element;
+mod front;
 mod gather;
 pub mod link;
+pub mod patches;
 pub mod reference;
 pub mod refine;
 pub mod render;

@@ -18,7 +18,8 @@ use std::fmt;
 
 use super::Oracle;
 use super::element::{ElementId, Hierarchy};
-use super::gather::{self, Rgb, Surfaces};
+use super::front::front_fractions;
+use super::gather::{self, Conservation, Rgb, Surfaces};
 use super::link::{Link, Sampler, Stage, facing};
 use crate::backend::BackendError;
 use crate::scene::Scene;
@@ -45,6 +46,9 @@ pub struct Settings {
     pub max_sweeps: u32,
     /// Most refinement passes.
     pub max_passes: u32,
+    /// Rays per leaf estimating what it sees (front, back, nothing) for
+    /// power conservation ([`gather::Conservation`]); 0: plain push-pull.
+    pub front_rays: u32,
 }
 
 impl Default for Settings {
@@ -59,6 +63,7 @@ impl Default for Settings {
             tolerance: 1e-6,
             max_sweeps: 1000,
             max_passes: 16,
+            front_rays: 32,
         }
     }
 }
@@ -185,6 +190,30 @@ fn transport_seed(seed: u64) -> u64 {
     seed ^ 0xA076_1D64_78BD_642F
 }
 
+/// The conservation weights of the current mesh and links: what every
+/// leaf not yet measured sees is traced (NaN marks those), its rays added
+/// to `rays`.
+fn conservation(
+    h: &Hierarchy,
+    links: &[Link],
+    sampler: &Sampler<'_>,
+    settings: &Settings,
+    seen: &mut Vec<[f64; 2]>,
+    rays: &mut u64,
+) -> Result<Conservation, BackendError> {
+    if settings.front_rays == 0 {
+        return Ok(Conservation::plain(h));
+    }
+    seen.resize(h.elements.len(), [f64::NAN; 2]);
+    let todo: Vec<ElementId> = h.leaves().into_iter().filter(|&e| seen[e as usize][0].is_nan()).collect();
+    let (f, r) = front_fractions(h, sampler.prepared, sampler.tracer, &todo, settings.front_rays, settings.seed)?;
+    for (e, v) in todo.into_iter().zip(f) {
+        seen[e as usize] = v;
+    }
+    *rays += r;
+    Ok(Conservation::new(h, links, seen))
+}
+
 /// Solves `scene` with `settings`: the whole pipeline.
 ///
 /// # Errors
@@ -226,8 +255,10 @@ pub fn solve(
     let (mut links, mut rays) = sampler.evaluate(&h, &pairs, Stage::Refine)?;
     let mut evaluations = pairs.len() as u64;
     let (mut b, mut irradiance) = (Vec::new(), Vec::new());
+    let mut front = Vec::new();
+    let k = conservation(&h, &links, &sampler, settings, &mut front, &mut rays)?;
     let mut sweeps =
-        gather::solve(&h, &links, &surfaces, &mut b, &mut irradiance, settings.tolerance, settings.max_sweeps);
+        gather::solve(&h, &links, &surfaces, &k, &mut b, &mut irradiance, settings.tolerance, settings.max_sweeps);
     let min_area = settings.min_area * total_area;
     let mut leaves = h.roots.len();
     let mut capped = false;
@@ -282,8 +313,9 @@ pub fn solve(
             evaluations += pairs.len() as u64;
             work = new;
         }
+        let k = conservation(&h, &links, &sampler, settings, &mut front, &mut rays)?;
         sweeps +=
-            gather::solve(&h, &links, &surfaces, &mut b, &mut irradiance, settings.tolerance, settings.max_sweeps);
+            gather::solve(&h, &links, &surfaces, &k, &mut b, &mut irradiance, settings.tolerance, settings.max_sweeps);
         if !changed || capped {
             break;
         }
@@ -299,7 +331,9 @@ pub fn solve(
     rays += r;
     evaluations += pairs.len() as u64;
     links = fresh;
-    sweeps += gather::solve(&h, &links, &surfaces, &mut b, &mut irradiance, settings.tolerance, settings.max_sweeps);
+    let k = conservation(&h, &links, &sampler, settings, &mut front, &mut rays)?;
+    sweeps +=
+        gather::solve(&h, &links, &surfaces, &k, &mut b, &mut irradiance, settings.tolerance, settings.max_sweeps);
     let transport_rays = links.iter().map(|l| u64::from(l.rays)).sum();
     Ok(Solution {
         hierarchy: h,
@@ -319,7 +353,7 @@ pub fn solve(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use glam::DVec3;
 
     use super::*;

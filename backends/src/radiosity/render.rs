@@ -178,6 +178,42 @@ pub fn vertex_radiosity(h: &Hierarchy, radiosity: &[Rgb]) -> Vertices {
     v
 }
 
+/// The leaves as one polygon mesh: shared corners (per patch, by position,
+/// as [`Vertices`] shares them), each corner's Gouraud vertex radiosity, and
+/// each leaf's corner indices (3 or 4, counter-clockwise as the element).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LeafMesh {
+    /// Corner positions in scene space.
+    pub positions: Vec<DVec3>,
+    /// Radiosity at each corner (the [`vertex_radiosity`] value).
+    pub radiosity: Vec<Rgb>,
+    /// Corner indices of each leaf, in leaf order.
+    pub faces: Vec<Vec<u32>>,
+}
+
+/// The [`LeafMesh`] of a solution.
+#[must_use]
+pub fn leaf_mesh(h: &Hierarchy, radiosity: &[Rgb]) -> LeafMesh {
+    let vertices = vertex_radiosity(h, radiosity);
+    let mut index: HashMap<(u32, [i64; 3]), u32> = HashMap::new();
+    let mut mesh = LeafMesh::default();
+    for e in h.leaves() {
+        let el = &h.elements[e as usize];
+        let patch = h.roots[el.root as usize].patch;
+        let mut face = Vec::with_capacity(usize::from(el.corners));
+        for (k, p) in el.points[..usize::from(el.corners)].iter().enumerate() {
+            let i = *index.entry(vertices.key(patch, *p)).or_insert_with(|| {
+                mesh.positions.push(*p);
+                mesh.radiosity.push(vertices.get(h, e, k).unwrap_or(radiosity[e as usize]));
+                (mesh.positions.len() - 1) as u32
+            });
+            face.push(i);
+        }
+        mesh.faces.push(face);
+    }
+    mesh
+}
+
 /// Radiosity at a sight: the leaf's own value (`flat`) or interpolated from
 /// its corners' vertex values (Gouraud: bilinear on quads, linear on triangles).
 #[must_use]
@@ -268,4 +304,37 @@ pub fn mesh_picture(flat: &[Option<Rgb>], leaf: &[Option<ElementId>], width: u32
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A unit square split once, then one child split again: 7 leaves, the
+    /// corners shared (3 x 3 grid plus the 5 new points of the inner split),
+    /// and a corner's value the area-weighted mean of the leaves that touch it.
+    #[test]
+    fn leaf_mesh_shares_corners_and_averages_by_area() {
+        let mut s = Scene::named("t");
+        let q = [DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+        s.add_polygon("square", &q, 0);
+        let mut h = Hierarchy::new(&s);
+        let c = h.split(0);
+        let g = h.split(c);
+        let mut b = vec![[0.0; 3]; h.elements.len()];
+        for e in h.leaves() {
+            b[e as usize] = [f64::from(e), 1.0, 0.0];
+        }
+        let m = leaf_mesh(&h, &b);
+        assert_eq!(m.faces.len(), 7);
+        assert_eq!(m.positions.len(), 9 + 5);
+        assert!(m.faces.iter().all(|f| f.len() == 4));
+        // The square's centre touches three children of the first split and
+        // one grandchild (area 1/16): (b1 + b2 + b3) / 4 + b_g2 / 16, over 13/16.
+        let centre = m.positions.iter().position(|p| (*p - DVec3::new(0.5, 0.5, 0.0)).length() < 1e-12).unwrap();
+        let grand = (g..g + 4).find(|&e| h.elements[e as usize].points.contains(&DVec3::new(0.5, 0.5, 0.0))).unwrap();
+        let want = ((c + 1..c + 4).map(f64::from).sum::<f64>() / 4.0 + f64::from(grand) / 16.0) / (13.0 / 16.0);
+        assert!((m.radiosity[centre][0] - want).abs() < 1e-12, "{} vs {want}", m.radiosity[centre][0]);
+        assert!((m.radiosity[centre][1] - 1.0).abs() < 1e-12);
+    }
 }

@@ -203,7 +203,7 @@ pub fn render(
         .into_par_iter()
         .map(|y| {
             let pixels: Vec<u32> = (y * w..(y + 1) * w).collect();
-            let row = render_pixels(pt, view, policy, &pixels);
+            let row = render_pixels(pt, view, policy, &pixels, true);
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, u64::from(h));
             row
         })
@@ -223,8 +223,11 @@ pub fn render(
     Ok(frame)
 }
 
-/// Samples taken by each of `pixels` (indices `y · width + x`) under
-/// `policy`: what [`render`] would spend there (the pixels of a pilot run).
+/// Rays traced for each of `pixels` (indices `y · width + x`) under
+/// `policy`, decision samples and image samples together: what [`render`]
+/// would spend there (the pixels of a pilot run). Only the decisions are
+/// traced: an unbiased policy's image samples are counted, not traced (as
+/// many as its pilot took, or 8 a leaf of the tree).
 ///
 /// # Errors
 /// Backend failures only.
@@ -235,19 +238,22 @@ pub fn sample_counts(
     pixels: &[u32],
 ) -> Result<Vec<u32>, BackendError> {
     let parts: Vec<Vec<([f64; 3], u32, u32)>> =
-        pixels.par_chunks(64).map(|c| render_pixels(pt, view, policy, c)).collect::<Result<_, _>>()?;
-    Ok(parts.into_iter().flatten().map(|(_, n, pilot)| n.max(pilot)).collect())
+        pixels.par_chunks(64).map(|c| render_pixels(pt, view, policy, c, false)).collect::<Result<_, _>>()?;
+    Ok(parts.into_iter().flatten().map(|(_, n, pilot)| n + pilot).collect())
 }
 
-/// Renders the given pixels (indices `y · width + x`): (mean, image samples, pilot samples).
+/// Renders the given pixels (indices `y · width + x`): (mean, image samples,
+/// pilot samples). With `estimate` false an unbiased policy only decides:
+/// the image samples are counted but not traced (the mean is the pilot's).
 fn render_pixels(
     pt: &PathTracer,
     view: &View,
     policy: &dyn Policy,
     ids: &[u32],
+    estimate: bool,
 ) -> Result<Vec<([f64; 3], u32, u32)>, BackendError> {
     if let Some(t) = policy.tree() {
-        return super::tree::render_tree(pt, view, &t, ids);
+        return super::tree::render_tree(pt, view, &t, ids, estimate);
     }
     let unbiased = policy.unbiased();
     let first = policy.first().clamp(1, MAX_PIXEL_SAMPLES);
@@ -284,6 +290,15 @@ fn render_pixels(
     }
     if !unbiased {
         return Ok(pixels.into_iter().map(|p| (mean(&p.samples.rgb), p.samples.rgb.len() as u32, 0)).collect());
+    }
+    if !estimate {
+        return Ok(pixels
+            .into_iter()
+            .map(|p| {
+                let n = p.samples.rgb.len() as u32;
+                (mean(&p.samples.rgb), n, n)
+            })
+            .collect());
     }
     // Unbiased: as many fresh samples as the pilot took, in one stratified batch.
     let batches: Vec<Batch> = pixels

@@ -109,11 +109,13 @@ pub enum Sampling {
     Adaptive {
         /// The criterion.
         criterion: Criterion,
-        /// Average samples per pixel to spend (the threshold is tuned to it).
+        /// Average rays per pixel to trace, decision samples included (the
+        /// threshold is tuned to it).
         spp: u32,
         /// Most samples one pixel takes.
         max: u32,
-        /// Decide on a separate pilot set, estimate from fresh samples.
+        /// Decide on a separate pilot set, estimate from fresh samples (the
+        /// default); false: the tutorial's form, biased.
         unbiased: bool,
         /// A given threshold instead of tuning one.
         threshold: Option<f64>,
@@ -124,9 +126,11 @@ pub enum Sampling {
         contrast: TreeContrast,
         /// Colour weight `δ` against geometry (eq. (28)); 1 is colour only.
         delta: f64,
-        /// Average samples per pixel to spend (the threshold is tuned to it).
+        /// Average rays per pixel to trace, the pilot tree's included (the
+        /// threshold is tuned to it).
         spp: u32,
-        /// Pilot tree decides, fresh leaf samples estimate.
+        /// Pilot tree decides, fresh leaf samples estimate (the default);
+        /// false: the tutorial's form, biased.
         unbiased: bool,
         /// A given threshold instead of tuning one.
         threshold: Option<f64>,
@@ -141,10 +145,13 @@ pub enum Sampling {
 pub struct Supersampling {
     /// How the oracle's contrast is formed.
     pub oracle: Oracle,
-    /// Average samples per pixel (exact: no threshold is tuned).
+    /// Average rays per pixel, the oracle's included (exact: no threshold is tuned).
     pub spp: u32,
-    /// Most samples one pixel takes.
+    /// Most samples one pixel takes in its estimate.
     pub max: u32,
+    /// The oracle's samples only decide (the default); false: they are
+    /// averaged into the image too, the tutorial's form, biased.
+    pub unbiased: bool,
 }
 
 /// A rendered frame and how its sampler was set.
@@ -213,7 +220,7 @@ fn trace(
         Sampling::Adaptive { criterion, spp, max, unbiased, threshold } => {
             let tuned = match threshold {
                 Some(_) => None,
-                None => Some(tune::tune(pt, &view, criterion, f64::from(spp), max)?),
+                None => Some(tune::tune(pt, &view, criterion, f64::from(spp), max, unbiased)?),
             };
             let threshold = threshold.or(tuned.map(|t| t.threshold)).unwrap_or(0.0);
             let policy = Adaptive { criterion, threshold, max, unbiased };
@@ -228,7 +235,7 @@ fn trace(
             let tuned = match threshold {
                 Some(_) => None,
                 None => Some(tune::tune_policy(pt, &view, f64::from(spp), &|eps| {
-                    Box::new(Tree { threshold: eps, unbiased: false, contrast, delta })
+                    Box::new(Tree { threshold: eps, unbiased, contrast, delta })
                 })?),
             };
             let threshold = threshold.or(tuned.map(|t| t.threshold)).unwrap_or(0.0);
@@ -236,7 +243,7 @@ fn trace(
             Ok(Rendered { frame, threshold: Some(threshold), tuned, map: None })
         }
         Sampling::Supersample(es) => {
-            let (frame, map) = supersample::render(pt, &view, es.oracle, es.spp, es.max, progress)?;
+            let (frame, map) = supersample::render(pt, &view, &es, progress)?;
             Ok(Rendered { frame, threshold: None, tuned: None, map: Some(map) })
         }
     }

@@ -11,7 +11,9 @@
 //! the merge checks), and `es` traces the whole 8-spp oracle in every shard
 //! (its shares depend on every pixel's contrast).
 //!
-//! Version 1 holds the format name and version, the scene's fingerprint
+//! Version 2 (version 1 is refused: there `--spp` of an unbiased run
+//! counted its image samples only, and the tutorial's form was the default)
+//! holds the format name and version, the scene's fingerprint
 //! ([`MeshFingerprint`]), the settings the pixels depend on
 //! ([`RenderSettings`]), the shard `i/n`, its rows, the threshold used, and
 //! per pixel the mean radiance (f64, written so it reads back exactly), the
@@ -27,7 +29,7 @@ pub use crate::viewpoint::shard_file::MeshFingerprint;
 /// The `format` field of a render shard file.
 pub const FORMAT_NAME: &str = "itgfx-render-shard";
 /// The version written and read.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 
 /// The settings a shard's pixels depend on: every shard of a run must agree on all of them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -41,7 +43,8 @@ pub struct RenderSettings {
     pub max_spp: u32,
     /// `--threshold` as given (`None`: tuned).
     pub threshold: Option<f64>,
-    /// `--unbiased`.
+    /// Decisions on samples kept out of the image (the default of every
+    /// adaptive sampler); false for `--tutorial-form` and `uniform`.
     pub unbiased: bool,
     /// `--delta`.
     pub delta: f64,
@@ -68,7 +71,7 @@ impl RenderSettings {
             .or_else(|| d("--spp", self.spp.to_string(), other.spp.to_string()))
             .or_else(|| d("--max-spp", self.max_spp.to_string(), other.max_spp.to_string()))
             .or_else(|| d("--threshold", format!("{:?}", self.threshold), format!("{:?}", other.threshold)))
-            .or_else(|| d("--unbiased", self.unbiased.to_string(), other.unbiased.to_string()))
+            .or_else(|| d("--tutorial-form", (!self.unbiased).to_string(), (!other.unbiased).to_string()))
             .or_else(|| d("--delta", format!("{:?}", self.delta), format!("{:?}", other.delta)))
             .or_else(|| d("--binary-contrast", self.binary_contrast.to_string(), other.binary_contrast.to_string()))
             .or_else(|| {
@@ -106,7 +109,7 @@ pub struct RenderShard {
     pub rgb: Vec<[f64; 3]>,
     /// Samples in each pixel's value.
     pub samples: Vec<u32>,
-    /// Decision-only samples of each pixel (`--unbiased`).
+    /// Decision-only samples of each pixel (the unbiased form).
     pub pilot_samples: Vec<u32>,
 }
 

@@ -9,15 +9,26 @@
 //!    binary form) and the geometry contrast `C^g` of eq. (20) on the
 //!    first-hit geometry factors `g = cos θ / r²` (eq. (12)). The result is
 //!    the contrast map.
-//! 2. **Sampling**: the samples left of the budget, `N_p (N_s − n_s)`, are
-//!    shared among the pixels in proportion to their contrast (largest
-//!    remainders; a pixel above its cap gives its excess to the others), each
-//!    pixel's share taken as one stratified batch (indices `8..8+e`).
-//! 3. **Reconstruction**: box filter: a pixel's value is the mean of all its
-//!    samples, oracle ones included.
+//! 2. **Sampling**: the samples left of the budget are shared among the
+//!    pixels in proportion to their contrast (largest remainders; a pixel
+//!    above its cap gives its excess to the others), each pixel's samples
+//!    taken as one stratified batch from index 8 on.
+//! 3. **Reconstruction**: box filter over the pixel's samples.
 //!
-//! The budget is met exactly (no threshold to tune): the mean samples per
-//! pixel is `N_s` unless caps leave samples unspent. Contrast weights are
+//! Two forms. **Unbiased** (the default): the oracle's samples only decide;
+//! every pixel gets `n_s` fresh samples plus its share of
+//! `N_p (N_s − 2 n_s)` (indices `8..16+e`), and its value is their mean. A
+//! pixel's count depends on the oracle's samples alone, which are not in
+//! its mean, so the mean of its fresh samples is unbiased whatever the
+//! count. **Tutorial** (§5.1 as written): the share of `N_p (N_s − n_s)`
+//! (indices `8..8+e`) is averaged with the oracle's own 8 samples, which
+//! darkens: a pixel whose 8 samples caught a caustic is judged contrasted
+//! and its bright samples are diluted by more, one that missed it keeps its
+//! dark estimate.
+//!
+//! Either way the budget is met exactly (no threshold to tune): the mean
+//! rays per pixel, oracle included, is `N_s` unless caps leave samples
+//! unspent. Contrast weights are
 //! Mitchell's (0.4, 0.3, 0.6), as the contrast maps of §4.1; the colour
 //! quality map uses equal weights, as Fig. 1.b.
 
@@ -29,6 +40,7 @@ use itgfx_core::pixel::{
 };
 use rayon::prelude::*;
 
+use super::Supersampling;
 use super::frame::{Batch, Frame, View, trace_geometry};
 use super::path::PathTracer;
 use crate::tracer::BackendError;
@@ -209,31 +221,38 @@ pub fn allocate(weights: &[f64], total: u64, cap: u32) -> Vec<u32> {
     out
 }
 
-/// Renders `view` by entropy-based supersampling with an average of `spp`
-/// samples per pixel, none above `max`: the oracle's contrast map, then the
-/// rest of the budget shared by contrast, then the box filter. Returns the
-/// frame (of `view.rows`) and the contrast map (of the whole image: the
-/// share of every row depends on every pixel's contrast, so a shard traces
-/// the whole oracle and its own rows' shares). `progress` gets (rows done, rows) of both passes.
+/// Renders `view` by entropy-based supersampling with an average of
+/// `es.spp` rays per pixel (the oracle's included), at most `es.max` in a
+/// pixel's estimate: the oracle's contrast map, then the rest of the budget
+/// shared by contrast, then the box filter (over the fresh samples in the
+/// unbiased form, over the oracle's and the share in the tutorial form).
+/// Returns the frame (of `view.rows`) and the contrast map (of the whole
+/// image: the share of every row depends on every pixel's contrast, so a
+/// shard traces the whole oracle and its own rows' shares). `progress` gets
+/// (rows done, rows) of both passes.
 ///
 /// # Errors
 /// Backend failures only.
 pub fn render(
     pt: &PathTracer,
     view: &View,
-    oracle: Oracle,
-    spp: u32,
-    max: u32,
+    es: &Supersampling,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<(Frame, ContrastMap), BackendError> {
     let h = u64::from(view.height);
     let first = |d: u64, _: u64| progress(d, 2 * h);
     let mine = u64::from(view.rows.1 - view.rows.0);
-    let map = contrast_map(pt, view, oracle, &first)?;
+    let map = contrast_map(pt, view, es.oracle, &first)?;
     let pixels = map.measures.len() as u64;
-    let extra_total = pixels * u64::from(spp.saturating_sub(ORACLE_SAMPLES));
+    // Samples every pixel's estimate has before the shares: the oracle's own
+    // (tutorial form), or as many fresh ones (unbiased form, whose oracle
+    // samples are spent on the decision alone).
+    let base = ORACLE_SAMPLES;
+    let spent = if es.unbiased { 2 * ORACLE_SAMPLES } else { ORACLE_SAMPLES };
+    let extra_total = pixels * u64::from(es.spp.saturating_sub(spent));
     let contrast: Vec<f64> = map.measures.iter().map(|m| m.contrast).collect();
-    let extra = allocate(&contrast, extra_total, max.saturating_sub(ORACLE_SAMPLES));
+    let extra = allocate(&contrast, extra_total, es.max.saturating_sub(base));
+    let fresh = |p: usize| if es.unbiased { base + extra[p] } else { extra[p] };
     let w = view.width;
     let done = AtomicU64::new(0);
     let (first_row, end_row) = view.rows;
@@ -242,18 +261,19 @@ pub fn render(
         .map(|y| {
             let batches: Vec<Batch> = (0..w)
                 .map(|x| y * w + x)
-                .filter(|&p| extra[p as usize] > 0)
+                .filter(|&p| fresh(p as usize) > 0)
                 .map(|p| Batch {
                     pixel: p,
                     slot: p % w,
                     first: ORACLE_SAMPLES,
-                    n: extra[p as usize],
+                    n: fresh(p as usize),
                     odd: false,
                     pilot: false,
                 })
                 .collect();
             let rgb = trace_geometry(pt, view, &batches, None)?;
-            let mut row: Vec<[f64; 3]> = (0..w).map(|x| map.sums[(y * w + x) as usize]).collect();
+            let kept = |x: u32| if es.unbiased { [0.0; 3] } else { map.sums[(y * w + x) as usize] };
+            let mut row: Vec<[f64; 3]> = (0..w).map(kept).collect();
             let mut k = 0;
             for b in &batches {
                 let n = b.n as usize;
@@ -261,7 +281,7 @@ pub fn render(
                 k += n;
             }
             for (x, c) in row.iter_mut().enumerate() {
-                let n = f64::from(ORACLE_SAMPLES + extra[y as usize * w as usize + x]);
+                let n = f64::from(base + extra[y as usize * w as usize + x]);
                 *c = c.map(|v| v / n);
             }
             progress(h + (done.fetch_add(1, Ordering::Relaxed) + 1) * h / mine.max(1), 2 * h);
@@ -269,12 +289,13 @@ pub fn render(
         })
         .collect::<Result<_, BackendError>>()?;
     let range = (first_row * w) as usize..(end_row * w) as usize;
-    let samples: Vec<u32> = extra[range].iter().map(|e| e + ORACLE_SAMPLES).collect();
+    let samples: Vec<u32> = extra[range].iter().map(|e| e + base).collect();
+    let decided = if es.unbiased { ORACLE_SAMPLES } else { 0 };
     let frame = Frame {
         width: view.width,
         height: end_row - first_row,
         rgb: rows.into_iter().flatten().collect(),
-        pilot_samples: vec![0; samples.len()],
+        pilot_samples: vec![decided; samples.len()],
         samples,
     };
     Ok((frame, map))

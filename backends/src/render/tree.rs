@@ -157,12 +157,15 @@ struct Node {
     children: Option<usize>,
 }
 
-/// Renders the pixels `ids` with the refinement tree: (colour, samples, 0).
+/// Renders the pixels `ids` with the refinement tree: (colour, image
+/// samples, decision samples). With `estimate` false an unbiased tree is
+/// only built: its leaves' fresh samples are counted, not traced.
 pub(crate) fn render_tree(
     pt: &PathTracer,
     view: &View,
     tree: &Tree,
     ids: &[u32],
+    estimate: bool,
 ) -> Result<Vec<([f64; 3], u32, u32)>, BackendError> {
     let mut nodes: Vec<Node> = ids
         .iter()
@@ -223,6 +226,12 @@ pub(crate) fn render_tree(
         pilot = counts.clone();
         counts.iter_mut().for_each(|c| *c = 0);
         let leaves: Vec<usize> = (0..nodes.len()).filter(|&k| nodes[k].children.is_none()).collect();
+        if !estimate {
+            for &k in &leaves {
+                counts[nodes[k].slot] += NODE_SAMPLES;
+            }
+            return Ok((0..ids.len()).map(|slot| (nodes[slot].colour, counts[slot], pilot[slot])).collect());
+        }
         let chosen: Vec<&Node> = leaves.iter().map(|&k| &nodes[k]).collect();
         let starts: Vec<Start> =
             chosen.iter().flat_map(|n| node_starts(view, std::slice::from_ref(*n), false)).collect();

@@ -110,13 +110,15 @@ impl<'a> Packet<'a> {
         let mut same = true;
         for i in 0..LANES {
             let l = &lines[if i < lines.len() { i } else { 0 }];
-            let (s, _) = Shear::of(l);
+            // The traversal direction as the single-ray walk takes it (no
+            // -0.0: see `Shear::of`).
+            let (s, dir) = Shear::of(l);
             if *axes.get_or_insert(s.k) != s.k {
                 same = false;
             }
             for a in 0..3 {
                 p.origin[a][i] = l.origin[a];
-                p.inv[a][i] = safe_inverse(l.direction[a]);
+                p.inv[a][i] = safe_inverse(dir[a]);
                 p.sheared_origin[a][i] = s.org[s.k[a]];
                 p.shear[a][i] = s.s[a];
             }

@@ -45,11 +45,17 @@ impl Shear {
         Self { org, k: [kx, ky, kz], s: [dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]] }
     }
 
-    /// The shear constants of line `l`, with its direction.
+    /// The shear constants of line `l`, with its direction for the BVH
+    /// traversal: negative zeros made positive (`-0.0 + 0.0 = +0.0`, every
+    /// other value unchanged). obvhs takes a child's near plane by
+    /// `direction < 0.0` (false for `-0.0`) but inverts `-0.0` to
+    /// `-1/EPSILON` (`signum(-0.0) = -1`): near and far swap and the ray
+    /// misses every box that is flat across that axis, such as an
+    /// axis-aligned wall seen head-on (tests/tests/backends.rs, `axis_rays`).
     pub(crate) fn of(l: &Line) -> (Self, Vec3A) {
         let org = Vec3A::from(Vec3::from(l.origin));
         let dir = Vec3A::from(Vec3::from(l.direction));
-        (Self::new(org, dir), dir)
+        (Self::new(org, dir), dir + Vec3A::ZERO)
     }
 
     #[inline(always)]

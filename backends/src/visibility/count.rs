@@ -14,7 +14,7 @@ use glam::DVec3;
 use itgfx_core::PairCount;
 use rayon::prelude::*;
 
-use super::counts_file::SceneFingerprint;
+use super::counts_valid::SceneFingerprint;
 use super::{BlockCounts, ContinuousSums, CountsError, FixedSum, LineOptions, MAX_BLOCKS, VisibilityCounts};
 use crate::lines::{Line, LineRng, cosine_direction, global_line, sample_cdf};
 use crate::scene::Scene;

@@ -26,7 +26,7 @@
 
 use itgfx_core::PairCount;
 
-use super::counts_file::SceneFingerprint;
+use super::counts_valid::SceneFingerprint;
 use super::{BlockCounts, ContinuousSums, CountsError, FixedSum, MAX_BLOCKS, VisibilityCounts};
 
 /// The first 8 bytes of a binary counts file.

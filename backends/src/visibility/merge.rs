@@ -4,7 +4,7 @@
 
 use itgfx_core::PairCount;
 
-use super::counts_file::{fmt_ranges, overflow, same_scene};
+use super::counts_valid::{fmt_ranges, overflow, same_scene};
 use super::{BlockCounts, CountsError, VisibilityCounts};
 
 impl VisibilityCounts {

@@ -34,6 +34,7 @@
 pub mod count;
 pub mod counts_binary;
 pub mod counts_file;
+pub mod counts_valid;
 pub mod jackknife;
 pub mod merge;
 
@@ -44,7 +45,8 @@ use itgfx_core::PairCount;
 use crate::tracer::BackendError;
 
 pub use count::{CHUNK, SPHERE_SCALE, count_visibility, local_line};
-pub use counts_file::{FORMAT_VERSION, SceneFingerprint};
+pub use counts_file::FORMAT_VERSION;
+pub use counts_valid::SceneFingerprint;
 pub use jackknife::Complexity;
 
 /// How to cast lines.

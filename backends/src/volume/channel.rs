@@ -21,7 +21,9 @@ use glam::DVec3;
 use itgfx_core::{Base, Error, entropy, entropy_of_weights};
 use rayon::prelude::*;
 
+use super::cast::VolumeCaster;
 use super::raycast::{Caster, viewpoint_camera};
+use crate::backend::BackendError;
 use crate::viewpoint::selection::importance_information;
 use crate::viewpoint::{ViewpointAnalysis, ViewpointChannel, ViewpointMeasures, ViewpointWeights};
 
@@ -66,13 +68,18 @@ pub fn channel_memory(caster: &Caster<'_>, seeable: usize, viewpoints: usize) ->
 /// its visibility over the seeable voxels only ([`Caster::receiving_voxels`],
 /// a dense row of that length), then keeps its positive entries: the same
 /// sums, in the same order, as a row over every voxel. `progress(done,
-/// total)` counts viewpoints.
-#[must_use]
+/// total)` counts viewpoints. The rays are cast by `backend` (the CPU's
+/// [`Caster`] or a device, [`super::cast::open`]): every backend gives these
+/// rows bit for bit.
+///
+/// # Errors
+/// The backend's (a device that fails).
 pub fn volume_channel(
-    caster: &Caster<'_>,
+    backend: &dyn VolumeCaster,
     o: &VolumeChannelOptions,
     progress: &mut dyn FnMut(u64, u64),
-) -> ViewpointChannel {
+) -> Result<ViewpointChannel, BackendError> {
+    let caster = backend.caster();
     let voxels = caster.volume.voxels();
     let seeable = caster.receiving_voxels();
     let mut slot = vec![u32::MAX; voxels];
@@ -88,8 +95,7 @@ pub fn volume_channel(
             .par_iter()
             .map(|&d| {
                 let mut vis = vec![0.0; seeable.len()];
-                let bg = caster
-                    .visibility_with(&viewpoint_camera(d, o.distance, 1.0), o.size, |z, x| vis[slot[z] as usize] += x);
+                let bg = backend.visibility_row(&viewpoint_camera(d, o.distance, 1.0), o.size, &slot, &mut vis)?;
                 let (mut idx, mut val) = (Vec::new(), Vec::new());
                 for (&z, &x) in seeable.iter().zip(&vis) {
                     if x > 0.0 {
@@ -97,9 +103,9 @@ pub fn volume_channel(
                         val.push(x);
                     }
                 }
-                (idx, val, bg)
+                Ok((idx, val, bg))
             })
-            .collect();
+            .collect::<Result<_, BackendError>>()?;
         for (idx, val, bg) in rows {
             patch.extend(idx);
             solid_angle.extend(val);
@@ -108,7 +114,7 @@ pub fn volume_channel(
         }
         progress((w * wave + dirs.len()) as u64, total);
     }
-    ViewpointChannel {
+    Ok(ViewpointChannel {
         positions: o.directions.iter().map(|d| d.normalize() * o.distance).collect(),
         starts,
         patch,
@@ -116,7 +122,7 @@ pub fn volume_channel(
         background,
         patches: voxels,
         rays_per_viewpoint: u64::from(o.size) * u64::from(o.size),
-    }
+    })
 }
 
 /// Viewpoint entropy with noteworthiness (Bordoloi and Shen 2005, Part VI
@@ -241,7 +247,7 @@ mod tests {
         let c = Caster::new(&v, &tf, 0.5);
         let dirs = icosphere(level);
         let o = VolumeChannelOptions { directions: dirs.clone(), distance: 3.0, size };
-        let ch = volume_channel(&c, &o, &mut |_, _| {});
+        let ch = volume_channel(&c, &o, &mut |_, _| {}).unwrap();
         let m =
             volume_measures(ch, &dirs, &c.voxel_opacity, None, ViewpointWeights::ProjectedArea, Base::Bits).unwrap();
         (dirs, m)
@@ -306,7 +312,7 @@ mod tests {
         let tf = TransferFunction::preset("ramp").unwrap();
         let c = Caster::new(&v, &tf, 0.5);
         let o = VolumeChannelOptions { directions: icosphere(1), distance: 3.0, size: 32 };
-        let ch = volume_channel(&c, &o, &mut |_, _| {});
+        let ch = volume_channel(&c, &o, &mut |_, _| {}).unwrap();
         let seeable = seeable_voxels(&c);
         let visible = c.voxel_opacity.iter().filter(|&&a| a > 0.0).count();
         assert!(seeable >= visible && seeable < v.voxels());
@@ -327,7 +333,7 @@ mod tests {
         let v = built_in("phantom:12").unwrap();
         let c = Caster::new(&v, &TransferFunction::preset("ramp").unwrap(), 0.5);
         let o = VolumeChannelOptions { directions: icosphere(0), distance: 3.0, size: 16 };
-        let mut ch = volume_channel(&c, &o, &mut |_, _| {});
+        let mut ch = volume_channel(&c, &o, &mut |_, _| {}).unwrap();
         // A viewpoint that sees nothing: its row is dropped, the rows after it move down.
         let empty = ch.starts[3]..ch.starts[4];
         ch.patch.drain(empty.clone());

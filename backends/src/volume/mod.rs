@@ -27,6 +27,7 @@
 //!   channel of a labelled volume.
 
 pub mod builtin;
+pub mod cast;
 pub mod channel;
 pub mod grid;
 pub mod iso;

@@ -46,7 +46,7 @@ pub fn viewpoint_camera(direction: DVec3, distance: f64, radius: f64) -> Camera 
 }
 
 /// The ray through the centre of pixel `(x, y)` of a `size × size` image.
-fn pixel_ray(camera: &Camera, x: u32, y: u32, size: u32) -> DVec3 {
+pub(crate) fn pixel_ray(camera: &Camera, x: u32, y: u32, size: u32) -> DVec3 {
     camera.direction(f64::from(x) + 0.5, f64::from(y) + 0.5, size, size)
 }
 
@@ -153,7 +153,7 @@ impl<'a> Caster<'a> {
     }
 
     /// Where a ray from `o` along `d` is inside the box: `(t0, t1)`.
-    fn clip(&self, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
+    pub(crate) fn clip(&self, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
         let h = self.volume.box_half();
         let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
         for a in 0..3 {
@@ -173,10 +173,33 @@ impl<'a> Caster<'a> {
     /// Marches one ray, calling `visit(corners, contribution, colour, grid
     /// point)` for every sample with positive opacity; returns the
     /// transmittance left.
-    fn march(&self, o: DVec3, d: DVec3, mut visit: impl FnMut(&[(usize, f64); 8], f64, [f64; 3], DVec3)) -> f64 {
+    fn march(&self, o: DVec3, d: DVec3, visit: impl FnMut(&[(usize, f64); 8], f64, [f64; 3], DVec3)) -> f64 {
         let Some((t0, t1)) = self.clip(o, d) else { return 1.0 };
-        let mut transmittance = 1.0;
-        let mut t = t0 + 0.5 * self.step;
+        self.march_from(o, d, self.first_sample(t0), t1, 1.0, visit)
+    }
+
+    /// The first sample's `t` of a ray whose box span is `(t0, _)`.
+    pub(crate) fn first_sample(&self, t0: f64) -> f64 {
+        t0 + 0.5 * self.step
+    }
+
+    /// Sample step in normalised units.
+    pub(crate) fn step(&self) -> f64 {
+        self.step
+    }
+
+    /// [`Caster::march`] from the sample at `t` (before `t1`) with
+    /// `transmittance` in front of it: where a device that ran out of room
+    /// for a ray's samples hands the rest of the ray back.
+    pub(crate) fn march_from(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        mut t: f64,
+        t1: f64,
+        mut transmittance: f64,
+        mut visit: impl FnMut(&[(usize, f64); 8], f64, [f64; 3], DVec3),
+    ) -> f64 {
         while t < t1 {
             let g = self.volume.grid_coords(o + d * t);
             if !self.cell_active[self.volume.cell(g)] {
@@ -197,6 +220,27 @@ impl<'a> Caster<'a> {
             t += self.step;
         }
         transmittance
+    }
+
+    /// Shares a sample's contribution `c` at grid point `g` among its eight
+    /// voxels, in [`Volume::corners`] order, as [`Caster::visibility_with`]
+    /// does: `add(voxel, c · w)`.
+    pub(crate) fn deposit(&self, g: DVec3, c: f64, mut add: impl FnMut(usize, f64)) {
+        for (i, w) in self.volume.corners(g) {
+            add(i, c * w);
+        }
+    }
+
+    /// The transfer function's step-corrected opacity table over the
+    /// normalised scalar, and the scalar's normalisation `(lo, 1/range)`
+    /// and transparent range (`s ≤ skip_below` is skipped).
+    pub(crate) fn opacity_table(&self) -> (Vec<f64>, f64, f64, f64) {
+        (self.table.iter().map(|e| e.0).collect(), self.lo, self.inv_range, self.skip_below)
+    }
+
+    /// Whether each cell (by lowest corner) can be seen.
+    pub(crate) fn active_cells(&self) -> &[bool] {
+        &self.cell_active
     }
 
     /// Adds every voxel's visibility from `view` over a `size × size` image

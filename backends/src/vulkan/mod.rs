@@ -9,9 +9,11 @@
 //!
 //! * [`tracer`]: [`tracer::VulkanTracer`], the tracing seam on the GPU.
 //! * [`reduce`]: entropy of large weight arrays with f64 accumulation.
+//! * [`volume`]: [`volume::VulkanVolumeCaster`], volume ray casting on the GPU.
 
 pub mod reduce;
 pub mod tracer;
+pub mod volume;
 
 use std::ffi::CStr;
 use std::sync::{Arc, Mutex};

@@ -6,7 +6,7 @@ pub mod register;
 pub mod segment;
 pub mod synth;
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use clap::Args;
 
@@ -14,7 +14,6 @@ pub use register::run_register;
 pub use segment::run_segment;
 pub use synth::run_phantom;
 
-use crate::CliError;
 use crate::values::out_path;
 
 /// Largest width or height of a generated phantom.
@@ -184,23 +183,6 @@ pub struct SegmentOptions {
     /// --json and --base (entropies and information in bits, nats or hartleys)
     #[command(flatten)]
     pub common: crate::options::Common,
-}
-
-/// Makes `--out` if missing (remembering that it did) and checks that every
-/// file in `names` can be written there; on failure removes what it made.
-///
-/// # Errors
-/// One line naming `--out` or the file.
-pub fn prepare_out(dir: &Path, names: &[&str]) -> Result<Vec<PathBuf>, CliError> {
-    let created = crate::output::out_dir(dir)?.is_some();
-    let paths: Vec<PathBuf> = names.iter().map(|n| dir.join(n)).collect();
-    if let Err(e) = paths.iter().try_for_each(|p| crate::output::check("--out", p)) {
-        if created {
-            let _ = std::fs::remove_dir(dir);
-        }
-        return Err(e);
-    }
-    Ok(paths)
 }
 
 /// Progress lines on stderr when it is a terminal or `ITGFX_PROGRESS=1`.

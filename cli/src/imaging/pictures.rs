@@ -9,6 +9,7 @@ use itgfx_backends::imaging::Gray;
 
 use crate::CliError;
 use crate::export::{viridis, write_png};
+use crate::plot::{Axis, Curve, Style, chart};
 
 /// Most pixels an input image may have (memory: a few `f32` copies each).
 pub const MAX_PIXELS: u64 = 16 * 1024 * 1024;
@@ -118,59 +119,11 @@ pub fn label_image(labels: &[usize], w: usize, h: usize) -> RgbImage {
     RgbImage::from_fn(w as u32, h as u32, |x, y| Rgb(palette(labels[y as usize * w + x as usize])))
 }
 
-/// A polyline `(x, y)` and its colour.
-pub type Curve = (Vec<(f64, f64)>, [u8; 3]);
-
-/// Curves `y(x)` on a white `w × h` plot with a grey frame and a light grid
-/// of 10 × 10 cells; axes span `[x0, x1] × [y0, y1]`. Each curve is a list
-/// of points and a colour; points are joined and marked.
+/// Curves `y(x)` on a white `w × h` chart with linear axes spanning
+/// `[x0, x1] × [y0, y1]` ([`crate::plot::chart`], axis ends labelled).
 #[must_use]
 pub fn plot(curves: &[Curve], x: (f64, f64), y: (f64, f64), size: (u32, u32)) -> RgbImage {
-    let (w, h) = size;
-    let mut img = RgbImage::from_pixel(w, h, Rgb([255, 255, 255]));
-    let m = 12i64;
-    let (pw, ph) = (i64::from(w) - 2 * m, i64::from(h) - 2 * m);
-    for k in 0..=10 {
-        let gx = m + pw * k / 10;
-        let gy = m + ph * k / 10;
-        let c = if k == 0 || k == 10 { Rgb([90, 90, 90]) } else { Rgb([228, 228, 228]) };
-        for t in 0..=ph {
-            img.put_pixel(gx as u32, (m + t) as u32, c);
-        }
-        for t in 0..=pw {
-            img.put_pixel((m + t) as u32, gy as u32, c);
-        }
-    }
-    let to = |px: f64, py: f64| -> (i64, i64) {
-        let fx = if x.1 > x.0 { (px - x.0) / (x.1 - x.0) } else { 0.5 };
-        let fy = if y.1 > y.0 { (py - y.0) / (y.1 - y.0) } else { 0.5 };
-        (m + (fx.clamp(0.0, 1.0) * pw as f64).round() as i64, m + ph - (fy.clamp(0.0, 1.0) * ph as f64).round() as i64)
-    };
-    let put = |img: &mut RgbImage, px: i64, py: i64, c: [u8; 3]| {
-        if px >= 0 && py >= 0 && px < i64::from(w) && py < i64::from(h) {
-            img.put_pixel(px as u32, py as u32, Rgb(c));
-        }
-    };
-    for (points, colour) in curves {
-        for pair in points.windows(2) {
-            let (a, b) = (to(pair[0].0, pair[0].1), to(pair[1].0, pair[1].1));
-            let n = (b.0 - a.0).abs().max((b.1 - a.1).abs()).max(1);
-            for s in 0..=n {
-                let (px, py) = (a.0 + (b.0 - a.0) * s / n, a.1 + (b.1 - a.1) * s / n);
-                put(&mut img, px, py, *colour);
-                put(&mut img, px, py + 1, *colour);
-            }
-        }
-        if points.len() <= 64 {
-            for p in points {
-                let (px, py) = to(p.0, p.1);
-                for (dx, dy) in [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, -1), (1, -1), (-1, 1)] {
-                    put(&mut img, px + dx, py + dy, *colour);
-                }
-            }
-        }
-    }
-    img
+    chart(curves, Axis::linear(x.0, x.1), Axis::linear(y.0, y.1), size, &Style::LIGHT)
 }
 
 /// Writes a colour picture.

@@ -123,7 +123,7 @@ pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
         ..Engine::default()
     };
     // Everything readable and valid: now the output directory.
-    let paths = super::prepare_out(&o.out, &FILES)?;
+    let paths = crate::output::out_files(&o.out, &FILES)?;
     let t0 = Instant::now();
     let r = register(&fixed, &moving, &engine, |k, n| {
         let l = engine.levels[k];

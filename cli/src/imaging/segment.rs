@@ -23,7 +23,7 @@ pub fn run_segment(o: &SegmentOptions) -> Result<Report, CliError> {
     if lo >= hi {
         return Err(CliError::usage(format!("{:?}: the image is constant (H(X) = 0): nothing to segment", o.image)));
     }
-    let paths = super::prepare_out(&o.out, &FILES)?;
+    let paths = crate::output::out_files(&o.out, &FILES)?;
     let engine = Engine {
         bins: o.bins,
         max_leaves: o.max_leaves as usize,

@@ -14,7 +14,7 @@ use crate::report::Report;
 /// # Errors
 /// Output errors, one line.
 pub fn run_phantom(o: &PhantomOptions) -> Result<Report, CliError> {
-    let paths = super::prepare_out(&o.out, &["fixed.png", "moving.png", "transform.json"])?;
+    let paths = crate::output::out_files(&o.out, &["fixed.png", "moving.png", "transform.json"])?;
     let (w, h) = o.size;
     let truth = Rigid2 { angle_deg: o.angle, tx: o.shift.0, ty: o.shift.1 };
     let (fixed, moving) = render(&Render { width: w, height: h, truth, noise: o.noise, bias: o.bias, seed: o.seed });

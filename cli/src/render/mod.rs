@@ -47,7 +47,8 @@ pub struct RenderOptions {
     /// Directory for image.exr, image.png and density.png (made if missing)
     #[arg(long, value_name = "DIR", value_parser = out_path)]
     pub out: Option<PathBuf>,
-    /// Samples per pixel (uniform), or the average every adaptive sampler spends
+    /// Samples per pixel (uniform), or the average rays per pixel every adaptive sampler traces
+    /// (the samples it decides on included)
     #[arg(long, value_name = "N", default_value = "16", value_parser = spp)]
     pub spp: u32,
     /// Pixel sampler: uniform (stratified), or an adaptive criterion: cc (classic contrast), ct
@@ -77,9 +78,13 @@ pub struct RenderOptions {
     /// Adaptive: this threshold instead of one tuned to spend --spp on average
     #[arg(long, value_name = "EPS", value_parser = threshold)]
     pub threshold: Option<f64>,
-    /// Adaptive: decide on a separate pilot set of samples and estimate each pixel from as many
-    /// fresh ones (no bias from samples that chose their own count; traces twice the rays)
+    /// Adaptive: the tutorial's form, BIASED: the samples a criterion decides on are averaged into
+    /// the image (3.5-17% dark on mirror-room, docs/RENDER.md). Default: decisions on samples that
+    /// are kept out of the image (a pilot set, the tree's pilot, es's oracle), unbiased
     #[arg(long)]
+    pub tutorial_form: bool,
+    /// Gone: the unbiased form is the default now (and --spp counts its decision samples)
+    #[arg(long, hide = true)]
     pub unbiased: bool,
     /// Image size in pixels
     #[arg(long, value_name = "WxH", default_value = "256x256", value_parser = size)]
@@ -218,6 +223,11 @@ fn out_dir(o: &RenderOptions) -> Result<(PathBuf, bool), CliError> {
 /// # Errors
 /// Usage, scene, camera and backend errors, one line each.
 pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
+    if o.unbiased {
+        return Err(CliError::usage(
+            "--unbiased is gone: the unbiased form is the default now, and --spp counts its decision samples too (an old --spp N --unbiased run is --spp 2N); --tutorial-form gives the tutorial's biased form",
+        ));
+    }
     if !o.shards.merge.is_empty() {
         return shard::run_merge(o);
     }
@@ -229,9 +239,9 @@ pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
         return Err(CliError::usage(format!("--reference {r:?}: not a regular file")));
     }
     let adaptive = o.sampler != "uniform";
-    if !adaptive && (o.max_spp.is_some() || o.threshold.is_some() || o.unbiased) {
+    if !adaptive && (o.max_spp.is_some() || o.threshold.is_some() || o.tutorial_form) {
         return Err(CliError::usage(
-            "--max-spp, --threshold and --unbiased are for adaptive samplers (--sampler cc, kl, ...)",
+            "--max-spp, --threshold and --tutorial-form are for adaptive samplers (--sampler cc, kl, ...)",
         ));
     }
     let is_tree = TreeContrast::from_name(&o.sampler).is_some();
@@ -248,10 +258,8 @@ pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
     if o.binary_contrast && !oracle_maps {
         return Err(CliError::usage("--binary-contrast is for --sampler es and --maps"));
     }
-    if o.sampler == "es" && (o.threshold.is_some() || o.unbiased) {
-        return Err(CliError::usage(
-            "--sampler es spends exactly --spp on average (no threshold) and decides once: no --threshold or --unbiased",
-        ));
+    if o.sampler == "es" && o.threshold.is_some() {
+        return Err(CliError::usage("--sampler es spends exactly --spp on average: no --threshold"));
     }
     if let Some(m) = o.max_spp
         && m < o.spp
@@ -263,6 +271,14 @@ pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
             "--spp {}: adaptive samplers take at least {} per pixel",
             o.spp,
             criteria::BATCH
+        )));
+    }
+    // The unbiased form traces at least 8 samples to decide and 8 to estimate.
+    let floor = 2 * criteria::BATCH;
+    if adaptive && !o.tutorial_form && o.spp < floor && (o.threshold.is_none() || o.sampler == "es") {
+        return Err(CliError::usage(format!(
+            "--spp {}: the unbiased form traces at least {floor} a pixel (8 to decide, 8 for the image): give --spp {floor} or more, or --tutorial-form",
+            o.spp
         )));
     }
     shard::check(o)?;
@@ -346,19 +362,20 @@ fn render_into(o: &RenderOptions, spec: &str, dir: Option<&Path>) -> Result<Repo
     let delta = o.delta.unwrap_or(1.0);
     let sampling = match (Criterion::from_name(&o.sampler), TreeContrast::from_name(&o.sampler)) {
         (None, Some(contrast)) => {
-            Sampling::Tree { contrast, delta, spp: o.spp, unbiased: o.unbiased, threshold: o.threshold }
+            Sampling::Tree { contrast, delta, spp: o.spp, unbiased: !o.tutorial_form, threshold: o.threshold }
         }
         (None, None) if o.sampler == "es" => Sampling::Supersample(Supersampling {
             oracle: Oracle { delta, binary: o.binary_contrast },
             spp: o.spp,
             max: o.max_spp.unwrap_or(o.spp.saturating_mul(16).min(MAX_SPP)),
+            unbiased: !o.tutorial_form,
         }),
         (None, None) => Sampling::Uniform(o.spp),
         (Some(criterion), _) => Sampling::Adaptive {
             criterion,
             spp: o.spp,
             max: o.max_spp.unwrap_or(o.spp.saturating_mul(16).min(MAX_SPP)),
-            unbiased: o.unbiased,
+            unbiased: !o.tutorial_form,
             threshold: o.threshold,
         },
     };
@@ -408,13 +425,18 @@ fn render_into(o: &RenderOptions, spec: &str, dir: Option<&Path>) -> Result<Repo
         _ => return Err(CliError::usage("give --out DIR for the images")),
     };
 
+    let adaptive = o.sampler != "uniform";
     r.text("scene", scene.name.clone()).text("backend", tracer.name()).text("sampler", o.sampler.clone());
     r.count("width", u64::from(frame.width)).count("height", u64::from(frame.height)).count("seed", o.seed);
     r.reals("camera_eye", camera.eye.to_array().to_vec())
         .reals("camera_forward", camera.forward.to_array().to_vec())
         .real("camera_fov_y", camera.fov_y.to_degrees(), Some("deg"));
-    if let Sampling::Adaptive { max, unbiased, .. } = sampling {
-        r.count("max_spp", u64::from(max)).flag("unbiased", unbiased);
+    if let Sampling::Adaptive { max, .. } = sampling {
+        r.count("max_spp", u64::from(max));
+    }
+    if adaptive {
+        // Which form ran: decisions kept out of the image, or the tutorial's shared samples.
+        r.text("form", if o.tutorial_form { "tutorial" } else { "unbiased" }).flag("unbiased", !o.tutorial_form);
     }
     if let Sampling::Supersample(es) = sampling {
         r.count("max_spp", u64::from(es.max)).count("oracle_spp", u64::from(supersample::ORACLE_SAMPLES));

@@ -34,7 +34,7 @@ pub struct RenderShardOptions {
     /// Write the images of the saved shards F1,F2,... (all n of one run) to --out instead of
     /// rendering; no SCENE or sampler options (the shards carry them)
     #[arg(long, value_name = "F1,F2,...", value_delimiter = ',', num_args = 1..,
-          conflicts_with_all = ["shard", "scene", "sampler", "spp", "size", "seed", "camera", "threshold", "unbiased",
+          conflicts_with_all = ["shard", "scene", "sampler", "spp", "size", "seed", "camera", "threshold", "tutorial_form",
                                 "delta", "binary_contrast", "maps", "max_spp", "export_scene"],
           help_heading = "Shards")]
     pub merge: Vec<PathBuf>,
@@ -78,7 +78,7 @@ pub fn settings(o: &RenderOptions, sampling: &Sampling, delta: f64, camera: &Cam
         spp: o.spp,
         max_spp,
         threshold: o.threshold,
-        unbiased: o.unbiased,
+        unbiased: o.sampler != "uniform" && !o.tutorial_form,
         delta,
         binary_contrast: o.binary_contrast,
         width: o.size.0,

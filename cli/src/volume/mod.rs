@@ -15,8 +15,10 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
+use itgfx_backends::BackendChoice;
 use itgfx_backends::viewpoint::selection::{best_views, exploration};
 use itgfx_backends::viewpoint::{ViewpointWeights, icosphere};
+use itgfx_backends::volume::cast::{backend_memory, open};
 use itgfx_backends::volume::channel::{channel_memory, seeable_voxels};
 use itgfx_backends::volume::raycast::Caster;
 use itgfx_backends::volume::{TransferFunction, VolumeChannelOptions, volume_channel, volume_measures};
@@ -24,7 +26,7 @@ use itgfx_backends::volume::{TransferFunction, VolumeChannelOptions, volume_chan
 use crate::options::Common;
 use crate::progress::Progress;
 use crate::report::Report;
-use crate::values::{argmin, best_n, capture, distance, explore, out_path, threads, viewpoint_count, viewpoint_level};
+use crate::values::{argmin, backend, distance, out_path, threads, viewpoint_count, viewpoint_level};
 use crate::{CliError, core_err};
 use input::{dims, focus, image_side, iso_value, load, size, spacing, step, transfer, volume_help};
 use pictures::{PICTURES, Shots};
@@ -76,15 +78,9 @@ pub struct VolumeOptions {
     /// viewpoint channel on it (Part VI §2.1), to compare its views with the voxels'
     #[arg(long, value_name = "F", value_parser = iso_value, help_heading = "Channel")]
     pub iso: Option<f64>,
-    /// At most N best views, greedy
-    #[arg(long, value_name = "N", default_value = "6", value_parser = best_n, help_heading = "Selection")]
-    pub best_n: usize,
-    /// Stop once the views capture F of I(V;Z), F in (0, 1]
-    #[arg(long, value_name = "F", default_value = "0.9", value_parser = capture, help_heading = "Selection")]
-    pub capture: f64,
-    /// Steps of the guided exploration path from the best view
-    #[arg(long, value_name = "S", default_value = "12", value_parser = explore, help_heading = "Selection")]
-    pub explore: usize,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub selection: crate::options::Selection,
     /// Pictures and volume.json in DIR (created if missing)
     #[arg(long, value_name = "DIR", value_parser = out_path, help_heading = "Pictures")]
     pub out: Option<PathBuf>,
@@ -94,6 +90,9 @@ pub struct VolumeOptions {
     /// Worker threads (default: all cores)
     #[arg(long, value_name = "T", value_parser = threads)]
     pub threads: Option<usize>,
+    /// Ray-casting backend for the channel: cpu or vulkan (the same rows, bit for bit)
+    #[arg(long, value_name = "cpu|vulkan", default_value = "cpu", value_parser = backend)]
+    pub backend: BackendChoice,
     /// Shards.
     #[command(flatten)]
     pub shards: shard::VolumeShardOptions,
@@ -155,7 +154,12 @@ fn run_in(
     }
     let dirs = icosphere(viewpoint_level(o.viewpoints));
     let (first, end) = shard::range(o, dirs.len());
-    let need = channel_memory(&caster, seeable_voxels(&caster), end - first);
+    let largest = volume.dims.iter().copied().max().unwrap_or(1) as u32;
+    let rays = o.size.unwrap_or((2 * largest).clamp(32, 512));
+    // The device's buffers too when it casts: on lavapipe they are host memory.
+    let casting = if o.shards.merge.is_empty() { u64::from(rays) * u64::from(rays) } else { 0 };
+    let need = channel_memory(&caster, seeable_voxels(&caster), end - first)
+        + if casting > 0 { backend_memory(o.backend, &caster, casting) } else { 0 };
     if need > MEMORY_LIMIT {
         return Err(CliError::usage(format!(
             "{}: the channel may need {:.1} GiB (limit {} GiB): fewer --viewpoints or a smaller volume",
@@ -164,15 +168,19 @@ fn run_in(
             MEMORY_LIMIT >> 30
         )));
     }
-    let largest = volume.dims.iter().copied().max().unwrap_or(1) as u32;
-    let rays = o.size.unwrap_or((2 * largest).clamp(32, 512));
+    let backend_err = |e: itgfx_backends::BackendError| CliError::usage(e.to_string());
     if let Some(s) = o.shards.shard {
-        return shard::save(o, s, &caster, &dirs, rays, need);
+        return shard::save(o, s, &*open(o.backend, &caster).map_err(backend_err)?, &dirs, rays, need);
     }
+    // Rays a device handed back to the host (reported for vulkan only).
+    let mut host_rays = None;
     let ch = if o.shards.merge.is_empty() {
+        let backend = open(o.backend, &caster).map_err(backend_err)?;
         let mut progress = Progress::new();
         let copts = VolumeChannelOptions { directions: dirs.clone(), distance: o.distance, size: rays };
-        volume_channel(&caster, &copts, &mut |d, t| progress.update(d, t))
+        let ch = volume_channel(&*backend, &copts, &mut |d, t| progress.update(d, t)).map_err(backend_err)?;
+        host_rays = (o.backend == BackendChoice::Vulkan).then(|| backend.rays_finished_on_host());
+        ch
     } else {
         shard::merged(o, &caster, &dirs, rays)?
     };
@@ -190,15 +198,15 @@ fn run_in(
         .map_err(err)?;
     let v = &m.views;
     let t_measures = t0.elapsed().as_secs_f64() - t_channel;
-    let best_n = best_views(&m.analysis, v, o.capture, o.best_n, base).map_err(err)?;
-    let tour = exploration(&m.analysis, &neighbours, v.best, o.explore, base).map_err(err)?;
+    let best_n = best_views(&m.analysis, v, o.selection.capture, o.selection.best_n, base).map_err(err)?;
+    let tour = exploration(&m.analysis, &neighbours, v.best, o.selection.explore, base).map_err(err)?;
     let instability = m.analysis.instability(&neighbours, base).map_err(err)?;
     let seen = m.analysis.expand(&m.analysis.seen_angle, 0.0);
     let iso = o.iso.map(|f| iso_route(&volume, f, &dirs, o.distance, rays, base)).transpose()?;
     let seconds = t0.elapsed().as_secs_f64();
 
     let mut r = Report::new();
-    r.text("volume", volume.name.clone());
+    r.text("volume", volume.name.clone()).text("backend", o.backend.name());
     r.counts("dims", volume.dims.iter().map(|&d| d as u64).collect());
     r.count("voxels", volume.voxels() as u64).count("viewpoints", dirs.len() as u64);
     r.count("rays_per_viewpoint", rays_per_viewpoint).real("step_voxels", o.step, None);
@@ -292,6 +300,9 @@ fn run_in(
     r.real("channel_seconds", t_channel, Some("s")).real("measures_seconds", t_measures, Some("s"));
     r.real("seconds", seconds, Some("s"));
     r.real("memory_estimate_MiB", need as f64 / f64::from(1u32 << 20), None);
+    if let Some(n) = host_rays {
+        r.count("vulkan_rays_finished_on_host", n);
+    }
 
     if let Some(dir) = &o.out {
         let shots = Shots {

@@ -14,6 +14,7 @@ use itgfx_backends::viewpoint::ViewpointChannel;
 use itgfx_backends::viewpoint::shard_file::{
     Fnv, MeshFingerprint, ShardSettings, VOLUME_ESTIMATOR, ViewpointShard, grid_channel, order_shards, shard_range,
 };
+use itgfx_backends::volume::cast::VolumeCaster;
 use itgfx_backends::volume::raycast::Caster;
 use itgfx_backends::volume::{VolumeChannelOptions, volume_channel};
 
@@ -95,17 +96,19 @@ fn identity(o: &VolumeOptions, caster: &Caster<'_>, viewpoints: usize, rays: u32
 pub(super) fn save(
     o: &VolumeOptions,
     s: Shard,
-    caster: &Caster<'_>,
+    backend: &dyn VolumeCaster,
     dirs: &[DVec3],
     rays: u32,
     memory: u64,
 ) -> Result<Report, CliError> {
+    let caster = backend.caster();
     let t0 = Instant::now();
     let (first, end) = range(o, dirs.len());
     let (scene, settings) = identity(o, caster, dirs.len(), rays);
     let copts = VolumeChannelOptions { directions: dirs[first..end].to_vec(), distance: o.distance, size: rays };
     let mut progress = Progress::new();
-    let ch = volume_channel(caster, &copts, &mut |d, t| progress.update(d, t));
+    let ch = volume_channel(backend, &copts, &mut |d, t| progress.update(d, t))
+        .map_err(|e| CliError::usage(e.to_string()))?;
     let shard = ViewpointShard::grid(scene, settings, (s.index, s.count), &ch);
     let text = shard.to_json().map_err(|e| CliError::usage(format!("--save-shard: {e}")))?;
     let path = o.shards.save_shard.as_ref().ok_or_else(|| CliError::usage("--shard needs --save-shard F"))?;

@@ -1,0 +1,227 @@
+//! Line charts as pictures: curves `y(x)` on linear or logarithmic axes in a
+//! frame with a 10 × 10 grid, the ends of both axes labelled with a small
+//! built-in digit font (no font files, no text dependencies). Used by
+//! `simplify` (error against triangle count) and the imaging commands
+//! (mutual information against regions or iterations).
+
+use image::{Rgb, RgbImage};
+
+/// One axis: the range shown and whether it is logarithmic.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Axis {
+    /// Smallest value shown.
+    pub lo: f64,
+    /// Largest value shown.
+    pub hi: f64,
+    /// Logarithmic spacing (values <= 0 sit at the low end).
+    pub log: bool,
+}
+
+impl Axis {
+    /// A linear axis over `[lo, hi]`.
+    #[must_use]
+    pub const fn linear(lo: f64, hi: f64) -> Self {
+        Self { lo, hi, log: false }
+    }
+
+    /// A logarithmic axis over `[lo, hi]` (`lo > 0`).
+    #[must_use]
+    pub const fn log(lo: f64, hi: f64) -> Self {
+        Self { lo, hi, log: true }
+    }
+
+    /// Where `v` falls, 0 at `lo` and 1 at `hi`, clamped; 0.5 for an empty range.
+    #[must_use]
+    pub fn fraction(&self, v: f64) -> f64 {
+        let f = |x: f64| if self.log { x.max(f64::MIN_POSITIVE).ln() } else { x };
+        let (a, b) = (f(self.lo), f(self.hi));
+        if b > a && v.is_finite() { ((f(v) - a) / (b - a)).clamp(0.0, 1.0) } else { 0.5 }
+    }
+}
+
+/// A polyline `(x, y)` and its colour.
+pub type Curve = (Vec<(f64, f64)>, [u8; 3]);
+
+/// Colours of a chart.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Style {
+    /// Background.
+    pub background: [u8; 3],
+    /// Frame and labels.
+    pub frame: [u8; 3],
+    /// Inner grid lines.
+    pub grid: [u8; 3],
+}
+
+impl Style {
+    /// Dark on white (the imaging pictures).
+    pub const LIGHT: Self = Self { background: [255, 255, 255], frame: [90, 90, 90], grid: [228, 228, 228] };
+    /// Light on the preview background (the simplify pictures).
+    pub const DARK: Self =
+        Self { background: itgfx_backends::preview::BACKGROUND, frame: [150, 150, 155], grid: [70, 70, 76] };
+}
+
+/// Pixels per label character (3 × 5 glyphs drawn 2× with a 2-pixel gap).
+const ADVANCE: i64 = 8;
+
+/// A `w × h` chart of `curves` over the axes `x` and `y`. Points are joined
+/// and, for curves of at most 64 points, marked; the axis ends carry their
+/// values (three significant digits).
+#[must_use]
+pub fn chart(curves: &[Curve], x: Axis, y: Axis, size: (u32, u32), style: &Style) -> RgbImage {
+    let (w, h) = size;
+    let mut img = RgbImage::from_pixel(w, h, Rgb(style.background));
+    let (y_lo, y_hi) = (number(y.lo), number(y.hi));
+    let left = 10 + ADVANCE * y_lo.len().max(y_hi.len()) as i64;
+    let (right, top, bottom) = (14i64, 12i64, 22i64);
+    let (pw, ph) = ((i64::from(w) - left - right).max(1), (i64::from(h) - top - bottom).max(1));
+    for k in 0..=10 {
+        let c = if k == 0 || k == 10 { style.frame } else { style.grid };
+        let gx = (left + pw * k / 10) as f64;
+        let gy = (top + ph * k / 10) as f64;
+        line(&mut img, (gx, top as f64), (gx, (top + ph) as f64), c);
+        line(&mut img, (left as f64, gy), ((left + pw) as f64, gy), c);
+    }
+    let to =
+        |px: f64, py: f64| (left as f64 + x.fraction(px) * pw as f64, (top + ph) as f64 - y.fraction(py) * ph as f64);
+    for (points, colour) in curves {
+        for pair in points.windows(2) {
+            let (a, b) = (to(pair[0].0, pair[0].1), to(pair[1].0, pair[1].1));
+            line(&mut img, a, b, *colour);
+            line(&mut img, (a.0, a.1 + 1.0), (b.0, b.1 + 1.0), *colour);
+        }
+        if points.len() <= 64 {
+            for p in points {
+                let (px, py) = to(p.0, p.1);
+                for (dx, dy) in [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, -1), (1, -1), (-1, 1)] {
+                    put(&mut img, px as i64 + dx, py as i64 + dy, *colour);
+                }
+            }
+        }
+    }
+    label(&mut img, 4, top - 4, &y_hi, style.frame);
+    label(&mut img, 4, top + ph - 6, &y_lo, style.frame);
+    let (x_lo, x_hi) = (number(x.lo), number(x.hi));
+    label(&mut img, left - 4, top + ph + 6, &x_lo, style.frame);
+    label(&mut img, left + pw + 4 - ADVANCE * x_hi.len() as i64, top + ph + 6, &x_hi, style.frame);
+    img
+}
+
+/// A value as a label: whole numbers as they are, others to three
+/// significant digits, very large or small ones as `d.dde-n`.
+#[must_use]
+pub fn number(v: f64) -> String {
+    if !v.is_finite() {
+        return String::new();
+    }
+    if v == v.round() && v.abs() < 1e7 {
+        return format!("{v:.0}");
+    }
+    let a = v.abs();
+    if (1e-3..1e7).contains(&a) {
+        let digits = (2 - a.log10().floor() as i32).max(0) as usize;
+        format!("{v:.digits$}")
+    } else {
+        format!("{v:.2e}")
+    }
+}
+
+/// 3 × 5 glyphs (rows top down, three bits each, the high bit on the left).
+fn glyph(c: char) -> Option<[u8; 5]> {
+    Some(match c {
+        '0' => [7, 5, 5, 5, 7],
+        '1' => [2, 6, 2, 2, 7],
+        '2' => [7, 1, 7, 4, 7],
+        '3' => [7, 1, 7, 1, 7],
+        '4' => [5, 5, 7, 1, 1],
+        '5' => [7, 4, 7, 1, 7],
+        '6' => [7, 4, 7, 5, 7],
+        '7' => [7, 1, 1, 1, 1],
+        '8' => [7, 5, 7, 5, 7],
+        '9' => [7, 5, 7, 1, 7],
+        '.' => [0, 0, 0, 0, 2],
+        '-' => [0, 0, 7, 0, 0],
+        'e' => [0, 7, 5, 6, 3],
+        _ => return None,
+    })
+}
+
+/// Draws `text` (digits, `.`, `-`, `e`) with its top-left corner at `(x, y)`,
+/// pixels doubled; other characters leave a gap.
+pub fn label(img: &mut RgbImage, x: i64, y: i64, text: &str, colour: [u8; 3]) {
+    for (i, c) in text.chars().enumerate() {
+        let Some(g) = glyph(c) else { continue };
+        for (row, bits) in g.iter().enumerate() {
+            for col in 0..3 {
+                if bits >> (2 - col) & 1 == 1 {
+                    for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                        put(img, x + ADVANCE * i as i64 + 2 * col + dx, y + 2 * row as i64 + dy, colour);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// A line from `a` to `b` (pixel coordinates), one pixel wide, clipped.
+pub fn line(img: &mut RgbImage, a: (f64, f64), b: (f64, f64), colour: [u8; 3]) {
+    let n = (b.0 - a.0).abs().max((b.1 - a.1).abs()).ceil().max(1.0);
+    if !n.is_finite() {
+        return;
+    }
+    let n = n.min(1e5) as usize;
+    for k in 0..=n {
+        let t = k as f64 / n as f64;
+        put(img, (a.0 + (b.0 - a.0) * t).floor() as i64, (a.1 + (b.1 - a.1) * t).floor() as i64, colour);
+    }
+}
+
+fn put(img: &mut RgbImage, x: i64, y: i64, colour: [u8; 3]) {
+    if x >= 0 && y >= 0 && x < i64::from(img.width()) && y < i64::from(img.height()) {
+        img.put_pixel(x as u32, y as u32, Rgb(colour));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn axes_place_values_linearly_and_logarithmically() {
+        assert!((Axis::linear(0.0, 10.0).fraction(2.5) - 0.25).abs() < 1e-15);
+        assert!((Axis::log(1.0, 1000.0).fraction(10.0) - 1.0 / 3.0).abs() < 1e-12);
+        assert_eq!(Axis::log(1.0, 100.0).fraction(-3.0), 0.0, "non-positive values sit at the low end");
+        assert_eq!(Axis::linear(2.0, 2.0).fraction(2.0), 0.5, "an empty range centres");
+        assert_eq!(Axis::linear(0.0, 1.0).fraction(f64::NAN), 0.5);
+    }
+
+    #[test]
+    fn labels_are_short_and_drawable() {
+        assert_eq!(number(64.0), "64");
+        assert_eq!(number(0.1234), "0.123");
+        assert_eq!(number(12.345), "12.3");
+        assert_eq!(number(-1.5), "-1.50");
+        assert_eq!(number(2.5e-5), "2.50e-5");
+        for v in [0.0, 1e9, -7.25, 3.3e-9, 123_456.7] {
+            assert!(number(v).chars().all(|c| glyph(c).is_some()), "{v}: {}", number(v));
+        }
+    }
+
+    #[test]
+    fn a_rising_curve_is_drawn_from_bottom_left_to_top_right() {
+        let red = [200, 0, 0];
+        let img = chart(
+            &[(vec![(1.0, 0.0), (100.0, 1.0)], red)],
+            Axis::log(1.0, 100.0),
+            Axis::linear(0.0, 1.0),
+            (200, 120),
+            &Style::LIGHT,
+        );
+        let reds: Vec<(u32, u32)> = img.enumerate_pixels().filter(|p| p.2.0 == red).map(|p| (p.0, p.1)).collect();
+        assert!(!reds.is_empty());
+        let (lo, hi) = (reds.iter().min_by_key(|p| p.0).unwrap(), reds.iter().max_by_key(|p| p.0).unwrap());
+        assert!(lo.1 > hi.1, "left end lower on screen than right end: {lo:?} {hi:?}");
+        // On a log axis the midpoint x = 10 sits at half the width of the plot area.
+        assert!(reds.iter().all(|p| p.0 < 200 && p.1 < 120));
+    }
+}

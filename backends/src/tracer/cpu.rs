@@ -7,9 +7,10 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::ray::Ray;
 
+use super::node8;
+use super::packet::{self, LANES};
 use super::watertight::{Shear, before, finish, push_crossing, sphere_crossings, sphere_hit, triangle_hit};
 use super::{BackendError, CrossingBuffer, Hit, Prepared, Tracer};
-use super::{node8, packet};
 use crate::lines::Line;
 
 /// Triangle boxes and build parameters shared by the CPU and Vulkan BVHs:
@@ -109,18 +110,39 @@ impl CpuTracer {
     /// [`CpuTracer::any`]'s.
     fn occluded_packet(&self, lines: &[Line], stack: &mut Vec<(u32, u8)>, out: &mut Vec<bool>) -> bool {
         #[cfg(target_arch = "x86_64")]
-        if let Some(bvh) = &self.bvh
-            && self.avx2
-            && self.scene.sphere.is_none()
-            && let Some(p) = packet::Packet::new(lines)
-        {
-            // SAFETY: `self.avx2` came from `has_avx2()`.
+        if let Some((bvh, p)) = self.packet(lines) {
+            // SAFETY: `packet` checked `self.avx2`, which came from `has_avx2()`.
             let done = unsafe { packet::occluded(bvh, &self.ordered, &p, stack) };
             out.extend((0..p.len()).map(|i| done >> i & 1 == 1));
             return true;
         }
         let _ = (lines, stack, out);
         false
+    }
+
+    /// Closest hits of up to [`LANES`] coherent lines as one packet, as
+    /// [`CpuTracer::occluded_packet`]; each answer is [`CpuTracer::closest`]'s.
+    fn closest_packet(&self, lines: &[Line], stack: &mut Vec<(u32, u8)>, out: &mut Vec<Option<Hit>>) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if let Some((bvh, p)) = self.packet(lines) {
+            // SAFETY: as in `occluded_packet`.
+            let best = unsafe { packet::closest(bvh, &self.ordered, &bvh.primitive_indices, &p, stack) };
+            out.extend(lines.iter().zip(best).map(|(l, b)| b.and_then(|(_, tri)| triangle_hit(&self.scene, l, tri))));
+            return true;
+        }
+        let _ = (lines, stack, out);
+        false
+    }
+
+    /// The BVH and the packet of `lines`, where a packet applies: AVX2, a
+    /// triangle scene, and at least two lines in one octant.
+    #[cfg(target_arch = "x86_64")]
+    fn packet<'a>(&self, lines: &'a [Line]) -> Option<(&CwBvh, packet::Packet<'a>)> {
+        let bvh = self.bvh.as_ref()?;
+        if !self.avx2 || self.scene.sphere.is_some() {
+            return None;
+        }
+        Some((bvh, packet::Packet::new(lines)?))
     }
 }
 
@@ -155,14 +177,19 @@ impl Tracer for CpuTracer {
 
     fn closest_hit(&self, lines: &[Line], out: &mut Vec<Option<Hit>>) -> Result<(), BackendError> {
         out.clear();
-        out.extend(lines.iter().map(|l| self.closest(l)));
+        let mut stack = Vec::with_capacity(256);
+        for chunk in lines.chunks(LANES) {
+            if !self.closest_packet(chunk, &mut stack, out) {
+                out.extend(chunk.iter().map(|l| self.closest(l)));
+            }
+        }
         Ok(())
     }
 
     fn occluded(&self, lines: &[Line], out: &mut Vec<bool>) -> Result<(), BackendError> {
         out.clear();
         let mut stack = Vec::with_capacity(256);
-        for chunk in lines.chunks(packet::LANES) {
+        for chunk in lines.chunks(LANES) {
             if !self.occluded_packet(chunk, &mut stack, out) {
                 out.extend(chunk.iter().map(|l| self.any(l)));
             }

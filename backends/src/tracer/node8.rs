@@ -23,7 +23,7 @@ use obvhs::ray::Ray;
 
 /// obvhs's near cut-off: children nearer than this along the ray are culled
 /// (`obvhs::cwbvh::node::EPSILON`, private there; see `docs/TRACING.md`).
-const NODE_EPSILON: f32 = 0.0001;
+pub(super) const NODE_EPSILON: f32 = 0.0001;
 
 /// Whether the AVX2 node test may be used (asked once; std caches it).
 #[must_use]

@@ -1,127 +1,198 @@
-//! Occlusion of up to eight coherent rays in one BVH walk (a ray packet).
+//! Up to eight coherent rays in one BVH walk (a ray packet): occlusion and
+//! closest hits.
 //!
-//! The viewpoint channel's shadow rays come in coherent groups: one view's
-//! rays share the eye, and consecutive rays head for the same triangle (its
-//! `m²` sample points) or for neighbouring centroids (Morton order). Walked
-//! one at a time, eight such rays load the same nodes and triangles eight
-//! times; the walk is memory-bound (`docs/TRACING.md`). Here the eight walk
-//! together: each node is loaded once and tested for each ray still active
-//! there with the single-ray walk's own node test ([`intersect8`]), so
-//! every ray visits exactly the nodes it would alone and tests exactly the
-//! same triangles. Occlusion asks only whether any of them is crossed, so
-//! every ray's answer is the single-ray walk's, whatever order the packet
-//! visits them in.
+//! The viewpoint channel's rays come in coherent groups: one view's rays
+//! share the eye, and consecutive rays head for the same triangle (its `m²`
+//! sample points), for neighbouring centroids (Morton order) or through
+//! neighbouring pixels. Walked one at a time, eight such rays load the same
+//! nodes and triangles eight times; the walk is memory-bound
+//! (`docs/TRACING.md`). Here the eight walk together: each node is loaded
+//! once and each of its children is tested against all eight rays in one
+//! AVX2 register, with the single-ray node test's arithmetic lane by lane
+//! ([`super::node8`]: a multiply, then an add, max/min in the same operand
+//! order), so each ray visits exactly the nodes it would alone (for
+//! occlusion) and tests the same triangles. Occlusion asks only whether any
+//! of them is crossed, so every ray's answer is the single-ray walk's,
+//! whatever order the packet visits them in; closest hits shrink each ray's
+//! own `tmax` and break ties by triangle index, which makes the answer
+//! independent of the order too (boxes are padded and quantised outwards:
+//! a crossing nearer than the best so far is never culled).
 //!
-//! Where the rays share the axes of their watertight shear (nearly always:
-//! the dominant axis of nearby directions), a triangle is tested against all
-//! of them at once: [`Shear::hit`]'s arithmetic lane by lane, operation for
-//! operation (no fused multiply-add), so the same `t` to the bit; a lane
-//! whose edge functions hit an exact zero is finished by [`Shear::hit`]
-//! itself (its double-precision re-evaluation).
+//! Where the rays also share the axes of their watertight shear (nearly
+//! always: the dominant axis of nearby directions), a triangle is tested
+//! against all of them at once: [`Shear::hit`]'s arithmetic lane by lane,
+//! operation for operation (no fused multiply-add), so the same `t` to the
+//! bit; a lane whose edge functions hit an exact zero is finished by
+//! [`Shear::hit`] itself (its double-precision re-evaluation).
 //!
-//! The rays of a packet must share the octant of their directions (the
-//! compressed nodes' child order depends on it); [`Packet::new`] checks.
+//! The rays of a packet share the octant of their directions (the node
+//! test's near and far planes, and the compressed nodes' child order,
+//! depend on it); [`Packet::new`] checks. Packets need AVX2 (x86-64); the
+//! CPU backend sends every other line through the single-ray walk.
+#![cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
 
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::{
     __m256, _CMP_EQ_OQ, _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_NEQ_OQ, _mm256_add_ps, _mm256_and_ps,
-    _mm256_andnot_ps, _mm256_cmp_ps, _mm256_div_ps, _mm256_loadu_ps, _mm256_movemask_ps, _mm256_mul_ps, _mm256_or_ps,
-    _mm256_set1_ps, _mm256_setzero_ps, _mm256_sub_ps,
+    _mm256_andnot_ps, _mm256_cmp_ps, _mm256_div_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_min_ps, _mm256_movemask_ps,
+    _mm256_mul_ps, _mm256_or_ps, _mm256_set1_ps, _mm256_setzero_ps, _mm256_storeu_ps, _mm256_sub_ps,
 };
 
 use glam::Vec3A;
 use obvhs::cwbvh::CwBvh;
-use obvhs::ray::Ray;
+use obvhs::cwbvh::node::CwBvhNode;
+use obvhs::ray::safe_inverse;
 
-#[cfg(target_arch = "x86_64")]
-use super::node8::intersect8;
-use super::watertight::Shear;
+use super::node8::NODE_EPSILON;
+use super::watertight::{Shear, before};
 use crate::lines::Line;
 
 /// Lanes of a packet.
 pub(crate) const LANES: usize = 8;
 
-/// The octant code obvhs orders a node's children by (`ray_get_octant_inv4`,
-/// private there): rays with equal codes walk children in the same order.
-#[must_use]
-fn octant_inv4(d: Vec3A) -> u32 {
-    (if d.x < 0.0 { 0 } else { 0x0404_0404 })
-        | (if d.y < 0.0 { 0 } else { 0x0202_0202 })
-        | (if d.z < 0.0 { 0 } else { 0x0101_0101 })
+/// `f32` per lane.
+type Lanes = [f32; LANES];
+
+/// Whether a direction component counts as negative for the node test and
+/// the child order (obvhs's `ray_get_octant_inv4` and `intersect_ray`).
+fn negative(x: f32) -> bool {
+    x < 0.0
 }
 
-/// Up to [`LANES`] lines prepared for one walk.
-pub(crate) struct Packet {
-    n: usize,
+/// Up to [`LANES`] lines prepared for one walk, as structures of arrays.
+pub(crate) struct Packet<'a> {
+    lines: &'a [Line],
+    /// obvhs's octant code (`ray_get_octant_inv4`) shared by every lane.
     oct_inv4: u32,
-    rays: [Ray; LANES],
-    shears: [Shear; LANES],
-    tmin: [f32; LANES],
-    tmax: [f32; LANES],
-    /// The shared shear axes `[kx, ky, kz]` of every lane, if they agree.
+    /// Whether the direction is negative along x, y, z (every lane alike).
+    neg: [bool; 3],
+    /// Node test: origin and inverse direction (`safe_inverse`) per axis.
+    origin: [Lanes; 3],
+    inv: [Lanes; 3],
+    /// Triangle test: the shared shear axes `[kx, ky, kz]` (if all lanes
+    /// agree), the origin along them and the shear constants.
     axes: Option<[usize; 3]>,
-    /// Per lane (structure of arrays, for the 8-wide triangle test): the
-    /// origin along the shear axes and the shear constants.
-    org: [[f32; LANES]; 3],
-    s: [[f32; LANES]; 3],
+    sheared_origin: [Lanes; 3],
+    shear: [Lanes; 3],
+    tmin: Lanes,
+    tmax: Lanes,
 }
 
-impl Packet {
+impl<'a> Packet<'a> {
     /// The packet of `lines` (2 to [`LANES`] of them), or `None` when their
-    /// directions are not all in one octant.
-    pub(crate) fn new(lines: &[Line]) -> Option<Self> {
+    /// directions are not all in one octant. Unused lanes repeat the first
+    /// line and are never active.
+    pub(crate) fn new(lines: &'a [Line]) -> Option<Self> {
         if lines.len() < 2 || lines.len() > LANES {
             return None;
         }
-        // Traversal directions as the single-ray walk takes them (no -0.0: see `Shear::of`).
-        let oct_inv4 = octant_inv4(Shear::of(&lines[0]).1);
-        if lines.iter().any(|l| octant_inv4(Shear::of(l).1) != oct_inv4) {
+        let d0 = lines[0].direction;
+        let neg = d0.map(negative);
+        if lines.iter().any(|l| l.direction.map(negative) != neg) {
             return None;
         }
-        // Unused lanes repeat the first line (they are never active).
-        let line = |i: usize| &lines[if i < lines.len() { i } else { 0 }];
-        let shears: [Shear; LANES] = std::array::from_fn(|i| Shear::of(line(i)).0);
-        let rays = std::array::from_fn(|i| {
-            let l = line(i);
-            Ray::new(Vec3A::from(l.origin), Shear::of(l).1, l.tmin, l.tmax)
-        });
-        let k = shears[0].k;
-        let axes = shears.iter().all(|s| s.k == k).then_some(k);
-        let org = std::array::from_fn(|a| std::array::from_fn(|i| shears[i].org[k[a]]));
-        let s = std::array::from_fn(|a| std::array::from_fn(|i| shears[i].s[a]));
-        Some(Self {
-            n: lines.len(),
+        let oct_inv4 = (if neg[0] { 0 } else { 0x0404_0404 })
+            | (if neg[1] { 0 } else { 0x0202_0202 })
+            | (if neg[2] { 0 } else { 0x0101_0101 });
+        let mut p = Packet {
+            lines,
             oct_inv4,
-            rays,
-            shears,
-            tmin: std::array::from_fn(|i| line(i).tmin),
-            tmax: std::array::from_fn(|i| line(i).tmax),
-            axes,
-            org,
-            s,
-        })
+            neg,
+            origin: [[0.0; LANES]; 3],
+            inv: [[0.0; LANES]; 3],
+            axes: None,
+            sheared_origin: [[0.0; LANES]; 3],
+            shear: [[0.0; LANES]; 3],
+            tmin: [0.0; LANES],
+            tmax: [0.0; LANES],
+        };
+        let mut axes = None;
+        let mut same = true;
+        for i in 0..LANES {
+            let l = &lines[if i < lines.len() { i } else { 0 }];
+            // The traversal direction as the single-ray walk takes it (no
+            // -0.0: see `Shear::of`).
+            let (s, dir) = Shear::of(l);
+            if *axes.get_or_insert(s.k) != s.k {
+                same = false;
+            }
+            for a in 0..3 {
+                p.origin[a][i] = l.origin[a];
+                p.inv[a][i] = safe_inverse(dir[a]);
+                p.sheared_origin[a][i] = s.org[s.k[a]];
+                p.shear[a][i] = s.s[a];
+            }
+            (p.tmin[i], p.tmax[i]) = (l.tmin, l.tmax);
+        }
+        p.axes = axes.filter(|_| same);
+        Some(p)
     }
 
     /// Lanes in use.
     pub(crate) fn len(&self) -> usize {
-        self.n
+        self.lines.len()
     }
 
-    /// The lanes of `lanes` whose ray crosses triangle `v` within its
-    /// `[tmin, tmax]`: [`Shear::hit`]'s answer for each.
+    /// Per child slot of `node`, the lanes of `lanes` whose ray enters the
+    /// child's box before its own `tmax[lane]`: obvhs's slab test
+    /// (`CwBvhNode::intersect_ray`, [`super::node8`]) lane by lane.
     ///
     /// # Safety
     /// The CPU must support AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn crossing(&self, v: &[Vec3A; 3], lanes: u8) -> u8 {
+    unsafe fn node(&self, node: &CwBvhNode, tmax: &Lanes, lanes: u8) -> [u8; 8] {
+        // SAFETY: each load reads one [f32; 8] (unaligned loads are allowed).
+        let load = |x: &Lanes| unsafe { _mm256_loadu_ps(x.as_ptr()) };
+        let ext = node.compute_extent();
+        // Per axis: the planes nearer and farther along the ray, the ray's
+        // scale and offset in the node's quantised frame.
+        let axis = |a: usize, lo: &[u8; 8], hi: &[u8; 8]| {
+            let inv = load(&self.inv[a]);
+            let adj_inv = _mm256_mul_ps(_mm256_set1_ps(ext[a]), inv);
+            let adj_org = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(node.p[a]), load(&self.origin[a])), inv);
+            let (near, far) = if self.neg[a] { (*hi, *lo) } else { (*lo, *hi) };
+            (near, far, adj_inv, adj_org)
+        };
+        let x = axis(0, &node.child_min_x, &node.child_max_x);
+        let y = axis(1, &node.child_min_y, &node.child_max_y);
+        let z = axis(2, &node.child_min_z, &node.child_max_z);
+        // `t` of a quantised plane `q` along each lane: q · adj_inv + adj_org.
+        let plane =
+            |q: u8, inv: __m256, org: __m256| _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(f32::from(q)), inv), org);
+        let (eps, ray_tmax) = (_mm256_set1_ps(NODE_EPSILON), load(tmax));
+        let mut out = [0u8; 8];
+        for (c, o) in out.iter_mut().enumerate() {
+            if node.child_meta[c] == 0 {
+                continue;
+            }
+            let tmin =
+                _mm256_max_ps(plane(x.0[c], x.2, x.3), _mm256_max_ps(plane(y.0[c], y.2, y.3), plane(z.0[c], z.2, z.3)));
+            let tfar =
+                _mm256_min_ps(plane(x.1[c], x.2, x.3), _mm256_min_ps(plane(y.1[c], y.2, y.3), plane(z.1[c], z.2, z.3)));
+            let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(_mm256_max_ps(tmin, eps), _mm256_min_ps(tfar, ray_tmax));
+            *o = _mm256_movemask_ps(hit) as u8 & lanes;
+        }
+        out
+    }
+
+    /// The lanes of `lanes` whose ray crosses triangle `v` within its
+    /// `[tmin, tmax]`, with each crossing's `t` in `ts`: [`Shear::hit`]'s
+    /// answer for each.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn crossing(&self, v: &[Vec3A; 3], lanes: u8, ts: &mut Lanes) -> u8 {
         let Some([kx, ky, kz]) = self.axes else {
-            return self.crossing_each(v, lanes);
+            return self.crossing_each(v, lanes, ts);
         };
         // SAFETY: each load reads one [f32; 8] (unaligned loads are allowed).
-        let load = |x: &[f32; LANES]| unsafe { _mm256_loadu_ps(x.as_ptr()) };
-        let (ox, oy, oz) = (load(&self.org[0]), load(&self.org[1]), load(&self.org[2]));
-        let (sx, sy, sz) = (load(&self.s[0]), load(&self.s[1]), load(&self.s[2]));
+        let load = |x: &Lanes| unsafe { _mm256_loadu_ps(x.as_ptr()) };
+        let (ox, oy, oz) =
+            (load(&self.sheared_origin[0]), load(&self.sheared_origin[1]), load(&self.sheared_origin[2]));
+        let (sx, sy, sz) = (load(&self.shear[0]), load(&self.shear[1]), load(&self.shear[2]));
         // Each vertex relative to each lane's origin, sheared: `Shear::raw`.
         let shear = |p: &Vec3A| -> (__m256, __m256, __m256) {
             let az = _mm256_sub_ps(_mm256_set1_ps(p[kz]), oz);
@@ -136,20 +207,11 @@ impl Packet {
         let w = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
         let vv = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
         let zero = _mm256_setzero_ps();
-        let any_zero = _mm256_or_ps(
-            _mm256_or_ps(_mm256_cmp_ps::<_CMP_EQ_OQ>(u, zero), _mm256_cmp_ps::<_CMP_EQ_OQ>(vv, zero)),
-            _mm256_cmp_ps::<_CMP_EQ_OQ>(w, zero),
-        );
+        let any3 = |f: &dyn Fn(__m256) -> __m256| _mm256_or_ps(_mm256_or_ps(f(u), f(vv)), f(w));
         // Exact zeros: that lane is decided in double precision by `Shear::hit`.
-        let exact = _mm256_movemask_ps(any_zero) as u8 & lanes;
-        let neg = _mm256_or_ps(
-            _mm256_or_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(u, zero), _mm256_cmp_ps::<_CMP_LT_OQ>(vv, zero)),
-            _mm256_cmp_ps::<_CMP_LT_OQ>(w, zero),
-        );
-        let pos = _mm256_or_ps(
-            _mm256_or_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(u, zero), _mm256_cmp_ps::<_CMP_GT_OQ>(vv, zero)),
-            _mm256_cmp_ps::<_CMP_GT_OQ>(w, zero),
-        );
+        let exact = _mm256_movemask_ps(any3(&|e| _mm256_cmp_ps::<_CMP_EQ_OQ>(e, zero))) as u8 & lanes;
+        let neg = any3(&|e| _mm256_cmp_ps::<_CMP_LT_OQ>(e, zero));
+        let pos = any3(&|e| _mm256_cmp_ps::<_CMP_GT_OQ>(e, zero));
         let det = _mm256_add_ps(_mm256_add_ps(u, vv), w);
         let num = _mm256_add_ps(
             _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(u, sz), az), _mm256_mul_ps(_mm256_mul_ps(vv, sz), bz)),
@@ -162,22 +224,50 @@ impl Packet {
             _mm256_cmp_ps::<_CMP_LE_OQ>(t, load(&self.tmax)),
         );
         let fast = _mm256_movemask_ps(_mm256_and_ps(inside, within)) as u8 & lanes & !exact;
-        fast | self.crossing_each(v, exact)
+        // SAFETY: `ts` is 8 writable f32 (unaligned stores are allowed).
+        unsafe { _mm256_storeu_ps(ts.as_mut_ptr(), t) };
+        fast | self.crossing_each(v, exact, ts)
     }
 
     /// [`Packet::crossing`] one lane at a time.
-    fn crossing_each(&self, v: &[Vec3A; 3], lanes: u8) -> u8 {
+    fn crossing_each(&self, v: &[Vec3A; 3], lanes: u8, ts: &mut Lanes) -> u8 {
         let mut out = 0;
         let mut l = lanes;
         while l != 0 {
             let i = l.trailing_zeros() as usize;
             l &= l - 1;
-            if matches!(self.shears[i].hit(v), Some(t) if t >= self.tmin[i] && t <= self.tmax[i]) {
+            if let Some(t) = Shear::of(&self.lines[i]).0.hit(v)
+                && t >= self.tmin[i]
+                && t <= self.tmax[i]
+            {
+                ts[i] = t;
                 out |= 1 << i;
             }
         }
         out
     }
+}
+
+/// Pushes the internal children of `node` that some lane enters, with
+/// their lanes, lowest traversal priority first, so the highest (nearest
+/// first for the packet's octant, as obvhs orders them) is walked next.
+fn push_children(node: &CwBvhNode, hit: &[u8; 8], oct_inv4: u32, stack: &mut Vec<(u32, u8)>) {
+    // Priority of slot c is c ^ (octant bits), as obvhs's `traverse!`.
+    let oct = (oct_inv4 & 7) as usize;
+    for p in 0..8 {
+        let c = p ^ oct;
+        if hit[c] != 0 && node.imask & (1 << c) != 0 {
+            let relative = (u32::from(node.imask) & !(u32::MAX << c)).count_ones();
+            stack.push((node.child_base_idx + relative, hit[c]));
+        }
+    }
+}
+
+/// The leaf primitives of slot `c` (indices into the BVH-ordered triangles).
+fn leaf(node: &CwBvhNode, c: usize) -> std::ops::Range<usize> {
+    let meta = node.child_meta[c];
+    let first = node.primitive_base_idx as usize + usize::from(meta & 0b1_1111);
+    first..first + (meta >> 5).count_ones() as usize
 }
 
 /// Which lanes of `packet` are occluded by `triangles` (in BVH order):
@@ -194,63 +284,150 @@ pub(crate) unsafe fn occluded(
     packet: &Packet,
     stack: &mut Vec<(u32, u8)>,
 ) -> u8 {
-    let all = ((1u16 << packet.n) - 1) as u8;
-    let oct_inv4 = packet.oct_inv4;
+    let all = ((1u16 << packet.len()) - 1) as u8;
     let mut done = 0u8;
     stack.clear();
     if bvh.nodes.is_empty() {
         return 0;
     }
     stack.push((0, all));
+    let mut ts = [0.0; LANES];
     while let Some((index, lanes)) = stack.pop() {
         let lanes = lanes & !done;
         if lanes == 0 {
             continue;
         }
         let node = &bvh.nodes[index as usize];
-        // Each active ray's hit mask: children in bits 24..32 (at their
-        // traversal priority), leaf primitives in bits 0..24.
-        let mut hits = [0u32; LANES];
-        let mut any = 0;
-        let mut l = lanes;
-        while l != 0 {
-            let i = l.trailing_zeros() as usize;
-            l &= l - 1;
-            // SAFETY: AVX2 is enabled in this function (the caller's promise).
-            hits[i] = unsafe { intersect8(node, &packet.rays[i], oct_inv4) };
-            any |= hits[i];
-        }
-        let with_bit = |b: u32| -> u8 {
-            let mut m = 0u8;
-            for (i, h) in hits.iter().enumerate() {
-                m |= (((h >> b) & 1) as u8) << i;
+        // SAFETY: AVX2 (the caller's promise).
+        let hit = unsafe { packet.node(node, &packet.tmax, lanes) };
+        for (c, &lanes) in hit.iter().enumerate() {
+            if lanes == 0 || node.imask & (1 << c) != 0 {
+                continue;
             }
-            m
-        };
-        let mut prims = any & 0x00ff_ffff;
-        while prims != 0 {
-            let b = prims.trailing_zeros();
-            prims &= prims - 1;
-            let k = (node.primitive_base_idx + b) as usize;
-            let l = with_bit(b) & !done;
-            if l != 0 {
+            for k in leaf(node, c) {
+                let l = lanes & !done;
+                if l != 0 {
+                    // SAFETY: AVX2 as above.
+                    done |= unsafe { packet.crossing(&triangles[k], l, &mut ts) };
+                }
+            }
+            if done == all {
+                return done;
+            }
+        }
+        push_children(node, &hit, packet.oct_inv4, stack);
+    }
+    done
+}
+
+/// The closest crossing `(t, original[k])` of each lane of `packet` with
+/// `triangles` (in BVH order), ties in `t` to the smaller original index:
+/// each lane's walk shrinks its own `tmax` as hits are found, as the
+/// single-ray walk does.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+pub(crate) unsafe fn closest(
+    bvh: &CwBvh,
+    triangles: &[[Vec3A; 3]],
+    original: &[u32],
+    packet: &Packet,
+    stack: &mut Vec<(u32, u8)>,
+) -> [Option<(f32, u32)>; LANES] {
+    let mut best: [Option<(f32, u32)>; LANES] = [None; LANES];
+    stack.clear();
+    if bvh.nodes.is_empty() {
+        return best;
+    }
+    let mut tmax = packet.tmax;
+    stack.push((0, ((1u16 << packet.len()) - 1) as u8));
+    let mut ts = [0.0; LANES];
+    while let Some((index, lanes)) = stack.pop() {
+        let node = &bvh.nodes[index as usize];
+        // SAFETY: AVX2 (the caller's promise).
+        let hit = unsafe { packet.node(node, &tmax, lanes) };
+        for (c, &lanes) in hit.iter().enumerate() {
+            if lanes == 0 || node.imask & (1 << c) != 0 {
+                continue;
+            }
+            for k in leaf(node, c) {
                 // SAFETY: AVX2 as above.
-                done |= unsafe { packet.crossing(&triangles[k], l) };
-                if done == all {
-                    return done;
+                let mut l = unsafe { packet.crossing(&triangles[k], lanes, &mut ts) };
+                while l != 0 {
+                    let i = l.trailing_zeros() as usize;
+                    l &= l - 1;
+                    let (t, tri) = (ts[i], original[k]);
+                    if before(t, tri, best[i]) {
+                        best[i] = Some((t, tri));
+                    }
+                    if t < tmax[i] {
+                        tmax[i] = t;
+                    }
                 }
             }
         }
-        // Children from the lowest priority up, so the highest (nearest
-        // first for the packet's octant, as obvhs) is walked next.
-        let mut inner = any & 0xff00_0000;
-        while inner != 0 {
-            let b = inner.trailing_zeros();
-            inner &= inner - 1;
-            let slot = (b - 24) ^ (oct_inv4 & 0xff);
-            let relative = (u32::from(node.imask) & !(u32::MAX << slot)).count_ones();
-            stack.push((node.child_base_idx + relative, with_bit(b)));
+        push_children(node, &hit, packet.oct_inv4, stack);
+    }
+    best
+}
+
+#[cfg(all(test, target_arch = "x86_64"))]
+mod tests {
+    use super::*;
+    use crate::lines::global_line;
+    use crate::scene::built_in;
+    use crate::tracer::node8::{has_avx2, intersect8};
+    use crate::tracer::{Prepared, bvh_input};
+    use obvhs::ray::Ray;
+
+    /// The packet's node test gives every lane exactly the children the
+    /// single-ray node test gives its ray (the same IEEE operations), on
+    /// every node of four BVHs, for packets of nearby lines at full length
+    /// and cut short.
+    #[test]
+    fn packet_node_test_matches_the_single_ray_test() {
+        if !has_avx2() {
+            return;
+        }
+        for spec in ["cube-enclosure:6", "cubes-room:16", "geosphere", "table-chairs:2"] {
+            let p = Prepared::new(&built_in(spec).unwrap());
+            let (aabbs, params) = bvh_input(&p);
+            let bvh = obvhs::cwbvh::builder::build_cwbvh(&aabbs, params, &mut std::time::Duration::default());
+            let (mut packets, mut entered) = (0, 0u64);
+            for g in 0..200 {
+                let base = global_line(7, g, 1.1);
+                let lines: Vec<Line> = (0..8)
+                    .map(|i| {
+                        let mut l = base;
+                        l.origin[i % 3] += 1e-3 * i as f32;
+                        l.direction[(i + 1) % 3] += 1e-3 * (i as f32 - 4.0);
+                        l.tmax *= [1.0, 0.5, 0.1][i % 3];
+                        l
+                    })
+                    .collect();
+                let Some(pk) = Packet::new(&lines) else { continue };
+                packets += 1;
+                for node in &bvh.nodes {
+                    // SAFETY: AVX2 checked above.
+                    let hit = unsafe { pk.node(node, &pk.tmax, 0xff) };
+                    for (i, l) in lines.iter().enumerate() {
+                        let ray = Ray::new(Vec3A::from(l.origin), Vec3A::from(l.direction), l.tmin, l.tmax);
+                        // SAFETY: AVX2 checked above.
+                        let single = unsafe { intersect8(node, &ray, pk.oct_inv4) };
+                        let (child_bits, bit_index) = node.get_child_and_index_bits(pk.oct_inv4);
+                        for (c, &lanes) in hit.iter().enumerate() {
+                            let bits = ((child_bits >> (8 * c)) & 0xff) as u32;
+                            let index = ((bit_index >> (8 * c)) & 0xff) as u32;
+                            let expect = bits != 0 && single & (bits << index) != 0;
+                            assert_eq!(lanes >> i & 1 == 1, expect, "{spec}: packet {g} lane {i} slot {c}");
+                            entered += u64::from(expect);
+                        }
+                    }
+                }
+            }
+            assert!(packets > 100 && entered > 1000, "{spec}: {packets} packets, {entered} children entered");
         }
     }
-    done
 }

@@ -49,6 +49,7 @@ fn vulkan_rows_are_the_cpu_rows_bit_for_bit() {
         ("phantom:20", "ramp", 0.5),
         ("cube:16", "step", 0.5),
         ("sphere:15", "ramp", 1.3),
+        ("marschner-lobb:19", "ramp", 0.6),
     ];
     for (spec, tf, step) in cases {
         let v = built_in(spec).unwrap();

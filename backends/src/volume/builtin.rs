@@ -15,6 +15,11 @@
 //!   polygonal cube of Part V.
 //! * `sphere[:N]`: a radial Gaussian, value `exp(−8 r²)`: every direction is
 //!   equivalent.
+//! * `marschner-lobb[:N]`: the Marschner–Lobb test signal (Marschner and
+//!   Lobb 1994, the usual test of volume reconstruction filters): a slow
+//!   sine along z plus a radial ripple of frequency `f_M = 6`, `α = 0.25`,
+//!   values in `[0, 1]`; sampled at 41³ by default as in the paper (near
+//!   the Nyquist rate of its ripple, so resampling it shows aliasing).
 //!
 //! Every built-in spans [`REFERENCE_SIZE`] world units whatever `N`, so its
 //! voxel spacing is `64/N`: opacity being per world unit, `hydrogen` at
@@ -43,6 +48,10 @@ pub const BUILT_IN: &[BuiltInVolume] = &[
     BuiltInVolume { syntax: "phantom[:N]", description: "five labelled objects on N^3 voxels (default 64)" },
     BuiltInVolume { syntax: "cube[:N]", description: "a solid cube, the middle half of each axis (default 32)" },
     BuiltInVolume { syntax: "sphere[:N]", description: "a radial Gaussian exp(-8 r^2) (default 32)" },
+    BuiltInVolume {
+        syntax: "marschner-lobb[:N]",
+        description: "the Marschner-Lobb test signal, f_M 6, alpha 0.25 (default N 41, as in the paper)",
+    },
 ];
 
 /// Extent of every built-in in world units: a voxel of a built-in at
@@ -96,8 +105,12 @@ pub fn built_in(spec: &str) -> Result<Volume, VolumeError> {
             }
             Ok(hydrogen(n as u32, l as u32, m.unsigned_abs() as u32, size("hydrogen", size_n)?))
         }
-        "phantom" | "cube" | "sphere" => {
-            let default = if name == "phantom" { 64 } else { 32 };
+        "phantom" | "cube" | "sphere" | "marschner-lobb" => {
+            let default = match name {
+                "phantom" => 64,
+                "marschner-lobb" => 41,
+                _ => 32,
+            };
             let s = match a.as_slice() {
                 [] => default,
                 [s] => *s,
@@ -109,6 +122,7 @@ pub fn built_in(spec: &str) -> Result<Volume, VolumeError> {
                 "cube" => field(&format!("cube:{s}"), s, |p| {
                     if p.x.abs() < 0.5 && p.y.abs() < 0.5 && p.z.abs() < 0.5 { 1.0 } else { 0.0 }
                 }),
+                "marschner-lobb" => field(&format!("marschner-lobb:{s}"), s, marschner_lobb),
                 _ => field(&format!("sphere:{s}"), s, |p| (-8.0 * p.length_squared()).exp()),
             })
         }
@@ -117,6 +131,18 @@ pub fn built_in(spec: &str) -> Result<Volume, VolumeError> {
             BUILT_IN.iter().map(|b| b.syntax).collect::<Vec<_>>().join(", ")
         ))),
     }
+}
+
+/// The Marschner–Lobb signal at `p` in `[-1, 1]³`:
+/// `(1 − sin(π z / 2) + α (1 + cos(2π f_M cos(π r / 2)))) / (2 (1 + α))`,
+/// `r = √(x² + y²)`, `f_M = 6`, `α = 1/4`.
+fn marschner_lobb(p: DVec3) -> f64 {
+    use std::f64::consts::PI;
+    const F_M: f64 = 6.0;
+    const ALPHA: f64 = 0.25;
+    let r = (p.x * p.x + p.y * p.y).sqrt();
+    let ripple = (2.0 * PI * F_M * (PI * r / 2.0).cos()).cos();
+    (1.0 - (PI * p.z / 2.0).sin() + ALPHA * (1.0 + ripple)) / (2.0 * (1.0 + ALPHA))
 }
 
 /// A field over `[-1, 1]³` sampled at the centres of `n³` voxels.
@@ -247,6 +273,30 @@ mod tests {
         assert!((ratio - 4.0 * (-1.0f64).exp()).abs() < 1e-12, "{ratio}");
         // 2s has a radial node at r = 2 (L_1^1(ρ) = 2 − ρ, ρ = r).
         assert!(density(2, 0, 0, DVec3::new(2.0, 0.0, 0.0)).abs() < 1e-20);
+    }
+
+    #[test]
+    fn marschner_lobb_is_the_published_signal() {
+        // On the z axis r = 0: cos(2π·6·1) = 1, so ρ = (1 − sin(πz/2) + 2α) / (2(1 + α)).
+        assert!((marschner_lobb(DVec3::ZERO) - 1.5 / 2.5).abs() < 1e-15);
+        assert!((marschner_lobb(DVec3::Z) - 0.5 / 2.5).abs() < 1e-15);
+        assert!((marschner_lobb(-DVec3::Z) - 2.5 / 2.5).abs() < 1e-15);
+        // Where cos(π r / 2) = 1/12 the ripple is cos(π) = −1: ρ = (1 − sin(πz/2)) / 2.5.
+        let r = (1.0f64 / 12.0).acos() * 2.0 / std::f64::consts::PI;
+        assert!((marschner_lobb(DVec3::new(r, 0.0, 0.0)) - 1.0 / 2.5).abs() < 1e-12);
+        let v = built_in("marschner-lobb").unwrap();
+        assert_eq!(v.dims, [41; 3]);
+        let (lo, hi) = v.range();
+        assert!(lo >= 0.0 && hi <= 1.0 && hi > 0.9 && lo < 0.1, "{lo} {hi}");
+        // Symmetric about the z axis: x -> -x and x <-> y swap voxels exactly.
+        let n = 41;
+        let at = |i: usize, j: usize, k: usize| v.data[(k * n + j) * n + i];
+        for (i, j, k) in [(3, 7, 11), (20, 5, 40), (0, 40, 17)] {
+            assert_eq!(at(i, j, k), at(n - 1 - i, j, k));
+            assert_eq!(at(i, j, k), at(j, i, k));
+        }
+        assert!(built_in("marschner-lobb:3").is_err());
+        assert!(built_in("marschner-lobb:8,8").is_err());
     }
 
     #[test]

@@ -107,10 +107,11 @@ pub struct VolumeOptions {
 /// Usage, input and output errors; one line each.
 #[allow(clippy::too_many_lines)]
 pub fn run(o: &VolumeOptions) -> Result<Report, CliError> {
-    let spec = o
-        .volume
-        .clone()
-        .ok_or_else(|| CliError::usage("give a volume: a built-in (hydrogen, phantom, cube, sphere) or a raw file"))?;
+    let spec = o.volume.clone().ok_or_else(|| {
+        CliError::usage(
+            "give a volume: a built-in (hydrogen, phantom, cube, sphere, marschner-lobb), an .nrrd or a raw file",
+        )
+    })?;
     let base = o.common.base;
     let unit = Some(base.unit());
     let tf = transfer(&o.tf)?;

@@ -47,7 +47,7 @@ pub struct Settings {
     /// Most refinement passes.
     pub max_passes: u32,
     /// Rays per leaf estimating what it sees (front, back, nothing) for
-    /// power conservation ([`gather::Conservation`]); 0: plain push-pull.
+    /// power conservation (`gather::Conservation`); 0: plain push-pull.
     pub front_rays: u32,
 }
 

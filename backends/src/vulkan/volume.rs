@@ -76,7 +76,7 @@ fn volume_bytes(caster: &Caster<'_>) -> [u64; 3] {
 /// `streams` viewpoints of `rays` rays in flight (one staging set each): the
 /// volume's buffers and per stream the rays, their state and `k` samples per
 /// ray for one chunk, plus the host's copy of a chunk's directions, and the
-/// driver's own ([`DRIVER_BYTES`]). On lavapipe the device's memory is the
+/// driver's own (`DRIVER_BYTES`). On lavapipe the device's memory is the
 /// host's.
 #[must_use]
 pub fn device_memory(caster: &Caster<'_>, streams: usize, rays: u64) -> u64 {

@@ -105,4 +105,4 @@ pub use scene::{
     discretisation_error_area_sampling, discretisation_error_lines, mutual_information_matrix_into, point_form_factor,
     scene_measures, scene_measures_from_counts,
 };
-pub use sparse::{SparseChannel, jensen_shannon_sparse};
+pub use sparse::{SparseChannel, jensen_shannon_sparse, jensen_shannon_sparse_logs, sparse_logs};

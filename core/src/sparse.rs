@@ -298,7 +298,45 @@ pub fn jensen_shannon_sparse<T: Real>(
     b: (&[u32], &[T]),
     base: Base,
 ) -> Result<T, Error> {
-    let (wa, wb) = (weights.0.to_f64(), weights.1.to_f64());
+    check_pair(weights, a, b)?;
+    let (va, vb) = (a.1, b.1);
+    Ok(js_merge(weights, a, b, |k| ln(va[k].to_f64()), |k| ln(vb[k].to_f64()), base))
+}
+
+/// [`jensen_shannon_sparse`] with `ln p` of every value given (`la[k] =
+/// ln(a.1[k])`, as the core's own `ln` computes it: pass
+/// [`sparse_logs`]'s output), so that rows compared with many others take
+/// their logarithms once. Bit for bit the same value as
+/// [`jensen_shannon_sparse`] for such logs (one definition: both run the
+/// same merge).
+///
+/// # Errors
+/// Those of [`jensen_shannon_sparse`], and [`Error::LengthMismatch`] when a
+/// log slice is not as long as its values.
+pub fn jensen_shannon_sparse_logs<T: Real>(
+    weights: (T, T),
+    a: (&[u32], &[T], &[f64]),
+    b: (&[u32], &[T], &[f64]),
+    base: Base,
+) -> Result<T, Error> {
+    for (v, l) in [(a.1, a.2), (b.1, b.2)] {
+        if v.len() != l.len() {
+            return Err(Error::LengthMismatch { expected: v.len(), found: l.len() });
+        }
+    }
+    check_pair(weights, (a.0, a.1), (b.0, b.1))?;
+    let (la, lb) = (a.2, b.2);
+    Ok(js_merge(weights, (a.0, a.1), (b.0, b.1), |k| la[k], |k| lb[k], base))
+}
+
+/// `ln p` of every value, as [`jensen_shannon_sparse_logs`] takes them.
+pub fn sparse_logs<T: Real>(values: &[T], out: &mut [f64]) {
+    for (o, v) in out.iter_mut().zip(values) {
+        *o = ln(v.to_f64());
+    }
+}
+
+fn check_pair<T: Real>(weights: (T, T), a: (&[u32], &[T]), b: (&[u32], &[T])) -> Result<(), Error> {
     check_normalized::<T>(mass(&[weights.0, weights.1])?)?;
     for (idx, val) in [a, b] {
         if idx.len() != val.len() {
@@ -309,31 +347,49 @@ pub fn jensen_shannon_sparse<T: Real>(
         }
         check_normalized::<T>(mass(val)?)?;
     }
-    // Σ_i π_i p_i ln(p_i / m) over the merged support.
-    let term = |w: f64, p: f64, m: f64| if w > 0.0 && p > 0.0 { w * p * (ln(p) - ln(m)) } else { 0.0 };
+    Ok(())
+}
+
+/// `Σ_i π_i p_i (ln p_i − ln m)` over the merged support (`m` the mixture;
+/// `ln m` taken once per index), with `ln p` from `la`/`lb` by position.
+fn js_merge<T: Real>(
+    weights: (T, T),
+    a: (&[u32], &[T]),
+    b: (&[u32], &[T]),
+    la: impl Fn(usize) -> f64,
+    lb: impl Fn(usize) -> f64,
+    base: Base,
+) -> T {
+    let (wa, wb) = (weights.0.to_f64(), weights.1.to_f64());
+    let term = |w: f64, p: f64, lp: f64, lm: f64| if w > 0.0 && p > 0.0 { w * p * (lp - lm) } else { 0.0 };
     let (mut i, mut j) = (0, 0);
     let mut acc = Neumaier::new();
     while i < a.0.len() || j < b.0.len() {
         let ia = a.0.get(i).copied().unwrap_or(u32::MAX);
         let ib = b.0.get(j).copied().unwrap_or(u32::MAX);
-        let (pa, pb) = match (ia.cmp(&ib), i < a.0.len(), j < b.0.len()) {
+        let (ka, kb) = match (ia.cmp(&ib), i < a.0.len(), j < b.0.len()) {
             (core::cmp::Ordering::Less, true, _) | (_, true, false) => {
                 i += 1;
-                (a.1[i - 1].to_f64(), 0.0)
+                (Some(i - 1), None)
             }
             (core::cmp::Ordering::Greater, _, true) | (_, false, true) => {
                 j += 1;
-                (0.0, b.1[j - 1].to_f64())
+                (None, Some(j - 1))
             }
             _ => {
                 i += 1;
                 j += 1;
-                (a.1[i - 1].to_f64(), b.1[j - 1].to_f64())
+                (Some(i - 1), Some(j - 1))
             }
         };
+        let pa = ka.map_or(0.0, |k| a.1[k].to_f64());
+        let pb = kb.map_or(0.0, |k| b.1[k].to_f64());
         let m = wa * pa + wb * pb;
-        acc.add(term(wa, pa, m) + term(wb, pb, m));
+        let lm = ln(m);
+        let ta = ka.map_or(0.0, |k| term(wa, pa, la(k), lm));
+        let tb = kb.map_or(0.0, |k| term(wb, pb, lb(k), lm));
+        acc.add(ta + tb);
     }
     let d = acc.value();
-    Ok(T::from_f64(if d < 0.0 { 0.0 } else { d * base.per_nat() }))
+    T::from_f64(if d < 0.0 { 0.0 } else { d * base.per_nat() })
 }

@@ -1,4 +1,6 @@
-use itgfx_core::{Base, Channel, SparseChannel, jensen_shannon, jensen_shannon_sparse};
+use itgfx_core::{
+    Base, Channel, SparseChannel, jensen_shannon, jensen_shannon_sparse, jensen_shannon_sparse_logs, sparse_logs,
+};
 use proptest::prelude::*;
 
 use crate::strategies::*;
@@ -98,6 +100,20 @@ proptest! {
         let d = jensen_shannon(&[w, 1.0 - w], &[a.clone(), b.clone()].concat(), n, Base::Bits).unwrap();
         let s = jensen_shannon_sparse((w, 1.0 - w), (&ia, &va), (&ib, &vb), Base::Bits).unwrap();
         prop_assert!(close(d, s, 1e-12));
+    }
+
+    /// With the logarithms given, the divergence is the same to the bit.
+    #[test]
+    fn sparse_js_with_logs_is_bit_identical((a, b) in pmf_pair(12), w in 0.0f64..=1.0) {
+        let n = a.len();
+        let (_, ia, va) = compress(&a, n);
+        let (_, ib, vb) = compress(&b, n);
+        let (mut la, mut lb) = (vec![0.0; va.len()], vec![0.0; vb.len()]);
+        sparse_logs(&va, &mut la);
+        sparse_logs(&vb, &mut lb);
+        let s = jensen_shannon_sparse((w, 1.0 - w), (&ia, &va), (&ib, &vb), Base::Nats).unwrap();
+        let l = jensen_shannon_sparse_logs((w, 1.0 - w), (&ia, &va, &la), (&ib, &vb, &lb), Base::Nats).unwrap();
+        prop_assert_eq!(s.to_bits(), l.to_bits());
     }
 }
 

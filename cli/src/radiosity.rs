@@ -178,17 +178,8 @@ fn outputs(o: &RadiosityOptions) -> Result<Vec<(&'static str, PathBuf)>, CliErro
     } else {
         &["radiosity.png", "mesh.png", "radiosity.exr", "radiosity.pfm", "mesh.ply", "elements.csv", "radiosity.json"]
     };
-    let created = crate::output::out_dir(dir)?.is_some();
-    let list: Vec<(&'static str, PathBuf)> = names.iter().map(|n| (*n, dir.join(n))).collect();
-    for (_, p) in &list {
-        if let Err(e) = crate::output::check("--out", p) {
-            if created {
-                let _ = std::fs::remove_dir(dir);
-            }
-            return Err(e);
-        }
-    }
-    Ok(list)
+    let paths = crate::output::out_files(dir, names)?;
+    Ok(names.iter().copied().zip(paths).collect())
 }
 
 /// A linear RGB picture as PFM (little-endian, bottom row first).

@@ -11,9 +11,9 @@
 //! **Dense or sparse.** Up to [`DENSE_LIMIT`] cells the counts live in one
 //! `n × n` matrix of `u32` (chunks arrive as sorted runs, so the adds sweep
 //! it in order), with a hash map for the rare pair past `2^32`; above it, in
-//! a hash map of the pairs hit. On Linux the matrix asks for transparent
-//! huge pages: its adds are scattered over ~10^8 bytes, and 2 MiB pages
-//! take the page-table walk off nearly every one of them.
+//! a hash map of the pairs hit. (Transparent huge pages for the matrix were
+//! tried: its adds got ~25% cheaper, but clearing the whole matrix at first
+//! touch cost more than that at 10^7 lines.)
 
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
@@ -78,36 +78,12 @@ const DENSE_LIMIT: usize = 36_000_000;
 /// than sorting the list of cells hit, which is then dropped.
 const TOUCHED_FRACTION: usize = 32;
 
-/// A zeroed `u32` matrix of `len` cells, backed by huge pages where the
-/// kernel grants them (Linux, `madvise`); the contents are the same either way.
-fn zeroed(len: usize) -> Vec<u32> {
-    let v = vec![0u32; len];
-    #[cfg(target_os = "linux")]
-    {
-        const PAGE: usize = 4096;
-        let bytes = len * size_of::<u32>();
-        let start = v.as_ptr() as usize;
-        let first = start.next_multiple_of(PAGE);
-        let end = (start + bytes) / PAGE * PAGE;
-        if end > first {
-            // SAFETY: `[first, end)` lies inside the vector's own allocation
-            // and is page-aligned; MADV_HUGEPAGE only changes how the kernel
-            // backs those pages (it never alters their contents), and its
-            // result, success or not, is ignored.
-            unsafe {
-                libc::madvise(first as *mut libc::c_void, end - first, libc::MADV_HUGEPAGE);
-            }
-        }
-    }
-    v
-}
-
 impl Accumulator {
     /// An empty accumulator for `n` patches; `symmetric` for global lines
     /// (one [`sym_key`] per segment).
     pub(super) fn new(n: usize, symmetric: bool) -> Self {
         let store = if n.saturating_mul(n) <= DENSE_LIMIT {
-            Store::Dense { n, counts: zeroed(n * n), touched: Some(Vec::new()), overflow: KeyMap::default() }
+            Store::Dense { n, counts: vec![0; n * n], touched: Some(Vec::new()), overflow: KeyMap::default() }
         } else {
             Store::Sparse(KeyMap::default())
         };

@@ -34,11 +34,12 @@ pub fn is_series_built_in(spec: &str) -> bool {
     spec.split(':').next() == Some("hydrogen-beat")
 }
 
-/// The built-in series from its specification.
+/// The built-in series from its specification, if its values (4 bytes a
+/// voxel and frame) fit in `max_bytes`.
 ///
 /// # Errors
-/// Bad arguments, one line.
-pub fn series_built_in(spec: &str) -> Result<Vec<Volume>, VolumeError> {
+/// Bad arguments or too many bytes, one line, before anything is allocated.
+pub fn series_built_in(spec: &str, max_bytes: u64) -> Result<Vec<Volume>, VolumeError> {
     let args = spec.split_once(':').map(|(_, a)| a);
     let nums: Vec<i64> = match args {
         None => Vec::new(),
@@ -58,6 +59,14 @@ pub fn series_built_in(spec: &str) -> Result<Vec<Volume>, VolumeError> {
     }
     if t < 2 || t > MAX_FRAMES as i64 {
         return Err(VolumeError::new(format!("hydrogen-beat: T = {t} frames must be in 2..={MAX_FRAMES}")));
+    }
+    let bytes = (n as u64).pow(3) * t as u64 * 4;
+    if bytes > max_bytes {
+        return Err(VolumeError::new(format!(
+            "hydrogen-beat:{n},{t}: the frames alone need {:.1} GiB (limit {:.1} GiB): fewer frames or voxels",
+            bytes as f64 / f64::from(1u32 << 30),
+            max_bytes as f64 / f64::from(1u32 << 30)
+        )));
     }
     Ok(hydrogen_beat(n as usize, t as usize))
 }
@@ -170,7 +179,7 @@ mod tests {
 
     #[test]
     fn the_beat_turns_about_z() {
-        let f = series_built_in("hydrogen-beat:12,4").unwrap();
+        let f = series_built_in("hydrogen-beat:12,4", 1 << 30).unwrap();
         assert_eq!(f.len(), 4);
         check_frames(&f).unwrap();
         let n = 12;
@@ -186,11 +195,12 @@ mod tests {
         assert!(f[0].data.iter().zip(&f[2].data).any(|(a, b)| (a - b).abs() > 0.1));
         let (lo, hi) = common_range(&f);
         assert!(lo >= 0.0 && (hi - 1.0).abs() < 1e-6);
-        assert!(series_built_in("hydrogen-beat:12,1").is_err());
-        assert!(series_built_in("hydrogen-beat:2").is_err());
-        assert!(series_built_in("hydrogen-beat:x").is_err());
+        assert!(series_built_in("hydrogen-beat:12,1", 1 << 30).is_err());
+        assert!(series_built_in("hydrogen-beat:2", 1 << 30).is_err());
+        assert!(series_built_in("hydrogen-beat:x", 1 << 30).is_err());
+        assert!(series_built_in("hydrogen-beat:64,2", 64 * 64 * 64 * 8 - 1).unwrap_err().0.contains("frames alone"));
         let mut g = f.clone();
-        g[3] = series_built_in("hydrogen-beat:10,2").unwrap().remove(0);
+        g[3] = series_built_in("hydrogen-beat:10,2", 1 << 30).unwrap().remove(0);
         assert!(check_frames(&g).unwrap_err().0.contains("frame 3"));
         assert!(check_frames(&g[..1]).is_err());
     }

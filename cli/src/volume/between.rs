@@ -43,17 +43,13 @@ pub(super) fn labels(v: &Volume, spec: &str, steps: usize) -> Result<Between, Cl
     };
     let find = |s: &str| {
         let s = s.trim();
-        v.label_names
-            .iter()
-            .position(|n| n == s)
-            .or_else(|| s.parse::<usize>().ok().filter(|&k| (1..=v.label_names.len()).contains(&k)).map(|k| k - 1))
-            .ok_or_else(|| {
-                CliError::usage(format!(
-                    "--path-between: {s:?} is not a label of {} ({})",
-                    v.name,
-                    v.label_names.join(", ")
-                ))
-            })
+        super::input::label(v, s).map(|k| k - 1).ok_or_else(|| {
+            CliError::usage(format!(
+                "--path-between: {s:?} is not a label of {} ({})",
+                v.name,
+                v.label_names.join(", ")
+            ))
+        })
     };
     let (from, to) = (find(a)?, find(b)?);
     if from == to {

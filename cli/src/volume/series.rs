@@ -41,7 +41,7 @@ fn frames(o: &VolumeOptions, spec: &str) -> Result<Vec<Volume>, CliError> {
         if o.dims.is_some() || o.value_type.is_some() || o.spacing.is_some() {
             return Err(CliError::usage("--dims, --type and --spacing are for raw files, not built-in volumes"));
         }
-        series_built_in(spec).map_err(usage)?
+        series_built_in(spec, MEMORY_LIMIT).map_err(usage)?
     } else {
         let items = if spec.contains(['*', '?']) { glob(spec)? } else { split(spec) };
         if items.len() > itgfx_backends::volume::series::MAX_FRAMES {
@@ -51,16 +51,28 @@ fn frames(o: &VolumeOptions, spec: &str) -> Result<Vec<Volume>, CliError> {
                 itgfx_backends::volume::series::MAX_FRAMES
             )));
         }
-        items
-            .iter()
-            .enumerate()
-            .map(|(k, s)| {
-                if s.trim().is_empty() {
-                    return Err(CliError::usage(format!("--time: frame {k} is empty")));
+        let mut frames: Vec<Volume> = Vec::with_capacity(items.len());
+        for (k, s) in items.iter().enumerate() {
+            if s.trim().is_empty() {
+                return Err(CliError::usage(format!("--time: frame {k} is empty")));
+            }
+            // Every frame has frame 0's grid (checked below): refuse before loading more than fits.
+            if let Some(first) = frames.first() {
+                let bytes = items.len() as u64 * first.voxels() as u64 * 5;
+                if bytes > MEMORY_LIMIT {
+                    return Err(CliError::usage(format!(
+                        "--time: {} frames of {} voxels need {:.1} GiB (limit {} GiB)",
+                        items.len(),
+                        first.voxels(),
+                        bytes as f64 / f64::from(1u32 << 30),
+                        MEMORY_LIMIT >> 30
+                    )));
                 }
-                super::input::load(o, s.trim()).map_err(|e| CliError::usage(format!("--time frame {k}: {e}")))
-            })
-            .collect::<Result<_, _>>()?
+            }
+            frames
+                .push(super::input::load(o, s.trim()).map_err(|e| CliError::usage(format!("--time frame {k}: {e}")))?);
+        }
+        frames
     };
     check_frames(&frames).map_err(usage)?;
     Ok(frames)

@@ -29,6 +29,20 @@ pub fn pcg(v: u32) -> u32 {
     (word >> 22) ^ word
 }
 
+/// The 32-bit hash of a seed that every line's draws start from
+/// ([`LineRng::of`]): computed once per run, not once per line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SeedHash(u32);
+
+impl SeedHash {
+    /// The hash of `seed`.
+    #[inline]
+    #[must_use]
+    pub fn new(seed: u64) -> Self {
+        Self(pcg(seed as u32 ^ pcg((seed >> 32) as u32 ^ 0x9E37_79B9)))
+    }
+}
+
 /// The random draws of one line: a pure function of `(seed, index)`.
 ///
 /// Two 32-bit words are hashed from the seed and the 64-bit index once (64
@@ -46,7 +60,14 @@ impl LineRng {
     #[inline]
     #[must_use]
     pub fn new(seed: u64, index: u64) -> Self {
-        let s = pcg(seed as u32 ^ pcg((seed >> 32) as u32 ^ 0x9E37_79B9));
+        Self::of(SeedHash::new(seed), index)
+    }
+
+    /// [`LineRng::new`] with the seed's hash computed once for many lines.
+    #[inline]
+    #[must_use]
+    pub fn of(seed: SeedHash, index: u64) -> Self {
+        let s = seed.0;
         let w1 = pcg(s ^ pcg(index as u32 ^ pcg((index >> 32) as u32)));
         let w2 = pcg(w1 ^ 0x85EB_CA6B ^ pcg(index as u32 ^ 0xC2B2_AE35) ^ (index >> 32) as u32);
         Self { w1, w2 }
@@ -107,7 +128,14 @@ pub fn sphere_point(u: f64, v: f64) -> DVec3 {
 /// of `radius` around the origin (Part III §1.4; uniformly distributed lines).
 #[must_use]
 pub fn global_line(seed: u64, index: u64, radius: f64) -> Line {
-    let rng = LineRng::new(seed, index);
+    global_line_of(SeedHash::new(seed), index, radius)
+}
+
+/// [`global_line`] with the seed's hash computed once for many lines.
+#[inline]
+#[must_use]
+pub fn global_line_of(seed: SeedHash, index: u64, radius: f64) -> Line {
+    let rng = LineRng::of(seed, index);
     // Draws 0.. for the first point, 64.. for the second (rejection rarely
     // needs more than a few pairs; 32 pairs fail with probability 0.21^32).
     let p = rng.sphere_point(0) * radius;

@@ -7,16 +7,13 @@
 //! rayon. Every count and sum is exact, so the result is the same for any
 //! thread count and chunking.
 
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
-
 use glam::DVec3;
-use itgfx_core::PairCount;
 use rayon::prelude::*;
 
 use super::counts_valid::SceneFingerprint;
+use super::pairs::{Accumulator, key, sym_key};
 use super::{BlockCounts, ContinuousSums, CountsError, FixedSum, LineOptions, MAX_BLOCKS, VisibilityCounts};
-use crate::lines::{Line, LineRng, cosine_direction, global_line, sample_cdf};
+use crate::lines::{Line, LineRng, SeedHash, cosine_direction, global_line_of, sample_cdf};
 use crate::scene::Scene;
 use crate::tracer::{Crossing, CrossingBuffer, Prepared, Tracer};
 
@@ -27,137 +24,6 @@ pub const CHUNK: u64 = 16_384;
 /// the unit cube (half-diagonal √3/2), where 59.0% of global lines cross the
 /// cube and Part III Table 6's rows are reproduced with every line counted.
 pub const SPHERE_SCALE: f64 = 0.9 / 0.866_025_403_784_438_6;
-
-/// A tiny multiplicative hasher for `u64` pair keys.
-#[derive(Default)]
-struct KeyHasher(u64);
-impl Hasher for KeyHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 = (self.0.rotate_left(5) ^ u64::from(b)).wrapping_mul(0x51_7C_C1_B7_27_22_0A_95);
-        }
-    }
-    fn write_u64(&mut self, v: u64) {
-        self.0 = (v ^ (v >> 29)).wrapping_mul(0xBF58_476D_1CE4_E5B9) ^ (v >> 32);
-    }
-}
-type KeyMap = HashMap<u64, u64, BuildHasherDefault<KeyHasher>>;
-
-/// Where a block's pair counts accumulate: a dense `n × n` matrix of `u32`
-/// when it fits in [`DENSE_LIMIT`] entries (chunks arrive as sorted runs, so
-/// the adds sweep it in order), a hash map of the pairs hit otherwise.
-///
-/// One accumulator serves every block of a run: [`Accumulator::take_pairs`]
-/// zeroes what it reads, so the matrix is allocated (and its pages faulted
-/// in) once per run, not once per block. The cells a block hit are listed
-/// while they are few, so a small shard reads its pairs without sweeping
-/// all `n²` cells (that sweep, eight times over 5400² cells, was a second of
-/// every small shard's CPU time).
-enum Accumulator {
-    Dense { n: usize, counts: Vec<u32>, touched: Option<Vec<u32>>, overflow: KeyMap },
-    Sparse(KeyMap),
-}
-
-/// Largest `n²` counted densely (6000 patches: 144 MB of `u32` per block).
-const DENSE_LIMIT: usize = 36_000_000;
-
-/// Past `n² / TOUCHED_FRACTION` cells hit, a sweep of the matrix is cheaper
-/// than sorting the list of cells hit, which is then dropped.
-const TOUCHED_FRACTION: usize = 32;
-
-impl Accumulator {
-    fn new(n: usize) -> Self {
-        if n.saturating_mul(n) <= DENSE_LIMIT {
-            Accumulator::Dense { n, counts: vec![0; n * n], touched: Some(Vec::new()), overflow: KeyMap::default() }
-        } else {
-            Accumulator::Sparse(KeyMap::default())
-        }
-    }
-
-    fn add(&mut self, runs: &[(u64, u64)]) {
-        match self {
-            Accumulator::Dense { n, counts, touched, overflow } => {
-                let limit = counts.len() / TOUCHED_FRACTION;
-                for &(k, c) in runs {
-                    let idx = (k >> 32) as usize * *n + (k as u32) as usize;
-                    let old = counts[idx];
-                    let (sum, carry) = old.overflowing_add(c as u32);
-                    if carry || c > u64::from(u32::MAX) {
-                        // Counts past 2^32 for one pair: keep the excess exactly.
-                        *overflow.entry(k).or_insert(0) += c;
-                    } else {
-                        counts[idx] = sum;
-                        if old == 0
-                            && sum != 0
-                            && let Some(t) = touched
-                        {
-                            // idx < n² ≤ DENSE_LIMIT < 2^32.
-                            t.push(idx as u32);
-                            if t.len() > limit {
-                                *touched = None;
-                            }
-                        }
-                    }
-                }
-            }
-            Accumulator::Sparse(map) => {
-                for &(k, c) in runs {
-                    *map.entry(k).or_insert(0) += c;
-                }
-            }
-        }
-    }
-
-    /// The pairs counted so far, sorted, leaving the accumulator empty for
-    /// the next block: the dense matrix is zeroed where it was written and
-    /// kept, so its pages are touched once per run, not once per block
-    /// (fresh pages cost two page faults each: 13% of a 10^7-line run).
-    /// While the cells hit are listed, only they are read; otherwise the
-    /// matrix is swept, whole runs of zeros skipped 16 entries at a time.
-    fn take_pairs(&mut self) -> Vec<PairCount> {
-        let mut pairs: Vec<PairCount> = match self {
-            Accumulator::Dense { n, counts, touched, overflow } => {
-                let n = *n;
-                let pair = |idx: usize, c: u32| PairCount {
-                    from: (idx / n) as u32,
-                    to: (idx % n) as u32,
-                    count: u64::from(c),
-                };
-                let mut v: Vec<PairCount> = Vec::new();
-                if let Some(mut t) = touched.take() {
-                    t.sort_unstable();
-                    v = t.iter().map(|&idx| pair(idx as usize, std::mem::take(&mut counts[idx as usize]))).collect();
-                } else {
-                    for (c, chunk) in counts.chunks_mut(16).enumerate() {
-                        if chunk.iter().fold(0, |a, &x| a | x) == 0 {
-                            continue;
-                        }
-                        for (k, x) in chunk.iter_mut().enumerate().filter(|(_, x)| **x > 0) {
-                            v.push(pair(c * 16 + k, std::mem::take(x)));
-                        }
-                    }
-                }
-                *touched = Some(Vec::new());
-                for (k, c) in overflow.drain() {
-                    let (i, j) = ((k >> 32) as u32, k as u32);
-                    match v.binary_search_by_key(&(i, j), |p| (p.from, p.to)) {
-                        Ok(pos) => v[pos].count += c,
-                        Err(pos) => v.insert(pos, PairCount { from: i, to: j, count: c }),
-                    }
-                }
-                v
-            }
-            Accumulator::Sparse(map) => {
-                map.drain().map(|(k, c)| PairCount { from: (k >> 32) as u32, to: k as u32, count: c }).collect()
-            }
-        };
-        pairs.sort_unstable();
-        pairs
-    }
-}
 
 /// Per-chunk endpoint sums: dense arrays for up to [`DENSE_ENDPOINTS`]
 /// patches, a list of `(patch, log)` above (a 10^6-patch mesh would make
@@ -300,10 +166,6 @@ pub fn local_line(prepared: &Prepared, seed: u64, index: u64) -> (u32, Line) {
     (p, l)
 }
 
-fn key(i: u32, j: u32) -> u64 {
-    (u64::from(i) << 32) | u64::from(j)
-}
-
 #[allow(clippy::too_many_arguments)]
 fn process_chunk(
     p: &Prepared,
@@ -316,13 +178,14 @@ fn process_chunk(
 ) -> Result<ChunkResult, CountsError> {
     let mut lines = Vec::with_capacity(count as usize);
     let mut origins = Vec::new();
+    let seed = SeedHash::new(opts.seed);
     for i in (0..count).map(|k| first + k * stride) {
         if let Some(s) = sampler {
             let (patch, x, n, l) = s.line(p, opts.seed, i);
             origins.push((patch, x, n));
             lines.push(l);
         } else {
-            lines.push(global_line(opts.seed, i, radius));
+            lines.push(global_line_of(seed, i, radius));
         }
     }
     let mut buf = CrossingBuffer::default();
@@ -343,8 +206,9 @@ fn process_chunk(
     let mut sample = |f: f64, ends: &[u32], endpoint: &mut Endpoints| {
         let l = (total_area_norm * f).ln();
         if f > 0.0 && l.is_finite() {
-            overflow |= !cont.add(l);
-            let l = FixedSum::of(l);
+            let fixed = FixedSum::of(l);
+            overflow |= !cont.add_fixed(fixed, l);
+            let l = fixed;
             for &e in ends {
                 endpoint.add(e, l);
             }
@@ -397,8 +261,8 @@ fn process_chunk(
                     Some(g) if g.cos < 0.0 => {
                         let r = f64::from(g.t - h.t);
                         let f = f64::from(h.cos) * f64::from(-g.cos) / (std::f64::consts::PI * r * r);
-                        keys.push(key(h.patch, g.patch));
-                        keys.push(key(g.patch, h.patch));
+                        // Both directions (Part III Fig. 8): one unordered key.
+                        keys.push(sym_key(h.patch, g.patch));
                         sample(f, &[h.patch, g.patch], &mut endpoint);
                         segments += 1;
                         k += 2;
@@ -529,7 +393,7 @@ pub fn count_visibility(
     let mut endpoints = vec![0u64; n];
     let mut endpoint_log = vec![FixedSum::default(); n];
     let mut done = 0;
-    let mut acc = Accumulator::new(n);
+    let mut acc = Accumulator::new(n, !opts.local);
     for b in 0..blocks {
         let (first, count) = block_lines(start, end, b, blocks);
         let mut background = vec![0u64; n];
@@ -579,7 +443,7 @@ pub fn count_visibility(
         if let Some(prev) = pending {
             merge(prev)?;
         }
-        block.pairs = acc.take_pairs();
+        block.pairs = acc.take_pairs()?;
         block.background =
             background.iter().enumerate().filter(|(_, c)| **c > 0).map(|(i, &c)| (i as u32, c)).collect();
         out.push(block);

@@ -1,0 +1,268 @@
+//! Accumulating a block's pair counts `N_ij` (Part III eq. (30)) from the
+//! sorted runs of keys each chunk of lines produces.
+//!
+//! **Symmetric counts.** A global-line segment joining patches `i` and `j`
+//! counts once for `i → j` and once for `j → i` (Part III Fig. 8), so
+//! `N_ij = N_ji`: global lines hand in one key per segment, `(min, max)`,
+//! and [`Accumulator::take_pairs`] writes both directions out (a segment
+//! from a patch back to itself counts twice on the diagonal, as two keys
+//! did). Half the keys to sort and add, half the matrix touched.
+//!
+//! **Dense or sparse.** Up to [`DENSE_LIMIT`] cells the counts live in one
+//! `n × n` matrix of `u32` (chunks arrive as sorted runs, so the adds sweep
+//! it in order), with a hash map for the rare pair past `2^32`; above it, in
+//! a hash map of the pairs hit. (Transparent huge pages for the matrix were
+//! tried: its adds got ~25% cheaper, but clearing the whole matrix at first
+//! touch cost more than that at 10^7 lines.)
+
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+use itgfx_core::PairCount;
+
+use super::CountsError;
+
+/// A tiny multiplicative hasher for `u64` pair keys.
+#[derive(Default)]
+struct KeyHasher(u64);
+impl Hasher for KeyHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0.rotate_left(5) ^ u64::from(b)).wrapping_mul(0x51_7C_C1_B7_27_22_0A_95);
+        }
+    }
+    fn write_u64(&mut self, v: u64) {
+        self.0 = (v ^ (v >> 29)).wrapping_mul(0xBF58_476D_1CE4_E5B9) ^ (v >> 32);
+    }
+}
+type KeyMap = HashMap<u64, u64, BuildHasherDefault<KeyHasher>>;
+
+/// The key of pair `(i, j)`: `i` in the high half, so keys sort as pairs do.
+#[inline]
+pub(super) fn key(i: u32, j: u32) -> u64 {
+    (u64::from(i) << 32) | u64::from(j)
+}
+
+/// The key of the unordered pair `{i, j}` (symmetric counts).
+#[inline]
+pub(super) fn sym_key(i: u32, j: u32) -> u64 {
+    key(i.min(j), i.max(j))
+}
+
+/// Where a block's pair counts accumulate (see the module docs).
+///
+/// One accumulator serves every block of a run: [`Accumulator::take_pairs`]
+/// zeroes what it reads, so the matrix is allocated (and its pages faulted
+/// in) once per run, not once per block. The cells a block hit are listed
+/// while they are few, so a small shard reads its pairs without sweeping
+/// all `n²` cells (that sweep, eight times over 5400² cells, was a second of
+/// every small shard's CPU time).
+pub(super) struct Accumulator {
+    store: Store,
+    /// Keys are unordered pairs ([`sym_key`]): write both directions out.
+    symmetric: bool,
+}
+
+enum Store {
+    Dense { n: usize, counts: Vec<u32>, touched: Option<Vec<u32>>, overflow: KeyMap },
+    Sparse(KeyMap),
+}
+
+/// Largest `n²` counted densely (6000 patches: 144 MB of `u32`).
+const DENSE_LIMIT: usize = 36_000_000;
+
+/// Past `n² / TOUCHED_FRACTION` cells hit, a sweep of the matrix is cheaper
+/// than sorting the list of cells hit, which is then dropped.
+const TOUCHED_FRACTION: usize = 32;
+
+impl Accumulator {
+    /// An empty accumulator for `n` patches; `symmetric` for global lines
+    /// (one [`sym_key`] per segment).
+    pub(super) fn new(n: usize, symmetric: bool) -> Self {
+        let store = if n.saturating_mul(n) <= DENSE_LIMIT {
+            Store::Dense { n, counts: vec![0; n * n], touched: Some(Vec::new()), overflow: KeyMap::default() }
+        } else {
+            Store::Sparse(KeyMap::default())
+        };
+        Self { store, symmetric }
+    }
+
+    /// Adds sorted runs `(key, count)`.
+    pub(super) fn add(&mut self, runs: &[(u64, u64)]) {
+        match &mut self.store {
+            Store::Dense { n, counts, touched, overflow } => {
+                let limit = counts.len() / TOUCHED_FRACTION;
+                for &(k, c) in runs {
+                    let idx = (k >> 32) as usize * *n + (k as u32) as usize;
+                    let old = counts[idx];
+                    let (sum, carry) = old.overflowing_add(c as u32);
+                    if carry || c > u64::from(u32::MAX) {
+                        // Counts past 2^32 for one pair: keep the excess exactly.
+                        *overflow.entry(k).or_insert(0) += c;
+                    } else {
+                        counts[idx] = sum;
+                        if old == 0
+                            && sum != 0
+                            && let Some(t) = touched
+                        {
+                            // idx < n² ≤ DENSE_LIMIT < 2^32.
+                            t.push(idx as u32);
+                            if t.len() > limit {
+                                *touched = None;
+                            }
+                        }
+                    }
+                }
+            }
+            Store::Sparse(map) => {
+                for &(k, c) in runs {
+                    *map.entry(k).or_insert(0) += c;
+                }
+            }
+        }
+    }
+
+    /// The pairs counted so far, sorted, leaving the accumulator empty for
+    /// the next block: the dense matrix is zeroed where it was written and
+    /// kept, so its pages are touched once per run, not once per block
+    /// (fresh pages cost two page faults each: 13% of a 10^7-line run).
+    /// While the cells hit are listed, only they are read; otherwise the
+    /// matrix is swept, whole runs of zeros skipped 16 entries at a time.
+    ///
+    /// # Errors
+    /// [`CountsError::Overflow`] if a doubled diagonal count would pass 64 bits.
+    pub(super) fn take_pairs(&mut self) -> Result<Vec<PairCount>, CountsError> {
+        let mut pairs: Vec<PairCount> = match &mut self.store {
+            Store::Dense { n, counts, touched, overflow } => {
+                let n = *n;
+                let pair = |idx: usize, c: u32| PairCount {
+                    from: (idx / n) as u32,
+                    to: (idx % n) as u32,
+                    count: u64::from(c),
+                };
+                let mut v: Vec<PairCount> = Vec::new();
+                if let Some(mut t) = touched.take() {
+                    t.sort_unstable();
+                    v = t.iter().map(|&idx| pair(idx as usize, std::mem::take(&mut counts[idx as usize]))).collect();
+                } else {
+                    for (c, chunk) in counts.chunks_mut(16).enumerate() {
+                        if chunk.iter().fold(0, |a, &x| a | x) == 0 {
+                            continue;
+                        }
+                        for (k, x) in chunk.iter_mut().enumerate().filter(|(_, x)| **x > 0) {
+                            v.push(pair(c * 16 + k, std::mem::take(x)));
+                        }
+                    }
+                }
+                *touched = Some(Vec::new());
+                for (k, c) in overflow.drain() {
+                    let (i, j) = ((k >> 32) as u32, k as u32);
+                    match v.binary_search_by_key(&(i, j), |p| (p.from, p.to)) {
+                        Ok(pos) => v[pos].count += c,
+                        Err(pos) => v.insert(pos, PairCount { from: i, to: j, count: c }),
+                    }
+                }
+                v
+            }
+            Store::Sparse(map) => {
+                map.drain().map(|(k, c)| PairCount { from: (k >> 32) as u32, to: k as u32, count: c }).collect()
+            }
+        };
+        pairs.sort_unstable();
+        if self.symmetric {
+            pairs = both_directions(&pairs).ok_or_else(|| CountsError::Overflow("a pair count".into()))?;
+        }
+        Ok(pairs)
+    }
+}
+
+/// The full sorted pair list from the sorted unordered pairs `upper`
+/// (`from <= to`): `(i, j)` and `(j, i)` with the same count, the diagonal
+/// doubled; `None` if a doubled count passes 64 bits. A counting sort by
+/// row, no comparison sort: row `r` is its mirrored entries `(r, i < r)`,
+/// in the order of `i` (the order `upper` lists them), then its own.
+fn both_directions(upper: &[PairCount]) -> Option<Vec<PairCount>> {
+    let rows = upper.iter().map(|p| p.to as usize + 1).max().unwrap_or(0);
+    // start[r]: where row r's mirrored entries begin; own[r]: its own.
+    let mut start = vec![0usize; rows + 1];
+    for p in upper {
+        start[p.from as usize + 1] += 1;
+        if p.from != p.to {
+            start[p.to as usize + 1] += 1;
+        }
+    }
+    for r in 0..rows {
+        start[r + 1] += start[r];
+    }
+    let mut mirrored = vec![0usize; rows];
+    for p in upper.iter().filter(|p| p.from != p.to) {
+        mirrored[p.to as usize] += 1;
+    }
+    let mut own: Vec<usize> = start[..rows].iter().zip(&mirrored).map(|(s, m)| s + m).collect();
+    let mut next = start;
+    let mut out = vec![PairCount::default(); upper.len() * 2 - upper.iter().filter(|p| p.from == p.to).count()];
+    for p in upper {
+        if p.from == p.to {
+            out[own[p.from as usize]] = PairCount { count: p.count.checked_mul(2)?, ..*p };
+        } else {
+            out[own[p.from as usize]] = *p;
+            let m = &mut next[p.to as usize];
+            out[*m] = PairCount { from: p.to, to: p.from, count: p.count };
+            *m += 1;
+        }
+        own[p.from as usize] += 1;
+    }
+    Some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Runs of the keys `keys`, as a chunk hands them in.
+    fn runs(mut keys: Vec<u64>) -> Vec<(u64, u64)> {
+        keys.sort_unstable();
+        let mut r: Vec<(u64, u64)> = Vec::new();
+        for k in keys {
+            match r.last_mut() {
+                Some((last, c)) if *last == k => *c += 1,
+                _ => r.push((k, 1)),
+            }
+        }
+        r
+    }
+
+    /// One key per segment in symmetric mode gives exactly the pairs two
+    /// keys per segment (both directions) give, diagonal included, dense and
+    /// sparse, with the list of cells hit and with the full sweep, and the
+    /// accumulator is empty again for the next block.
+    #[test]
+    fn symmetric_keys_give_the_pairs_of_both_directions() {
+        let mut state = 12_345u64;
+        let mut next = |m: u64| {
+            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            (state >> 33) % m
+        };
+        for (n, segments) in [(7usize, 40usize), (60, 3_000), (2_000, 500), (9_000, 500)] {
+            let segs: Vec<(u32, u32)> = (0..segments).map(|_| (next(n as u64) as u32, next(n as u64) as u32)).collect();
+            let both: Vec<u64> = segs.iter().flat_map(|&(i, j)| [key(i, j), key(j, i)]).collect();
+            let once: Vec<u64> = segs.iter().map(|&(i, j)| sym_key(i, j)).collect();
+            let (mut plain, mut sym) = (Accumulator::new(n, false), Accumulator::new(n, true));
+            for _block in 0..2 {
+                for half in [&both[..both.len() / 2], &both[both.len() / 2..]] {
+                    plain.add(&runs(half.to_vec()));
+                }
+                for half in [&once[..once.len() / 2], &once[once.len() / 2..]] {
+                    sym.add(&runs(half.to_vec()));
+                }
+                let want = plain.take_pairs().unwrap();
+                assert_eq!(sym.take_pairs().unwrap(), want, "n = {n}");
+                assert_eq!(want.iter().map(|p| p.count).sum::<u64>(), 2 * segments as u64);
+            }
+            assert!(plain.take_pairs().unwrap().is_empty() && sym.take_pairs().unwrap().is_empty());
+        }
+    }
+}

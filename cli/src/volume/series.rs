@@ -305,7 +305,7 @@ pub(super) fn run(
         .collect();
     r.records("views", views);
     r.real("seconds", seconds, Some("s")).real("memory_estimate_MiB", need as f64 / f64::from(1u32 << 20), None);
-    if let Some(out) = &o.out {
+    if o.out.is_some() {
         let half = (o.image / 2).max(16);
         let per_row = frames.len().min(8);
         let shots = |pick: &dyn Fn(usize) -> usize| -> Vec<image::RgbImage> {
@@ -320,7 +320,6 @@ pub(super) fn run(
         write_png(&montage(&shots(&|k| per_frame[k].best), per_row), &outputs[2])?;
         r.texts("wrote", outputs.iter().map(|p| p.display().to_string()).collect());
         crate::output::write(&outputs[3], r.to_json().to_string().as_bytes())?;
-        let _ = out;
     }
     Ok(r)
 }

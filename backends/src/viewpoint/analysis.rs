@@ -290,15 +290,37 @@ impl ViewpointAnalysis {
     /// # Errors
     /// None in practice.
     pub fn instability(&self, neighbours: &[Vec<usize>], base: Base) -> Result<Vec<f64>, Error> {
-        // One task per viewpoint; each sums its own neighbours in order, so
-        // the values do not depend on the thread count. Every row meets about
-        // six neighbours: its logarithms are taken once (same values, same bits).
+        // Every row meets about six neighbours: its logarithms are taken once
+        // (same values, same bits), at 8 bytes per entry of the channel.
         let mut logs = vec![0.0; self.values.len()];
         logs.par_chunks_mut(4096).zip(self.values.par_chunks(4096)).for_each(|(l, v)| itgfx_core::sparse_logs(v, l));
         let row = |x: usize| {
             let r = self.starts[x]..self.starts[x + 1];
             (&self.cols[r.clone()], &self.values[r.clone()], &logs[r])
         };
+        self.instability_by(neighbours, |w, x, y| jensen_shannon_sparse_logs(w, row(x), row(y), base))
+    }
+
+    /// [`ViewpointAnalysis::instability`] without holding a logarithm per
+    /// entry: each pair takes its rows' logarithms itself
+    /// ([`jensen_shannon_sparse`], the same merge, so the same bits). For
+    /// channels whose memory is counted without those 8 bytes per entry (the
+    /// volume channel's estimate): more CPU, no extra memory.
+    ///
+    /// # Errors
+    /// None in practice.
+    pub fn instability_lean(&self, neighbours: &[Vec<usize>], base: Base) -> Result<Vec<f64>, Error> {
+        self.instability_by(neighbours, |w, x, y| jensen_shannon_sparse(w, self.row(x), self.row(y), base))
+    }
+
+    /// The mean of `js((π_x, π_y), x, y)` over each row's neighbours that see
+    /// the object, one task per viewpoint summing its neighbours in order, so
+    /// the values do not depend on the thread count.
+    fn instability_by(
+        &self,
+        neighbours: &[Vec<usize>],
+        js: impl Fn((f64, f64), usize, usize) -> Result<f64, Error> + Sync,
+    ) -> Result<Vec<f64>, Error> {
         let rows: Vec<f64> = (0..self.seen.len())
             .into_par_iter()
             .map(|x| {
@@ -306,7 +328,7 @@ impl ViewpointAnalysis {
                 let mut s = 0.0;
                 for &y in &near {
                     let t = self.p_v[x] + self.p_v[y];
-                    s += jensen_shannon_sparse_logs((self.p_v[x] / t, self.p_v[y] / t), row(x), row(y), base)?;
+                    s += js((self.p_v[x] / t, self.p_v[y] / t), x, y)?;
                 }
                 Ok(if near.is_empty() { 0.0 } else { s / near.len() as f64 })
             })

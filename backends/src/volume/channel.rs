@@ -285,6 +285,21 @@ mod tests {
     }
 
     #[test]
+    fn lean_instability_is_the_same_bits() {
+        // The volume's instability holds no logarithm per entry; it must not change a bit.
+        let (_, m) = measures("hydrogen:2,1,1,10", "ramp", 1, 20);
+        let n = m.analysis.viewpoints;
+        let neighbours: Vec<Vec<usize>> = (0..n).map(|v| (1..=6).map(|k| (v + k * 7) % n).collect()).collect();
+        let a = m.analysis.instability(&neighbours, Base::Bits).unwrap();
+        let b = m.analysis.instability_lean(&neighbours, Base::Bits).unwrap();
+        assert!(a.iter().any(|x| *x > 0.0));
+        assert_eq!(
+            a.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+            b.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+        );
+    }
+
+    #[test]
     fn noteworthiness_entropy_limits() {
         let ch = ViewpointChannel {
             positions: vec![DVec3::X; 2],

@@ -256,7 +256,8 @@ fn run_in(
     let t_measures = t0.elapsed().as_secs_f64() - t_channel;
     let best_n = best_views(&m.analysis, v, o.selection.capture, o.selection.best_n, base).map_err(err)?;
     let tour = exploration(&m.analysis, &neighbours, v.best, o.selection.explore, base).map_err(err)?;
-    let instability = m.analysis.instability(&neighbours, base).map_err(err)?;
+    // Without a logarithm held per entry: the memory estimate counts 12 bytes an entry.
+    let instability = m.analysis.instability_lean(&neighbours, base).map_err(err)?;
     let seen = m.analysis.expand(&m.analysis.seen_angle, 0.0);
     let iso = o.iso.map(|f| iso_route(&volume, f, &dirs, o.distance, rays, base)).transpose()?;
     let path_between = match (&between, &objects) {

@@ -340,9 +340,10 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
     if let Some(walks) = o.path_trace {
         let v = view(&scene, &prepared, tracer.as_ref(), &h0, &camera, (o.size, o.size)).map_err(usage)?;
         let mut progress = Progress::new();
-        let reference =
-            path_traced(&scene, &prepared, tracer.as_ref(), &h0, &v, walks, o.seed, &mut |d, t| progress.update(d, t))
-                .map_err(usage)?;
+        let reference = path_traced(&scene, &prepared, tracer.as_ref(), &v, &camera, walks, o.seed, &mut |d, t| {
+            progress.update(d, t)
+        })
+        .map_err(usage)?;
         return reference_report(r, &reference, &v, o, walks, t0, &file);
     }
 
@@ -504,7 +505,10 @@ fn reference_report(
         }
         if n > 0.0 { acc / n } else { 0.0 }
     };
-    r.text("method", "path-traced reference (random walks, Russian roulette)");
+    r.text(
+        "method",
+        "path-traced reference (the renderer's path tracer: next-event estimation with MIS, Russian roulette)",
+    );
     r.count("walks_per_pixel", u64::from(walks)).count("rays", reference.rays).count("seen_pixels", seen.len() as u64);
     r.real("white", white, None);
     r.real("mean_relative_stderr", mean_rel, None);

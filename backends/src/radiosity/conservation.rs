@@ -211,3 +211,72 @@ fn the_glowing_cube_keeps_its_mean_with_near_exact_form_factors() {
     assert!((mean(&s) - 2.0).abs() < 0.004, "mean B {}", mean(&s));
     assert!((balance(&s) - 1.0).abs() < 0.002, "balance {}", balance(&s));
 }
+
+/// Two unoccluded links of the cube with a floating block (the block's top
+/// from the ceiling, the cube's `x−` wall from the block's `x−` side): the
+/// link estimator at 10 samples (mean of 2,000 seeds), cosine-weighted ray
+/// casting (200,000 rays from uniform receiver points, the fraction whose
+/// first hit is the source's front) and the exact factor (a 200 × 200
+/// midpoint rule over the receiver of Lambert's point-to-polygon formula)
+/// agree within 3 standard errors (measured: 0.52189 exact, 0.52177 ±
+/// 0.00017 estimator, 0.52097 ± 0.00112 cast; 0.14433, 0.14485 ± 0.00114,
+/// 0.14471 ± 0.00079). A 1-3 % gap between exact and ray-cast factors on
+/// two unoccluded links of this scene was reported before the link
+/// estimator (67fefb5) and the tracer fix for rays with a `−0.0` direction
+/// component (6fbfed7, which made axis-aligned rays miss flat boxes); it
+/// does not reproduce here. Which of the two removed it was not measured.
+#[test]
+fn unoccluded_links_agree_with_the_exact_factor_and_with_ray_casting() {
+    use crate::lines::{Line, LineRng, cosine_direction};
+    use crate::tracer::Tracer;
+    let scene = cube_with_block(0.5, false);
+    let p = Prepared::new(&scene);
+    let t = CpuTracer::new(&p);
+    let h = Hierarchy::new(&scene);
+    let root = |name: &str| {
+        let r = h.roots.iter().position(|r| scene.patches[r.patch as usize].name == name).expect(name);
+        (h.roots[r].element, h.roots[r].patch)
+    };
+    for (receiver, source) in [("block y+[0,0]", "cube y+[0,0]"), ("cube x-[0,0]", "block x-[0,0]")] {
+        let ((i, _), (j, pj)) = (root(receiver), root(source));
+        let (ei, ej) = (&h.elements[i as usize], &h.elements[j as usize]);
+        let m = 200;
+        let mut exact = 0.0;
+        for a in 0..m {
+            for b in 0..m {
+                let x = h.roots[ei.root as usize]
+                    .shape
+                    .point(glam::DVec2::new((f64::from(a) + 0.5) / f64::from(m), (f64::from(b) + 0.5) / f64::from(m)));
+                exact += super::link::point_to_polygon(x, ei.normal, &ej.points[..usize::from(ej.corners)]);
+            }
+        }
+        exact /= f64::from(m * m);
+        let seeds = 2000;
+        let (mut est, mut sq) = (0.0, 0.0);
+        for seed in 0..seeds {
+            let s = Sampler { prepared: &p, tracer: &t, oracle: Oracle::Power, samples: 10, seed, total_area: 1.0 };
+            let (links, _) = s.evaluate(&h, &[(i, j)], Stage::Transport).unwrap();
+            let f = links.first().map_or(0.0, |l| l.form_factor);
+            est += f / seeds as f64;
+            sq += f * f / seeds as f64;
+        }
+        let se_est = ((sq - est * est) / (seeds - 1) as f64).sqrt();
+        let n = 200_000u64;
+        let lines: Vec<Line> = (0..n)
+            .map(|k| {
+                let r = LineRng::new(11, k);
+                let x = p.to_normalised(ei.sample(r.uniform(0), r.uniform(1)));
+                Line::ray(x, cosine_direction(ei.normal, r.uniform(2), r.uniform(3)), 1e-6, 4.0)
+            })
+            .collect();
+        let mut hits = Vec::new();
+        t.closest_hit(&lines, &mut hits).unwrap();
+        let cast = hits.iter().filter(|h| h.is_some_and(|h| h.patch == pj && h.cos < 0.0)).count() as f64 / n as f64;
+        let se_cast = (cast * (1.0 - cast) / n as f64).sqrt();
+        eprintln!(
+            "{receiver} <- {source}: exact {exact:.5}, estimator {est:.5} ± {se_est:.5}, cast {cast:.5} ± {se_cast:.5}"
+        );
+        assert!((est - exact).abs() < 3.0 * se_est, "{receiver} <- {source}: estimator {est} ± {se_est} vs {exact}");
+        assert!((cast - exact).abs() < 3.0 * se_cast, "{receiver} <- {source}: cast {cast} ± {se_cast} vs {exact}");
+    }
+}

@@ -102,6 +102,9 @@ pub(super) struct Contours {
     /// Each contour's ends, in space and projected.
     ends: Vec<[DVec3; 2]>,
     projected: Vec<[Px; 2]>,
+    /// The two triangles of every manifold edge that is not a contour (of
+    /// the edges considered).
+    links: Vec<[u32; 2]>,
 }
 
 impl Contours {
@@ -124,6 +127,7 @@ impl Contours {
             members: Vec::new(),
             ends: Vec::new(),
             projected: Vec::new(),
+            links: Vec::new(),
         };
         for ((e, apex), owners) in edges.ends.iter().zip(&edges.apex).zip(&edges.owners) {
             if let (Some(h), Some([a, b])) = (hidden, owners)
@@ -139,6 +143,8 @@ impl Contours {
             if fold {
                 c.ends.push(*e);
                 c.projected.push(e.map(|p| c.project(p)));
+            } else if let Some([a, b]) = owners {
+                c.links.push([*a, *b]);
             }
         }
         // Bucket each contour into the tiles its bounding box touches
@@ -174,6 +180,14 @@ impl Contours {
     #[cfg(test)]
     fn len(&self) -> usize {
         self.ends.len()
+    }
+
+    /// The triangle pairs of the manifold edges that are no contour: where
+    /// neither triangle of such an edge is crossed by a contour
+    /// ([`Contours::crosses`]) nor cuts another, both are seen or hidden
+    /// alike, since nothing bounds visibility between them.
+    pub(super) fn links(&self) -> &[[u32; 2]] {
+        &self.links
     }
 
     /// Where `p` projects (central projection onto the image plane).

@@ -203,41 +203,116 @@ impl Shared {
     }
 }
 
-/// Whether visibility may change across each triangle seen from `eye`
-/// (`visible`: each centroid's): it cuts another triangle, or a contour edge
-/// crosses it ([`Contours::crosses`]). Contours whose triangles are all
-/// hidden and unflagged are hidden themselves and cannot bound anything
-/// seen, so the test is repeated without them (twice: each round can only
-/// clear flags, and every flag it clears is sound given the last round's).
-fn changing(shared: &Shared, eye: DVec3, visible: &[bool]) -> Vec<bool> {
-    let tris = &shared.tris;
-    let tiles = contour_tiles(tris.len());
-    let mut contours = Contours::new(&shared.edges, eye, tiles, None);
-    let mut flag: Vec<bool> = tris.iter().zip(&shared.cuts).map(|(tri, &cut)| cut || contours.crosses(tri)).collect();
-    for _ in 0..2 {
-        let hidden: Vec<bool> = flag.iter().zip(visible).map(|(&f, &v)| !f && !v).collect();
-        contours = Contours::new(&shared.edges, eye, tiles, Some(&hidden));
-        for ((f, tri), &cut) in flag.iter_mut().zip(tris).zip(&shared.cuts) {
-            if *f && !cut {
-                *f = contours.crosses(tri);
+/// Each triangle's component label (its smallest member) under `links`,
+/// joining only triangles not `flagged`: union by smaller index, so the
+/// labels do not depend on the order of the links.
+fn components(n: usize, links: &[[u32; 2]], flagged: &[bool]) -> Vec<u32> {
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    fn root(parent: &mut [u32], mut x: u32) -> u32 {
+        while parent[x as usize] != x {
+            let up = parent[parent[x as usize] as usize];
+            parent[x as usize] = up;
+            x = up;
+        }
+        x
+    }
+    for &[a, b] in links {
+        if flagged[a as usize] || flagged[b as usize] {
+            continue;
+        }
+        let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+        let (lo, hi) = (ra.min(rb), ra.max(rb));
+        parent[hi as usize] = lo;
+    }
+    (0..n as u32).map(|x| root(&mut parent, x)).collect()
+}
+
+/// One view's visibility: which triangles are seen at their centroid
+/// (meaningful for the unflagged ones) and which may change across
+/// themselves (`flag`), with the visibility rays cast.
+struct Visibility {
+    visible: Vec<bool>,
+    flag: Vec<bool>,
+    rays: u64,
+}
+
+impl Visibility {
+    /// Flags the triangles that cut another or that a contour edge crosses
+    /// ([`Contours::crosses`]); the others are seen or hidden whole, and
+    /// alike across the edges between them that are no contour, so each
+    /// such connected part gets centroid rays to three of its triangles
+    /// (first, middle and last by index; every triangle of it when they
+    /// disagree, which only rounding at a grazing ray can cause). Contours
+    /// whose triangles are all hidden and unflagged are hidden themselves
+    /// and cannot bound anything seen, so the flags are tested again
+    /// without them (twice: each round can only clear flags, and each flag
+    /// it clears is sound given the last round's), and triangles cleared
+    /// get their own centroid rays.
+    fn new(tracer: &dyn Tracer, shared: &Shared, eye: DVec3) -> Result<Self, BackendError> {
+        let (tris, n) = (&shared.tris, shared.tris.len());
+        let tiles = contour_tiles(n);
+        let first = Contours::new(&shared.edges, eye, tiles, None);
+        let flag: Vec<bool> = tris.iter().zip(&shared.cuts).map(|(tri, &cut)| cut || first.crosses(tri)).collect();
+        let label = components(n, first.links(), &flag);
+        drop(first);
+        let mut members: Vec<u32> = (0..n as u32).filter(|&t| !flag[t as usize]).collect();
+        members.sort_by_key(|&t| label[t as usize]);
+        let mut vis = Self { visible: vec![false; n], flag, rays: 0 };
+        let mut want = vec![false; n];
+        for part in members.chunk_by(|a, b| label[*a as usize] == label[*b as usize]) {
+            for i in [0, part.len() / 2, part.len() - 1] {
+                want[part[i] as usize] = true;
             }
         }
+        vis.probe(tracer, shared, eye, &mut want)?;
+        for part in members.chunk_by(|a, b| label[*a as usize] == label[*b as usize]) {
+            let v = vis.visible[part[0] as usize];
+            let reps = [0, part.len() / 2, part.len() - 1];
+            if reps.iter().all(|&i| vis.visible[part[i] as usize] == v) {
+                part.iter().for_each(|&t| vis.visible[t as usize] = v);
+            } else {
+                part.iter().for_each(|&t| want[t as usize] = true);
+                reps.iter().for_each(|&i| want[part[i] as usize] = false);
+            }
+        }
+        vis.probe(tracer, shared, eye, &mut want)?;
+        for _ in 0..2 {
+            let hidden: Vec<bool> = vis.flag.iter().zip(&vis.visible).map(|(&f, &v)| !f && !v).collect();
+            let contours = Contours::new(&shared.edges, eye, tiles, Some(&hidden));
+            for t in 0..n {
+                if vis.flag[t] && !shared.cuts[t] && !contours.crosses(&tris[t]) {
+                    vis.flag[t] = false;
+                    want[t] = true;
+                }
+            }
+            vis.probe(tracer, shared, eye, &mut want)?;
+        }
+        Ok(vis)
     }
-    flag
+
+    /// Centroid rays to the triangles `want`ed (cleared), in coherent order.
+    fn probe(
+        &mut self,
+        tracer: &dyn Tracer,
+        shared: &Shared,
+        eye: DVec3,
+        want: &mut [bool],
+    ) -> Result<(), BackendError> {
+        let which: Vec<u32> = shared.order.iter().copied().filter(|&t| want[t as usize]).collect();
+        let lines: Vec<Line> = which.iter().map(|&t| towards(eye, shared.centroids[t as usize])).collect();
+        for (&t, seen) in which.iter().zip(unoccluded(tracer, &lines)?) {
+            self.visible[t as usize] = seen;
+            want[t as usize] = false;
+        }
+        self.rays += lines.len() as u64;
+        Ok(())
+    }
 }
 
 impl View {
     fn new(p: &Prepared, tracer: &dyn Tracer, shared: &Shared, eye: DVec3, m: u32) -> Result<Self, BackendError> {
         let tris = &shared.tris;
-        // Centroid probes in coherent order, answers scattered back.
-        let lines: Vec<Line> = shared.order.iter().map(|&t| towards(eye, shared.centroids[t as usize])).collect();
-        let mut visible = vec![false; tris.len()];
-        for (&t, seen) in shared.order.iter().zip(unoccluded(tracer, &lines)?) {
-            visible[t as usize] = seen;
-        }
-        let rays = lines.len() as u64;
-        drop(lines);
-        let flag = changing(shared, eye, &visible);
+        let Visibility { visible, flag, rays } = Visibility::new(tracer, shared, eye)?;
         let mut view = View { eye, whole: Vec::new(), sampled: Vec::new(), m, rays };
         for (t, tri) in tris.iter().enumerate() {
             if !flag[t] && !visible[t] {

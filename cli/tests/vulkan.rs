@@ -139,3 +139,27 @@ fn volume_shards_mix_backends() {
     assert_eq!(merged, single);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A time series and a path between two objects ray-cast by the Vulkan
+/// kernel give the CPU's JSON (every frame, the static view, the dynamic
+/// path, every path step), but for the backend's name, the timings and the
+/// memory estimate.
+#[test]
+fn volume_series_and_object_paths_match_the_cpu_backend() {
+    if !have_vulkan() {
+        return;
+    }
+    for args in [
+        &["volume", "--time", "hydrogen-beat:12,3", "--viewpoints", "42"][..],
+        &["volume", "phantom:16,1", "--viewpoints", "12", "--path-between", "left,rod", "--path-steps", "4"][..],
+    ] {
+        let mut cpu = json_on(args, "cpu");
+        let mut gpu = json_on(args, "vulkan");
+        for r in [&mut cpu, &mut gpu] {
+            let m = r.as_object_mut().unwrap();
+            m.remove("memory_estimate_MiB");
+            m.remove("vulkan_rays_finished_on_host");
+        }
+        assert_eq!(cpu, gpu, "{args:?}");
+    }
+}

@@ -7,9 +7,14 @@
 //!   under `z → −z`, which the tests use. The value stored is the amplitude
 //!   `√(ρ/ρ_max)` in `[0, 1]`, which compresses the density's range as the
 //!   classic 8-bit data set does.
-//! * `phantom[:N]`: five labelled objects in `N³` voxels: an ellipsoidal
+//! * `phantom[:N[,W]]`: five labelled objects in `N³` voxels: an ellipsoidal
 //!   shell (0.3), a central sphere (0.6), a sphere (0.9) and a cube (0.8)
-//!   side by side, and a rod (1.0).
+//!   side by side, and a rod (1.0). With `W` (1..=4 voxels) the boundaries
+//!   are fuzzy: `p(o|z)` is the share of `4³` points spread over a cube of
+//!   side `W` voxels about the voxel's centre that lie in object `o` (later
+//!   objects taking precedence, as in the crisp phantom), the rest being the
+//!   background, and the value is the membership-weighted mean of the
+//!   objects' values (a partial-volume phantom). `W = 0` is the crisp one.
 //! * `cube[:N]`: a solid cube filling the middle half of each axis (value
 //!   1, else 0): with a step transfer function, the volume counterpart of the
 //!   polygonal cube of Part V.
@@ -28,6 +33,7 @@
 
 use glam::DVec3;
 
+use super::objects::Membership;
 use super::{Volume, VolumeError};
 
 /// One built-in volume: its syntax and what it is.
@@ -45,7 +51,10 @@ pub const BUILT_IN: &[BuiltInVolume] = &[
         syntax: "hydrogen[:n,l,m[,N]]",
         description: "hydrogen orbital |psi_nlm|^2 on N^3 voxels (default 3,2,0,64), stored as sqrt(rho/max)",
     },
-    BuiltInVolume { syntax: "phantom[:N]", description: "five labelled objects on N^3 voxels (default 64)" },
+    BuiltInVolume {
+        syntax: "phantom[:N[,W]]",
+        description: "five labelled objects on N^3 voxels (default 64); W 1..=4: fuzzy boundaries W voxels wide",
+    },
     BuiltInVolume { syntax: "cube[:N]", description: "a solid cube, the middle half of each axis (default 32)" },
     BuiltInVolume { syntax: "sphere[:N]", description: "a radial Gaussian exp(-8 r^2) (default 32)" },
     BuiltInVolume {
@@ -105,12 +114,25 @@ pub fn built_in(spec: &str) -> Result<Volume, VolumeError> {
             }
             Ok(hydrogen(n as u32, l as u32, m.unsigned_abs() as u32, size("hydrogen", size_n)?))
         }
-        "phantom" | "cube" | "sphere" | "marschner-lobb" => {
-            let default = match name {
-                "phantom" => 64,
-                "marschner-lobb" => 41,
-                _ => 32,
-            };
+        "phantom" => match a.as_slice() {
+            [] => Ok(phantom(64, 0)),
+            [s] => Ok(phantom(size(name, *s)?, 0)),
+            [s, w] => {
+                let s = size(name, *s)?;
+                if !(0..=MAX_FUZZY_WIDTH).contains(w) {
+                    return Err(VolumeError::new(format!("phantom: W = {w} must be in 0..={MAX_FUZZY_WIDTH} voxels")));
+                }
+                if *w > 0 && s > MAX_FUZZY_SIZE {
+                    return Err(VolumeError::new(format!(
+                        "phantom: a fuzzy phantom (W > 0) has N <= {MAX_FUZZY_SIZE} (64 membership samples a voxel)"
+                    )));
+                }
+                Ok(phantom(s, *w as u32))
+            }
+            _ => Err(VolumeError::new("phantom: give N or N,W")),
+        },
+        "cube" | "sphere" | "marschner-lobb" => {
+            let default = if name == "marschner-lobb" { 41 } else { 32 };
             let s = match a.as_slice() {
                 [] => default,
                 [s] => *s,
@@ -118,7 +140,6 @@ pub fn built_in(spec: &str) -> Result<Volume, VolumeError> {
             };
             let s = size(name, s)?;
             Ok(match name {
-                "phantom" => phantom(s),
                 "cube" => field(&format!("cube:{s}"), s, |p| {
                     if p.x.abs() < 0.5 && p.y.abs() < 0.5 && p.z.abs() < 0.5 { 1.0 } else { 0.0 }
                 }),
@@ -146,7 +167,7 @@ fn marschner_lobb(p: DVec3) -> f64 {
 }
 
 /// A field over `[-1, 1]³` sampled at the centres of `n³` voxels.
-fn field(name: &str, n: usize, mut f: impl FnMut(DVec3) -> f64) -> Volume {
+pub(super) fn field(name: &str, n: usize, mut f: impl FnMut(DVec3) -> f64) -> Volume {
     let mut data = Vec::with_capacity(n * n * n);
     let c = |i: usize| (i as f64 + 0.5) / n as f64 * 2.0 - 1.0;
     for k in 0..n {
@@ -159,11 +180,19 @@ fn field(name: &str, n: usize, mut f: impl FnMut(DVec3) -> f64) -> Volume {
     // 64 world units across whatever the resolution: opacity is per world
     // unit (see `raycast`), so a built-in resampled keeps its optical depth.
     let h = REFERENCE_SIZE / n as f64;
-    Volume { name: name.into(), dims: [n; 3], spacing: [h; 3], data, labels: None, label_names: Vec::new() }
+    Volume {
+        name: name.into(),
+        dims: [n; 3],
+        spacing: [h; 3],
+        data,
+        labels: None,
+        label_names: Vec::new(),
+        membership: None,
+    }
 }
 
 /// Generalised Laguerre polynomial `L_k^(α)(x)` by its three-term recurrence.
-fn laguerre(k: u32, alpha: f64, x: f64) -> f64 {
+pub(super) fn laguerre(k: u32, alpha: f64, x: f64) -> f64 {
     let (mut a, mut b) = (1.0, 1.0 + alpha - x);
     if k == 0 {
         return a;
@@ -178,7 +207,7 @@ fn laguerre(k: u32, alpha: f64, x: f64) -> f64 {
 }
 
 /// Associated Legendre function `P_l^m(x)` (`m ≥ 0`, up to sign).
-fn legendre(l: u32, m: u32, x: f64) -> f64 {
+pub(super) fn legendre(l: u32, m: u32, x: f64) -> f64 {
     let s = (1.0 - x * x).max(0.0).sqrt();
     let mut pmm = 1.0;
     for i in 0..m {
@@ -237,22 +266,59 @@ const OBJECTS: [Object; 5] = [
     ("rod", 1.0, |p| ((p.x).powi(2) + (p.y + 0.45).powi(2)).sqrt() <= 0.07 && p.z.abs() <= 0.45),
 ];
 
-fn phantom(n: usize) -> Volume {
+/// Widest fuzzy boundary of the phantom, in voxels.
+const MAX_FUZZY_WIDTH: i64 = 4;
+
+/// Largest `N` of a fuzzy phantom (each voxel tests 64 points).
+const MAX_FUZZY_SIZE: usize = 256;
+
+/// The label (`0` = none) at `p`: the last object holding it.
+fn label_at(p: DVec3) -> u8 {
+    OBJECTS.iter().enumerate().rev().find(|(_, o)| (o.2)(p)).map_or(0, |(k, _)| k as u8 + 1)
+}
+
+/// The phantom on `n³` voxels; `width > 0` voxels makes its boundaries fuzzy.
+fn phantom(n: usize, width: u32) -> Volume {
+    let name = if width == 0 { format!("phantom:{n}") } else { format!("phantom:{n},{width}") };
     let mut labels = Vec::with_capacity(n * n * n);
-    let mut v = field(&format!("phantom:{n}"), n, |p| {
-        let mut value = 0.0;
-        let mut label = 0u8;
-        for (k, (_, val, inside)) in OBJECTS.iter().enumerate() {
-            if inside(p) {
-                value = *val;
-                label = k as u8 + 1;
+    let mut m = Membership { starts: vec![0], objects: Vec::new(), weights: Vec::new() };
+    // Sub-sample offsets in voxels: 4 per axis, evenly over [−W/2, W/2].
+    const SUB: usize = 4;
+    let offsets: Vec<f64> =
+        (0..SUB).map(|i| (i as f64 + 0.5) / SUB as f64 * f64::from(width) - f64::from(width) / 2.0).collect();
+    let voxel = 2.0 / n as f64;
+    let value_of = |l: u8| if l == 0 { 0.0 } else { f64::from(OBJECTS[usize::from(l) - 1].1) };
+    let mut v = field(&name, n, |p| {
+        let centre = label_at(p);
+        labels.push(centre);
+        if width == 0 {
+            return value_of(centre);
+        }
+        let mut count = [0u32; OBJECTS.len() + 1];
+        for &dz in &offsets {
+            for &dy in &offsets {
+                for &dx in &offsets {
+                    count[usize::from(label_at(p + DVec3::new(dx, dy, dz) * voxel))] += 1;
+                }
             }
         }
-        labels.push(label);
-        f64::from(value)
+        let total = (SUB * SUB * SUB) as f64;
+        let mut value = 0.0;
+        for (l, &c) in count.iter().enumerate().skip(1) {
+            if c > 0 {
+                m.objects.push(l as u8);
+                m.weights.push(f64::from(c) / total);
+                value += f64::from(c) / total * value_of(l as u8);
+            }
+        }
+        m.starts.push(m.objects.len());
+        value
     });
     v.labels = Some(labels);
     v.label_names = OBJECTS.iter().map(|o| o.0.to_string()).collect();
+    if width > 0 {
+        v.membership = Some(m);
+    }
     v
 }
 
@@ -315,5 +381,33 @@ mod tests {
             assert!(labels.contains(&l), "label {l} missing at 16^3");
         }
         assert!(is_built_in("cube:8") && !is_built_in("x.raw"));
+    }
+
+    #[test]
+    fn fuzzy_phantom_rows_sum_to_one_and_width_0_is_crisp() {
+        let crisp = built_in("phantom:16").unwrap();
+        assert_eq!(built_in("phantom:16,0").unwrap(), crisp);
+        assert!(crisp.membership.is_none());
+        let f = built_in("phantom:16,2").unwrap();
+        let m = f.membership.as_ref().unwrap();
+        assert_eq!(m.voxels(), 16 * 16 * 16);
+        assert_eq!(f.labels, crisp.labels, "labels stay the centres' crisp labels");
+        let (mut fuzzy, mut inside) = (0, 0);
+        for z in 0..m.voxels() {
+            let (l, w) = m.row(z);
+            let sum: f64 = w.iter().sum();
+            // Objects and the background share the voxel: p(o|z) sum to 1 with p(background|z).
+            assert!(w.iter().all(|&x| x > 0.0 && x <= 1.0) && sum <= 1.0 + 1e-15, "{z}: {w:?}");
+            assert!(l.windows(2).all(|p| p[0] < p[1]));
+            fuzzy += usize::from(w.iter().any(|&x| x < 1.0));
+            inside += usize::from(!l.is_empty());
+            // The value is the membership-weighted mean of the objects' values.
+            let value: f64 = l.iter().zip(w).map(|(&l, &w)| w * f64::from(OBJECTS[usize::from(l) - 1].1)).sum();
+            assert!((f64::from(f.data[z]) - value).abs() < 1e-6);
+        }
+        assert!(fuzzy > 100 && inside > fuzzy, "{fuzzy} fuzzy voxels of {inside}");
+        assert!(built_in("phantom:16,5").is_err());
+        assert!(built_in("phantom:300,1").is_err());
+        assert!(built_in("phantom:16,1,1").is_err());
     }
 }

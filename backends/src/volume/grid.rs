@@ -24,6 +24,10 @@ pub struct Volume {
     pub labels: Option<Vec<u8>>,
     /// Names of labels `1..`, if any.
     pub label_names: Vec<String>,
+    /// Fuzzy object membership `p(o|z)` when the objects' boundaries are
+    /// fuzzy (then `labels` is each voxel centre's crisp label); `None`:
+    /// the crisp `labels`.
+    pub membership: Option<super::objects::Membership>,
 }
 
 impl Volume {
@@ -61,7 +65,7 @@ impl Volume {
                 data[i]
             )));
         }
-        Ok(Self { name: name.into(), dims, spacing, data, labels: None, label_names: Vec::new() })
+        Ok(Self { name: name.into(), dims, spacing, data, labels: None, label_names: Vec::new(), membership: None })
     }
 
     /// Voxels.

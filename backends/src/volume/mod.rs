@@ -24,7 +24,10 @@
 //! * [`raycast`]: cameras on the viewpoint sphere, visibility and pictures;
 //! * [`iso`]: iso-surfaces by marching tetrahedra, for the polygonal route;
 //! * [`channel`]: the channel and its measures; [`objects`]: the object
-//!   channel of a labelled volume.
+//!   channel of a labelled volume (crisp or fuzzy membership);
+//! * [`series`]: time-varying volumes; [`paths`]: the best static view of a
+//!   series, its dynamic view path, and the geodesic camera path between
+//!   two views.
 
 pub mod builtin;
 pub mod cast;
@@ -33,8 +36,10 @@ pub mod grid;
 pub mod iso;
 pub mod nrrd;
 pub mod objects;
+pub mod paths;
 pub mod raw;
 pub mod raycast;
+pub mod series;
 pub mod transfer;
 
 pub use channel::{VolumeChannelOptions, VolumeMeasures, volume_channel, volume_measures};

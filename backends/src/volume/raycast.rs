@@ -76,7 +76,15 @@ impl<'a> Caster<'a> {
     #[must_use]
     pub fn new(volume: &'a Volume, tf: &TransferFunction, step_voxels: f64) -> Self {
         let (lo, hi) = volume.range();
-        let (lo, hi) = (f64::from(lo), f64::from(hi));
+        Self::with_range(volume, tf, step_voxels, (f64::from(lo), f64::from(hi)))
+    }
+
+    /// [`Caster::new`] with the scalar normalised by `range` instead of the
+    /// volume's own: the frames of a time series share their range, so one
+    /// transfer function means the same values in every frame.
+    #[must_use]
+    pub fn with_range(volume: &'a Volume, tf: &TransferFunction, step_voxels: f64, range: (f64, f64)) -> Self {
+        let (lo, hi) = range;
         let inv_range = if hi > lo { 1.0 / (hi - lo) } else { 0.0 };
         let world_step = step_voxels * volume.spacing.iter().copied().fold(f64::INFINITY, f64::min);
         let table = (0..TABLE)

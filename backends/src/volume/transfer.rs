@@ -4,6 +4,10 @@
 //! A file holds one control point per line, `value opacity r g b` (all in
 //! `[0, 1]`, values strictly increasing), `#` starting a comment. Between
 //! points everything is interpolated linearly; outside, the end points hold.
+//!
+//! The same points as JSON ([`TransferFunction::parse_json`]):
+//! `{"points": [{"value": 0.1, "opacity": 0, "colour": [0.1, 0.3, 0.9]}, …]}`,
+//! strictly: no other key, every key present, numbers only (JSON has no NaN).
 
 use super::VolumeError;
 
@@ -111,6 +115,37 @@ impl TransferFunction {
         Self::new(points)
     }
 
+    /// Parses the JSON format (see the module docs): one object with the
+    /// single key `points`, a list of objects with exactly the keys `value`,
+    /// `opacity` and `colour` (three numbers).
+    ///
+    /// # Errors
+    /// Text that is not that JSON (unknown or missing keys, a string or
+    /// `NaN` for a number), with its line and column; the checks of
+    /// [`TransferFunction::new`].
+    pub fn parse_json(text: &str) -> Result<Self, VolumeError> {
+        #[derive(serde::Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Point {
+            value: f64,
+            opacity: f64,
+            colour: [f64; 3],
+        }
+        #[derive(serde::Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct File {
+            points: Vec<Point>,
+        }
+        let f: File =
+            serde_json::from_str(text).map_err(|e| VolumeError::new(format!("transfer function JSON: {e}")))?;
+        Self::new(
+            f.points
+                .into_iter()
+                .map(|p| ControlPoint { value: p.value, opacity: p.opacity, colour: p.colour })
+                .collect(),
+        )
+    }
+
     /// Opacity and colour at normalised scalar `s`.
     #[must_use]
     pub fn eval(&self, s: f64) -> (f64, [f64; 3]) {
@@ -163,5 +198,33 @@ mod tests {
         assert!(TransferFunction::parse("0 nan 0 0 0").is_err());
         assert_eq!(TransferFunction::preset("ramp").unwrap().transparent_below(), 0.1);
         assert!(TransferFunction::preset("none").is_err());
+    }
+
+    #[test]
+    fn json_is_the_text_format() {
+        let json = r#"{"points": [
+            {"value": 0, "opacity": 0, "colour": [0, 0, 0]},
+            {"value": 0.5, "opacity": 1, "colour": [1, 0, 0]},
+            {"value": 1, "opacity": 0.5, "colour": [0, 0, 1]}]}"#;
+        let text = "0 0 0 0 0\n0.5 1 1 0 0\n1 0.5 0 0 1\n";
+        assert_eq!(TransferFunction::parse_json(json).unwrap(), TransferFunction::parse(text).unwrap());
+        let bad = [
+            ("", "JSON"),
+            ("{}", "missing field `points`"),
+            (r#"{"points": []}"#, "no control point"),
+            (
+                r#"{"points": [{"value": 0.5, "opacity": 1, "colour": [1, 1, 1]}, {"value": 0.2, "opacity": 1, "colour": [1, 1, 1]}]}"#,
+                "increase strictly",
+            ),
+            (r#"{"points": [{"value": 0.5, "opacity": 1.5, "colour": [1, 1, 1]}]}"#, "in [0, 1]"),
+            (r#"{"points": [{"value": NaN, "opacity": 1, "colour": [1, 1, 1]}]}"#, "JSON"),
+            (r#"{"points": [{"value": 0.5, "opacity": 1, "colour": [1, 1]}]}"#, "JSON"),
+            (r#"{"points": [{"value": 0.5, "opacity": 1, "colour": [1, 1, 1], "alpha": 1}]}"#, "unknown field"),
+            (r#"{"points": [{"value": 0.5, "opacity": 0, "colour": [1, 1, 1]}]}"#, "opacity 0 everywhere"),
+        ];
+        for (text, want) in bad {
+            let e = TransferFunction::parse_json(text).unwrap_err().to_string();
+            assert!(e.contains(want) && !e.contains('\n'), "{text}: {e}");
+        }
     }
 }

@@ -23,8 +23,17 @@ pub(super) fn volume_help() -> String {
     }
     s.push_str("--tf is a preset (");
     s.push_str(&PRESETS.iter().map(|p| format!("{}: {}", p.0, p.1)).collect::<Vec<_>>().join("; "));
-    s.push_str(") or a file of lines 'value opacity r g b' over the scalar normalised to [0, 1].\n");
-    s.push_str("--out DIR gets best.png, worst.png, best-n.png, sphere.png, vomi.png, colour-vomi.png, volume.json.");
+    s.push_str(") or a file of lines 'value opacity r g b' over the scalar normalised to [0, 1],\n");
+    s.push_str("or a .json file {\"points\": [{\"value\": V, \"opacity\": A, \"colour\": [R, G, B]}, ...]}.\n");
+    s.push_str("--out DIR gets best.png, worst.png, best-n.png, sphere.png, vomi.png, colour-vomi.png, volume.json\n");
+    s.push_str("(and path-between.png with --path-between).\n");
+    let (syntax, what) = itgfx_backends::volume::series::SERIES_BUILT_IN;
+    s.push_str(&format!(
+        "--time SERIES (instead of VOLUME): the built-in {syntax}\n      {what}\n\
+         or frames 'a.nrrd,b.nrrd,...' or 'dir/f*.nrrd' (same grid; one transfer function over their common range);\n\
+         --out DIR then gets path.png (the dynamic path's views), static.png (the best static view),\n\
+         frames-best.png (each frame's best view) and series.json."
+    ));
     s
 }
 
@@ -39,6 +48,15 @@ pub(super) fn size(s: &str) -> Result<u32, String> {
 
 pub(super) fn image_side(s: &str) -> Result<u32, String> {
     ranged(s, 16, 2048).map(|v| v as u32)
+}
+
+pub(super) fn path_steps(s: &str) -> Result<usize, String> {
+    ranged(s, 2, 64).map(|v| v as usize)
+}
+
+pub(super) fn turn_degrees(s: &str) -> Result<f64, String> {
+    let x: f64 = s.parse().ok().filter(|x: &f64| x.is_finite()).ok_or("is not a finite number")?;
+    if (0.0..=180.0).contains(&x) { Ok(x) } else { Err("must be in 0..=180 degrees".into()) }
 }
 
 pub(super) fn step(s: &str) -> Result<f64, String> {
@@ -113,26 +131,39 @@ pub(super) fn transfer(spec: &str) -> Result<TransferFunction, CliError> {
         return Err(CliError::usage(format!("--tf {spec:?}: larger than 1 MiB")));
     }
     let text = std::fs::read_to_string(spec).map_err(|e| CliError::usage(format!("--tf {spec:?}: {e}")))?;
-    TransferFunction::parse(&text).map_err(|e| CliError::usage(format!("--tf {spec:?}: {e}")))
+    // JSON by its extension or its first character; the text format has neither.
+    let json = Path::new(spec).extension().is_some_and(|e| e.eq_ignore_ascii_case("json"))
+        || text.trim_start().starts_with('{');
+    let tf = if json { TransferFunction::parse_json(&text) } else { TransferFunction::parse(&text) };
+    tf.map_err(|e| CliError::usage(format!("--tf {spec:?}: {e}")))
 }
 
 fn preset_names() -> String {
     PRESETS.iter().map(|p| p.0).collect::<Vec<_>>().join(", ")
 }
 
-/// The focus importance: 1 on the voxels of the named label, 0 elsewhere.
-pub(super) fn focus(v: &Volume, name: &str) -> Result<(Vec<f64>, String), CliError> {
-    let Some(labels) = &v.labels else {
-        return Err(CliError::usage(format!("--focus {name:?}: {} has no labelled objects", v.name)));
-    };
-    let k = v
-        .label_names
+/// The label (`1..`) of an object of `v` given by name or number.
+pub(super) fn label(v: &Volume, name: &str) -> Option<usize> {
+    v.label_names
         .iter()
         .position(|n| n == name)
         .map(|k| k + 1)
         .or_else(|| name.parse::<usize>().ok().filter(|&k| (1..=v.label_names.len()).contains(&k)))
-        .ok_or_else(|| {
-            CliError::usage(format!("--focus {name:?}: not a label of {} ({})", v.name, v.label_names.join(", ")))
-        })?;
-    Ok((labels.iter().map(|&l| f64::from(u8::from(usize::from(l) == k))).collect(), v.label_names[k - 1].clone()))
+}
+
+/// The focus importance: 1 on the voxels of the named label, 0 elsewhere
+/// (`p(o|z)` for a fuzzy object).
+pub(super) fn focus(v: &Volume, name: &str) -> Result<(Vec<f64>, String), CliError> {
+    let Some(labels) = &v.labels else {
+        return Err(CliError::usage(format!("--focus {name:?}: {} has no labelled objects", v.name)));
+    };
+    let k = label(v, name).ok_or_else(|| {
+        CliError::usage(format!("--focus {name:?}: not a label of {} ({})", v.name, v.label_names.join(", ")))
+    })?;
+    // A fuzzy object's importance is its membership p(o|z).
+    let importance = match &v.membership {
+        Some(m) => m.of(k as u8),
+        None => labels.iter().map(|&l| f64::from(u8::from(usize::from(l) == k))).collect(),
+    };
+    Ok((importance, v.label_names[k - 1].clone()))
 }

@@ -4,11 +4,15 @@
 //! * `input`: the volume, the transfer function, the focus, option parsers;
 //! * `routes`: the object channel and the iso-surface route;
 //! * `pictures`: the pictures of `--out DIR`;
-//! * [`shard`]: `--shard i/n --save-shard F` and `--merge`.
+//! * [`shard`]: `--shard i/n --save-shard F` and `--merge`;
+//! * `series`: `--time SERIES`, time-varying volumes;
+//! * `between`: `--path-between A,B`, the camera path between two objects.
 
+mod between;
 mod input;
 mod pictures;
 mod routes;
+mod series;
 pub mod shard;
 
 use std::path::PathBuf;
@@ -78,6 +82,21 @@ pub struct VolumeOptions {
     /// viewpoint channel on it (Part VI §2.1), to compare its views with the voxels'
     #[arg(long, value_name = "F", value_parser = iso_value, help_heading = "Channel")]
     pub iso: Option<f64>,
+    /// Smooth camera path from object A's characteristic view to object B's (labelled volumes;
+    /// names or numbers): the great circle between them, K steps, with their measures
+    #[arg(long, value_name = "A,B", help_heading = "Objects")]
+    pub path_between: Option<String>,
+    /// Steps of --path-between, both ends included (2..=64; default 8)
+    #[arg(long, value_name = "K", value_parser = input::path_steps, help_heading = "Objects")]
+    pub path_steps: Option<usize>,
+    /// A time series instead of VOLUME: hydrogen-beat[:N[,T]], a comma-separated list of
+    /// volumes, or a pattern with * or ? in the file name (matches sorted by name)
+    #[arg(long, value_name = "SERIES", help_heading = "Time series")]
+    pub time: Option<String>,
+    /// Most camera turn between two frames of the dynamic view path, in degrees (0..=180;
+    /// default: one step to a neighbouring viewpoint)
+    #[arg(long, value_name = "DEG", value_parser = input::turn_degrees, help_heading = "Time series")]
+    pub max_turn: Option<f64>,
     #[command(flatten)]
     #[allow(missing_docs)]
     pub selection: crate::options::Selection,
@@ -107,7 +126,8 @@ pub struct VolumeOptions {
 /// Usage, input and output errors; one line each.
 #[allow(clippy::too_many_lines)]
 pub fn run(o: &VolumeOptions) -> Result<Report, CliError> {
-    let spec = o.volume.clone().ok_or_else(|| {
+    check_combinations(o)?;
+    let spec = o.volume.clone().or_else(|| o.time.clone()).ok_or_else(|| {
         CliError::usage(
             "give a volume: a built-in (hydrogen, phantom, cube, sphere, marschner-lobb), an .nrrd or a raw file",
         )
@@ -119,7 +139,8 @@ pub fn run(o: &VolumeOptions) -> Result<Report, CliError> {
         Some(d) => crate::output::out_dir(d)?,
         None => None,
     };
-    let result = run_in(o, &spec, &tf, base, unit);
+    let result =
+        if o.time.is_some() { series::run(o, &spec, &tf, base, unit) } else { run_in(o, &spec, &tf, base, unit) };
     if result.is_err()
         && let Some(d) = created
     {
@@ -127,6 +148,31 @@ pub fn run(o: &VolumeOptions) -> Result<Report, CliError> {
         let _ = std::fs::remove_dir(d);
     }
     result
+}
+
+/// Options that do not go together, refused before any work.
+fn check_combinations(o: &VolumeOptions) -> Result<(), CliError> {
+    if o.time.is_some() {
+        let clash = [
+            (o.volume.is_some(), "VOLUME (the series is the volume)"),
+            (o.focus.is_some(), "--focus"),
+            (o.iso.is_some(), "--iso"),
+            (o.path_between.is_some(), "--path-between"),
+            (o.shards.shard.is_some() || !o.shards.merge.is_empty(), "--shard/--merge"),
+        ];
+        if let Some((_, what)) = clash.iter().find(|c| c.0) {
+            return Err(CliError::usage(format!("--time takes no {what}")));
+        }
+    } else if o.max_turn.is_some() {
+        return Err(CliError::usage("--max-turn is for a time series (--time)"));
+    }
+    if o.path_steps.is_some() && o.path_between.is_none() {
+        return Err(CliError::usage("--path-steps is for --path-between A,B"));
+    }
+    if o.path_between.is_some() && o.shards.shard.is_some() {
+        return Err(CliError::usage("--path-between is for a whole run or --merge, not a --shard"));
+    }
+    Ok(())
 }
 
 #[allow(clippy::too_many_lines)]
@@ -144,6 +190,12 @@ fn run_in(
     }
     let volume = load(o, spec)?;
     let focus = o.focus.as_deref().map(|f| focus(&volume, f)).transpose()?;
+    let between =
+        o.path_between.as_deref().map(|s| between::labels(&volume, s, o.path_steps.unwrap_or(8))).transpose()?;
+    let between_png = o.out.as_ref().filter(|_| between.is_some()).map(|d| d.join(between::PICTURE));
+    if let Some(p) = &between_png {
+        crate::output::check("--out", p)?;
+    }
     let (lo, hi) = volume.range();
     if lo >= hi {
         return Err(CliError::usage(format!("{}: constant volume (every voxel is {lo}): nothing to see", volume.name)));
@@ -193,8 +245,11 @@ fn run_in(
     let err = |e| core_err("volume channel", e);
     // What needs the raw rows comes first: the measures normalise them in place.
     let (entries, rays_per_viewpoint, neighbours) = (ch.patch.len() as u64, ch.rays_per_viewpoint, ch.neighbours(6));
-    let objects =
-        volume.labels.as_ref().map(|l| object_measures(&ch, l, &volume.label_names, weights, base)).transpose()?;
+    let objects = volume
+        .labels
+        .as_ref()
+        .map(|l| object_measures(&ch, &volume, l, &volume.label_names, weights, base))
+        .transpose()?;
     let m = volume_measures(ch, &dirs, &caster.voxel_opacity, focus.as_ref().map(|f| f.0.as_slice()), weights, base)
         .map_err(err)?;
     let v = &m.views;
@@ -204,6 +259,13 @@ fn run_in(
     let instability = m.analysis.instability(&neighbours, base).map_err(err)?;
     let seen = m.analysis.expand(&m.analysis.seen_angle, 0.0);
     let iso = o.iso.map(|f| iso_route(&volume, f, &dirs, o.distance, rays, base)).transpose()?;
+    let path_between = match (&between, &objects) {
+        (Some(b), Some(ob)) => {
+            let backend = open(o.backend, &caster).map_err(backend_err)?;
+            Some(between::path(b, &volume, &*backend, &dirs, ob, &m.analysis.p_o, (o.distance, rays), base)?)
+        }
+        _ => None,
+    };
     let seconds = t0.elapsed().as_secs_f64();
 
     let mut r = Report::new();
@@ -273,6 +335,9 @@ fn run_in(
             .collect();
         r.records("objects", recs);
     }
+    if let Some(p) = &path_between {
+        r.records("path_between", vec![p.report.clone()]);
+    }
     let mut views = Vec::new();
     for (k, d) in dirs.iter().enumerate() {
         let mut x = Report::new();
@@ -314,7 +379,14 @@ fn run_in(
             radius: caster.content_radius(),
         };
         shots.write(dir, &m, &best_n.views)?;
-        let files: Vec<String> = outputs.iter().map(|p| p.display().to_string()).collect();
+        let mut files: Vec<String> = outputs.iter().map(|p| p.display().to_string()).collect();
+        if let (Some(p), Some(png)) = (&path_between, &between_png) {
+            let half = (o.image / 2).max(16);
+            let imgs: Vec<_> =
+                p.directions.iter().map(|&d| pictures::view(&caster, d, o.distance, shots.radius, half)).collect();
+            crate::export::write_png(&crate::export::montage(&imgs, imgs.len().min(8)), png)?;
+            files.push(png.display().to_string());
+        }
         r.texts("wrote", files);
         let json = r.to_json().to_string();
         crate::output::write(&dir.join(PICTURES[6]), json.as_bytes())?;

@@ -34,8 +34,7 @@ impl Shots<'_> {
     /// The volume from viewpoint `k`, framed on what the transfer function
     /// shows, `s × s`, optionally tinted per voxel.
     fn shot(&self, k: usize, tint: Option<&[[f32; 3]]>, s: u32) -> image::RgbImage {
-        let px = self.caster.render(&viewpoint_camera(self.dirs[k], self.distance, self.radius), s, tint);
-        image::RgbImage::from_fn(s, s, |x, y| image::Rgb(px[(y * s + x) as usize]))
+        tinted_view(self.caster, self.dirs[k], self.distance, self.radius, s, tint)
     }
 
     /// Writes the six pictures of [`PICTURES`] into `dir`.
@@ -72,6 +71,24 @@ impl Shots<'_> {
         let palette = sphere_image_coloured(dirs, &[key], None, side / 2);
         write_png(&montage(&[self.shot(v.best, Some(&colour_tint), side), palette], 2), &dir.join(PICTURES[5]))
     }
+}
+
+/// The volume seen from `direction` at `distance` radii, framed on the
+/// sphere of `radius`, `s × s`.
+pub(super) fn view(caster: &Caster<'_>, direction: DVec3, distance: f64, radius: f64, s: u32) -> image::RgbImage {
+    tinted_view(caster, direction, distance, radius, s, None)
+}
+
+fn tinted_view(
+    caster: &Caster<'_>,
+    direction: DVec3,
+    distance: f64,
+    radius: f64,
+    s: u32,
+    tint: Option<&[[f32; 3]]>,
+) -> image::RgbImage {
+    let px = caster.render(&viewpoint_camera(direction, distance, radius), s, tint);
+    image::RgbImage::from_fn(s, s, |x, y| image::Rgb(px[(y * s + x) as usize]))
 }
 
 /// The middle y slice (x across, z up) of a per-voxel field and its mean

@@ -8,7 +8,7 @@ use itgfx_backends::tracer::Prepared;
 use itgfx_backends::viewpoint::{ViewpointAnalysis, ViewpointChannel, ViewpointMeasures, ViewpointWeights};
 use itgfx_backends::volume::Volume;
 use itgfx_backends::volume::iso::iso_surface;
-use itgfx_backends::volume::objects::object_channel;
+use itgfx_backends::volume::objects::{object_channel, object_channel_fuzzy};
 use itgfx_backends::{BackendChoice, open};
 
 use crate::progress::Progress;
@@ -27,13 +27,18 @@ pub(super) struct ObjectMeasures {
 
 pub(super) fn object_measures(
     ch: &ViewpointChannel,
+    volume: &Volume,
     labels: &[u8],
     names: &[String],
     weights: ViewpointWeights,
     base: itgfx_core::Base,
 ) -> Result<ObjectMeasures, CliError> {
     let err = |e| core_err("object channel", e);
-    let och = object_channel(ch, labels, names.len());
+    // Fuzzy membership p(o|z) when the volume has one, else the crisp labels.
+    let och = match &volume.membership {
+        Some(m) => object_channel_fuzzy(ch, m, names.len()),
+        None => object_channel(ch, labels, names.len()),
+    };
     let an = ViewpointAnalysis::new(&och, weights, false).map_err(err)?;
     let measures = an.measures(&vec![1.0; names.len()], base).map_err(err)?;
     let information = an.polygonal_information(base).map_err(err)?;

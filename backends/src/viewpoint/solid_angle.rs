@@ -681,6 +681,46 @@ mod tests {
     use super::*;
 
     #[test]
+    fn components_join_unflagged_triangles_by_smallest_index() {
+        let links = [[3, 1], [1, 2], [4, 5], [5, 0]];
+        assert_eq!(components(6, &links, &[false; 6]), [0, 1, 1, 1, 0, 0]);
+        // Flagging 5 cuts 4 and 0 apart; flagged triangles stay alone.
+        assert_eq!(components(6, &links, &[false, false, false, false, false, true]), [0, 1, 1, 1, 4, 5]);
+    }
+
+    /// The visibility of every unflagged triangle, though most take it from
+    /// three rays into their part of the mesh, is what its own centroid ray
+    /// says (except for triangles seen almost edge-on, where that ray grazes
+    /// the neighbours: on the convex geosphere the parts are right and the
+    /// ray is not); and the parts save rays.
+    #[test]
+    fn parts_of_the_mesh_see_what_each_centroid_sees() {
+        for spec in ["table-chairs:2", "geosphere:2", "cubes-room:16"] {
+            let p = Prepared::new(&crate::scene::built_in(spec).unwrap());
+            let tracer = crate::tracer::CpuTracer::new(&p);
+            let shared = Shared::new(&p);
+            let (mut checked, mut saved) = (0, 0);
+            for d in super::super::fibonacci_sphere(6) {
+                let eye = d * 3.0;
+                let vis = Visibility::new(&tracer, &shared, eye).unwrap();
+                let lines: Vec<Line> = shared.centroids.iter().map(|&c| towards(eye, c)).collect();
+                let each = unoccluded(&tracer, &lines).unwrap();
+                let grazing = |t: usize| {
+                    let v = &shared.tris[t];
+                    let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+                    n.dot((shared.centroids[t] - eye).normalize()).abs() < 0.05
+                };
+                for t in (0..each.len()).filter(|&t| !vis.flag[t] && !grazing(t)) {
+                    assert_eq!(vis.visible[t], each[t], "{spec}: eye {eye}, triangle {t}");
+                    checked += 1;
+                }
+                saved += each.len() as u64 - vis.rays;
+            }
+            assert!(checked > 100 && saved > 0, "{spec}: {checked} checked, {saved} rays saved");
+        }
+    }
+
+    #[test]
     fn solid_angles_of_known_triangles() {
         // An octant of the unit sphere subtends 4π/8.
         let o = triangle_solid_angle(DVec3::X, DVec3::Y, DVec3::Z);

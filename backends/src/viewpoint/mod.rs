@@ -31,6 +31,7 @@
 
 pub mod analysis;
 mod coherent;
+mod contours;
 pub mod saliency;
 pub mod selection;
 pub mod shard_file;

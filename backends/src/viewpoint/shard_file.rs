@@ -170,7 +170,7 @@ pub struct SavedLadder {
     pub whole: Vec<(u32, f64)>,
     /// `[triangle, Ω]` of the sampled triangles.
     pub sampled: Vec<(u32, f64)>,
-    /// Rays of the probes and the item buffer.
+    /// Rays of the centroid probes.
     pub base_rays: u64,
     /// Visible fractions per level.
     pub fractions: Vec<Vec<f64>>,

@@ -1,0 +1,412 @@
+//! Where visibility can change across a triangle (the solid-angle channel's
+//! `a_o`, Part V eq. (2), is exact for every other triangle), decided from
+//! the mesh's edges.
+//!
+//! Seen from an eye, the part of a triangle `t` that is visible is bounded by
+//! `t`'s own edges, by the projections of *contour* edges lying in front of
+//! `t` (edges where the surface folds over in the image: both triangles of
+//! the edge on the same side of the plane through the eye and the edge, and
+//! every boundary or non-manifold edge), and by curves where `t` cuts through
+//! another triangle. So when no contour edge in front of `t`'s plane
+//! crosses the interior of `t`'s projection and `t` cuts no other triangle,
+//! every point of `t` is seen or hidden alike: its centroid's visibility is
+//! its own. A triangle this test flags is sampled ([`super::solid_angle`]);
+//! the others are taken whole, exactly. The test is conservative: a contour
+//! hidden behind something else, or one that only grazes `t`, still flags it,
+//! which costs rays, never accuracy.
+
+use glam::{DVec3, Vec3A};
+
+/// A point of the image plane (tangent-plane coordinates, `[-1, 1]` across
+/// the cone around the bounding sphere).
+type Px = (f64, f64);
+
+/// Twice the signed area of `a, b, q`: positive when `q` is left of `a → b`.
+fn edge(a: Px, b: Px, q: Px) -> f64 {
+    (b.0 - a.0) * (q.1 - a.1) - (b.1 - a.1) * (q.0 - a.0)
+}
+
+/// The edges of a mesh, each with the third vertices of its two triangles
+/// (`None` for a boundary or non-manifold edge: always a contour).
+pub(super) struct MeshEdges {
+    ends: Vec<[DVec3; 2]>,
+    apex: Vec<Option<[DVec3; 2]>>,
+    /// The triangles of each edge (one repeated for a boundary edge; `None`
+    /// for a non-manifold edge).
+    owners: Vec<Option<[u32; 2]>>,
+}
+
+impl MeshEdges {
+    /// The edges of `triangles`, vertices matched exactly (as
+    /// [`super::solid_angle::triangle_adjacency`]).
+    pub(super) fn new(triangles: &[[Vec3A; 3]], tris: &[[DVec3; 3]]) -> Self {
+        let key = |v: Vec3A| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+        let mut ids = std::collections::HashMap::new();
+        let vid: Vec<[u32; 3]> = triangles
+            .iter()
+            .map(|t| {
+                t.map(|v| {
+                    let n = ids.len() as u32;
+                    *ids.entry(key(v)).or_insert(n)
+                })
+            })
+            .collect();
+        // (low vertex, high vertex, triangle, corner opposite the edge)
+        let mut all: Vec<(u32, u32, u32, u8)> = Vec::with_capacity(3 * vid.len());
+        for (t, v) in vid.iter().enumerate() {
+            for c in 0..3 {
+                let (a, b) = (v[(c + 1) % 3], v[(c + 2) % 3]);
+                all.push((a.min(b), a.max(b), t as u32, c as u8));
+            }
+        }
+        all.sort_unstable();
+        let (mut ends, mut apex, mut owners) = (Vec::new(), Vec::new(), Vec::new());
+        for run in all.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)) {
+            let (t, c) = (run[0].2 as usize, usize::from(run[0].3));
+            ends.push([tris[t][(c + 1) % 3], tris[t][(c + 2) % 3]]);
+            apex.push(match run {
+                [x, y] if x.2 != y.2 => {
+                    Some([tris[x.2 as usize][usize::from(x.3)], tris[y.2 as usize][usize::from(y.3)]])
+                }
+                _ => None,
+            });
+            owners.push(match run {
+                [x] => Some([x.2, x.2]),
+                [x, y] => Some([x.2, y.2]),
+                _ => None,
+            });
+        }
+        Self { ends, apex, owners }
+    }
+}
+
+/// Tiles per side of the contour grid for a mesh of `triangles` triangles:
+/// about 4 × 4 triangles' worth of image each where the mesh fills it.
+pub(super) fn contour_tiles(triangles: usize) -> usize {
+    ((triangles as f64).sqrt() / 4.0).ceil().clamp(16.0, 256.0) as usize
+}
+
+/// One view's contour edges, projected and bucketed in a grid of tiles.
+pub(super) struct Contours {
+    eye: DVec3,
+    forward: DVec3,
+    right: DVec3,
+    up: DVec3,
+    /// Tiles per side of the grid over the image, and tiles per unit of
+    /// image coordinate.
+    tiles: usize,
+    per_unit: f64,
+    /// Tile `k`'s contours are `members[starts[k]..starts[k + 1]]`.
+    starts: Vec<u32>,
+    members: Vec<u32>,
+    /// Each contour's ends, in space and projected.
+    ends: Vec<[DVec3; 2]>,
+    projected: Vec<[Px; 2]>,
+    /// The two triangles of every manifold edge that is not a contour (of
+    /// the edges considered).
+    links: Vec<[u32; 2]>,
+}
+
+impl Contours {
+    /// The contours of `edges` seen from `eye` (outside the unit bounding
+    /// sphere), in a grid of `tiles × tiles`.
+    pub(super) fn new(edges: &MeshEdges, eye: DVec3, tiles: usize, hidden: Option<&[bool]>) -> Self {
+        let forward = -eye.normalize();
+        let (right, up) = forward.any_orthonormal_pair();
+        let tiles = tiles.max(1);
+        // The image spans ±tan of the cone's half-angle around the unit sphere.
+        let cone = 1.0 / (eye.length_squared() - 1.0).max(f64::MIN_POSITIVE).sqrt();
+        let mut c = Self {
+            eye,
+            forward,
+            right,
+            up,
+            tiles,
+            per_unit: 0.5 * tiles as f64 / cone,
+            starts: Vec::new(),
+            members: Vec::new(),
+            ends: Vec::new(),
+            projected: Vec::new(),
+            links: Vec::new(),
+        };
+        for ((e, apex), owners) in edges.ends.iter().zip(&edges.apex).zip(&edges.owners) {
+            if let (Some(h), Some([a, b])) = (hidden, owners)
+                && h[*a as usize]
+                && h[*b as usize]
+            {
+                continue;
+            }
+            let fold = apex.is_none_or(|[p, q]| {
+                let m = (e[0] - eye).cross(e[1] - eye);
+                m.dot(p - eye) * m.dot(q - eye) >= 0.0
+            });
+            if fold {
+                c.ends.push(*e);
+                c.projected.push(e.map(|p| c.project(p)));
+            } else if let Some([a, b]) = owners {
+                c.links.push([*a, *b]);
+            }
+        }
+        // Bucket each contour into the tiles its bounding box touches
+        // (counting, then filling, so the lists are in contour order).
+        let ranges: Vec<[usize; 4]> = c.projected.iter().map(|s| c.tile_range(s)).collect();
+        let mut count = vec![0u32; tiles * tiles + 1];
+        for r in &ranges {
+            for y in r[2]..=r[3] {
+                for x in r[0]..=r[1] {
+                    count[y * tiles + x + 1] += 1;
+                }
+            }
+        }
+        for k in 1..count.len() {
+            count[k] += count[k - 1];
+        }
+        let mut fill = count.clone();
+        c.members = vec![0; count[tiles * tiles] as usize];
+        for (i, r) in ranges.iter().enumerate() {
+            for y in r[2]..=r[3] {
+                for x in r[0]..=r[1] {
+                    let k = y * tiles + x;
+                    c.members[fill[k] as usize] = i as u32;
+                    fill[k] += 1;
+                }
+            }
+        }
+        c.starts = count;
+        c
+    }
+
+    /// Contour edges of this view.
+    #[cfg(test)]
+    fn len(&self) -> usize {
+        self.ends.len()
+    }
+
+    /// The triangle pairs of the manifold edges that are no contour: where
+    /// neither triangle of such an edge is crossed by a contour
+    /// ([`Contours::crosses`]) nor cuts another, both are seen or hidden
+    /// alike, since nothing bounds visibility between them.
+    pub(super) fn links(&self) -> &[[u32; 2]] {
+        &self.links
+    }
+
+    /// Where `p` projects (central projection onto the image plane).
+    fn project(&self, p: DVec3) -> Px {
+        let d = p - self.eye;
+        let z = d.dot(self.forward);
+        (d.dot(self.right) / z, d.dot(self.up) / z)
+    }
+
+    /// Tile index of image coordinate `c`, clamped to the grid.
+    fn tile(&self, c: f64) -> usize {
+        // Truncation is the floor for the non-negative; NaN goes to 0.
+        (((c * self.per_unit) + 0.5 * self.tiles as f64).max(0.0) as usize).min(self.tiles - 1)
+    }
+
+    /// `[x0, x1, y0, y1]` of the tiles the bounding box of `pts` touches.
+    fn tile_range(&self, pts: &[Px]) -> [usize; 4] {
+        let (mut lo, mut hi) = ((f64::INFINITY, f64::INFINITY), (f64::NEG_INFINITY, f64::NEG_INFINITY));
+        for p in pts {
+            lo = (lo.0.min(p.0), lo.1.min(p.1));
+            hi = (hi.0.max(p.0), hi.1.max(p.1));
+        }
+        [self.tile(lo.0), self.tile(hi.0), self.tile(lo.1), self.tile(hi.1)]
+    }
+
+    /// Whether some contour edge not wholly behind the plane of `v` crosses
+    /// the interior of `v`'s projection (see the module docs).
+    pub(super) fn crosses(&self, v: &[DVec3; 3]) -> bool {
+        let proj = v.map(|p| self.project(p));
+        let sign = edge(proj[0], proj[1], proj[2]).signum();
+        if sign == 0.0 {
+            return false;
+        }
+        let n = (v[1] - v[0]).cross(v[2] - v[0]);
+        let eye_side = n.dot(self.eye - v[0]);
+        let tol = 1e-9 * n.length_squared().sqrt();
+        let behind = |p: DVec3| {
+            let d = n.dot(p - v[0]);
+            d.abs() > tol && d * eye_side < 0.0
+        };
+        let r = self.tile_range(&proj);
+        for y in r[2]..=r[3] {
+            let row = y * self.tiles;
+            let (first, last) = (self.starts[row + r[0]] as usize, self.starts[row + r[1] + 1] as usize);
+            if first == last {
+                continue;
+            }
+            for x in r[0]..=r[1] {
+                let k = row + x;
+                for &i in &self.members[self.starts[k] as usize..self.starts[k + 1] as usize] {
+                    let i = i as usize;
+                    if crosses_interior(&proj, sign, self.projected[i])
+                        && !(behind(self.ends[i][0]) && behind(self.ends[i][1]))
+                    {
+                        return true;
+                    }
+                }
+            }
+        }
+        false
+    }
+}
+
+/// Whether segment `s` meets the open interior of triangle `p` (`sign`: the
+/// sign of its signed area): the part of the segment on the inner side of
+/// all three edges, clipped parameter by parameter, is not empty.
+fn crosses_interior(p: &[Px; 3], sign: f64, s: [Px; 2]) -> bool {
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    for i in 0..3 {
+        let (a, b) = (p[(i + 1) % 3], p[(i + 2) % 3]);
+        let (fa, fb) = (sign * edge(a, b, s[0]), sign * edge(a, b, s[1]));
+        if fa <= 0.0 && fb <= 0.0 {
+            return false;
+        }
+        if fa > 0.0 && fb > 0.0 {
+            continue;
+        }
+        let at = fa / (fa - fb);
+        if fa <= 0.0 {
+            lo = lo.max(at);
+        } else {
+            hi = hi.min(at);
+        }
+    }
+    lo < hi
+}
+
+/// Triangles that cut through another triangle (not one sharing a vertex
+/// with them): an edge of one crosses the other. Candidates come from a grid
+/// of cells about the size of the largest triangle's box.
+pub(super) fn cutting(tris: &[[DVec3; 3]]) -> Vec<bool> {
+    let mut out = vec![false; tris.len()];
+    if tris.is_empty() {
+        return out;
+    }
+    let boxes: Vec<(DVec3, DVec3)> =
+        tris.iter().map(|t| (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]))).collect();
+    let mut sizes: Vec<f64> = boxes.iter().map(|b| (b.1 - b.0).max_element()).collect();
+    sizes.sort_unstable_by(f64::total_cmp);
+    // Cells twice the median box: most triangles fall in one to eight.
+    let h = (2.0 * sizes[sizes.len() / 2]).max(1e-9);
+    let cell = |p: DVec3| (p / h).floor().as_i64vec3();
+    let mut keyed: Vec<(u64, u32)> = Vec::new();
+    for (t, b) in boxes.iter().enumerate() {
+        let (lo, hi) = (cell(b.0), cell(b.1));
+        for z in lo.z..=hi.z {
+            for y in lo.y..=hi.y {
+                for x in lo.x..=hi.x {
+                    let k = (x as u64 & 0x1f_ffff) | (y as u64 & 0x1f_ffff) << 21 | (z as u64 & 0x1f_ffff) << 42;
+                    keyed.push((k, t as u32));
+                }
+            }
+        }
+    }
+    keyed.sort_unstable();
+    let shares = |a: &[DVec3; 3], b: &[DVec3; 3]| a.iter().any(|p| b.contains(p));
+    for run in keyed.chunk_by(|x, y| x.0 == y.0) {
+        for (i, &(_, a)) in run.iter().enumerate() {
+            for &(_, b) in &run[i + 1..] {
+                let (ta, tb) = (&tris[a as usize], &tris[b as usize]);
+                let (ba, bb) = (boxes[a as usize], boxes[b as usize]);
+                if ba.0.cmpgt(bb.1).any() || bb.0.cmpgt(ba.1).any() || shares(ta, tb) {
+                    continue;
+                }
+                if edges_cross(ta, tb) || edges_cross(tb, ta) {
+                    out[a as usize] = true;
+                    out[b as usize] = true;
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Whether an edge of `a` crosses triangle `b` (Möller–Trumbore in `f64`,
+/// ends and rims included; edges parallel to `b`'s plane never cross).
+fn edges_cross(a: &[DVec3; 3], b: &[DVec3; 3]) -> bool {
+    let (e1, e2) = (b[1] - b[0], b[2] - b[0]);
+    (0..3).any(|i| {
+        let (p, d) = (a[i], a[(i + 1) % 3] - a[i]);
+        let h = d.cross(e2);
+        let det = e1.dot(h);
+        if det.abs() <= 1e-14 * e1.length() * e2.length() * d.length() {
+            return false;
+        }
+        let s = p - b[0];
+        let u = s.dot(h) / det;
+        let q = s.cross(e1);
+        let v = d.dot(q) / det;
+        let t = e2.dot(q) / det;
+        (0.0..=1.0).contains(&t) && u >= 0.0 && v >= 0.0 && u + v <= 1.0
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn segments_cross_the_open_interior_only() {
+        let t = [(0.0, 0.0), (4.0, 0.0), (0.0, 4.0)];
+        let sign = 1.0;
+        assert!(crosses_interior(&t, sign, [(-1.0, 1.0), (5.0, 1.0)]), "straight through");
+        assert!(crosses_interior(&t, sign, [(1.0, 1.0), (1.5, 1.0)]), "wholly inside");
+        assert!(crosses_interior(&t, sign, [(0.0, 0.0), (1.0, 1.0)]), "from a vertex inwards");
+        assert!(!crosses_interior(&t, sign, [(0.0, 0.0), (4.0, 0.0)]), "along an edge");
+        assert!(!crosses_interior(&t, sign, [(0.0, 0.0), (-1.0, -1.0)]), "from a vertex outwards");
+        assert!(!crosses_interior(&t, sign, [(4.0, 0.0), (4.0, 4.0)]), "touching at a vertex");
+        assert!(!crosses_interior(&t, sign, [(3.0, 3.0), (5.0, 5.0)]), "outside");
+        let reversed = [t[0], t[2], t[1]];
+        assert!(crosses_interior(&reversed, -1.0, [(-1.0, 1.0), (5.0, 1.0)]));
+    }
+
+    /// Two unit squares (two triangles each) folded at a shared edge, the
+    /// fold seen from either side: a contour only when both triangles of the
+    /// edge lie on one side of the plane through the eye and the edge.
+    #[test]
+    fn a_fold_is_a_contour_and_a_flat_sheet_is_not() {
+        let v = |x: f32, y: f32, z: f32| Vec3A::new(x, y, z);
+        // Flat sheet in z = 0, two triangles sharing the diagonal.
+        let flat = [
+            [v(0.0, 0.0, 0.0), v(0.5, 0.0, 0.0), v(0.0, 0.5, 0.0)],
+            [v(0.5, 0.0, 0.0), v(0.5, 0.5, 0.0), v(0.0, 0.5, 0.0)],
+        ];
+        // The second triangle folded back over the first.
+        let folded = [flat[0], [v(0.5, 0.0, 0.0), v(0.1, 0.1, 0.2), v(0.0, 0.5, 0.0)]];
+        let d = |t: &[[Vec3A; 3]]| t.iter().map(|t| t.map(|p| p.as_dvec3())).collect::<Vec<_>>();
+        let eye = DVec3::new(0.1, 0.2, 3.0);
+        let count = |t: &[[Vec3A; 3]]| {
+            let tris = d(t);
+            Contours::new(&MeshEdges::new(t, &tris), eye, 8, None).len()
+        };
+        // Flat: the four rim edges only; folded: the shared edge too.
+        assert_eq!(count(&flat), 4);
+        assert_eq!(count(&folded), 5);
+        // In the folded pair the lower triangle is crossed by the upper one's
+        // rim edges in front of it; the upper one, in front, by none.
+        let tris = d(&folded);
+        let c = Contours::new(&MeshEdges::new(&folded, &tris), eye, 8, None);
+        assert!(c.crosses(&tris[0]));
+        assert!(!c.crosses(&tris[1]));
+        // Flat: nothing crosses either.
+        let tris = d(&flat);
+        let c = Contours::new(&MeshEdges::new(&flat, &tris), eye, 8, None);
+        assert!(!c.crosses(&tris[0]) && !c.crosses(&tris[1]));
+    }
+
+    #[test]
+    fn cutting_triangles_are_found_and_neighbours_are_not() {
+        let tri = |a: [f64; 3], b: [f64; 3], c: [f64; 3]| [DVec3::from(a), DVec3::from(b), DVec3::from(c)];
+        let tris = vec![
+            tri([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+            // Shares an edge with the first: a neighbour, not a cut.
+            tri([1.0, 0.0, 0.0], [1.0, 1.0, 0.5], [0.0, 1.0, 0.0]),
+            // Pierces the first through its interior.
+            tri([0.2, 0.2, -0.5], [0.3, 0.2, 0.5], [0.2, 0.3, 0.5]),
+            // Far away.
+            tri([5.0, 5.0, 5.0], [6.0, 5.0, 5.0], [5.0, 6.0, 5.0]),
+        ];
+        assert_eq!(cutting(&tris), [true, false, true, false]);
+    }
+}

@@ -16,7 +16,7 @@
 //! 2. visibility can change across a triangle only where the projection of
 //!    a contour edge in front of it (a fold or a boundary of the surface as
 //!    seen from the eye) crosses it, or where it cuts through another
-//!    triangle ([`super::contours`]); each triangle so flagged is sampled at
+//!    triangle (`contours.rs`); each triangle so flagged is sampled at
 //!    `m²` stratified points (the centroids of its `m × m` subdivision) and
 //!    its visible fraction is the ratio estimate `f_t = Σ v_i w_i / Σ w_i`
 //!    with the solid-angle density `w_i = |cos θ_i| / r_i²`; every other

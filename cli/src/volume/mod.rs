@@ -89,7 +89,7 @@ pub struct VolumeOptions {
     /// Steps of --path-between, both ends included (2..=64; default 8)
     #[arg(long, value_name = "K", value_parser = input::path_steps, help_heading = "Objects")]
     pub path_steps: Option<usize>,
-    /// A time series instead of VOLUME: hydrogen-beat[:N[,T]], a comma-separated list of
+    /// A time series instead of VOLUME: hydrogen-beat, hydrogen-beat:N or hydrogen-beat:N,T; a comma-separated list of
     /// volumes, or a pattern with * or ? in the file name (matches sorted by name)
     #[arg(long, value_name = "SERIES", help_heading = "Time series")]
     pub time: Option<String>,

@@ -156,6 +156,13 @@ fn bad_input_is_one_line_and_exit_2() {
     failure(&itgfx(&["radiosity"]));
     failure(&itgfx(&["radiosity", "cornell-box", "--path-trace", "16", "--elements", "100"]));
     failure(&itgfx(&["radiosity", "cornell-box", "--size", "5000"]));
+    failure(&itgfx(&["radiosity", "cornell-box", "--base-level", "9"]));
+    // 17 polygons split 4 times: more elements than --elements asks for.
+    let e = failure(&itgfx(&["radiosity", "cornell-box", "--base-level", "4", "--elements", "1000"]));
+    assert!(e.contains("--base-level 4"), "{e}");
+    // 19 roots x 4^5 leaves and their pairs: refused before any work.
+    let e = failure(&itgfx(&["radiosity", "cornell-box", "--base-level", "5", "--max-elements", "100000"]));
+    assert!(e.contains("base level 5") && e.contains("max-elements"), "{e}");
     // A white material (Kd 1) would never converge.
     let dir = temp("bad-mtl");
     std::fs::create_dir_all(&dir).unwrap();

@@ -49,6 +49,15 @@ pub struct Settings {
     /// Rays per leaf estimating what it sees (front, back, nothing) for
     /// power conservation (`gather::Conservation`); 0: plain push-pull.
     pub front_rays: u32,
+    /// Every root split to this depth before the first links (`4^L`
+    /// leaves per quad or triangle root), which are made between every
+    /// pair of facing leaves. The oracles judge a link by its kernel and
+    /// the source's mean radiosity only (Part III eqs. 36-38, Def. 3), so a
+    /// link from a whole wall or floor whose radiosity varies (a shadow, a
+    /// lit spot) can stay unrefined and carry `F_ij · B̄_j` where
+    /// `∫ K B / A_i` is due; a base level bounds that source averaging.
+    /// 0: links start between the input polygons.
+    pub base_level: u32,
 }
 
 impl Default for Settings {
@@ -64,6 +73,7 @@ impl Default for Settings {
             max_sweeps: 1000,
             max_passes: 16,
             front_rays: 32,
+            base_level: 0,
         }
     }
 }
@@ -130,6 +140,8 @@ pub enum RadiosityError {
     Scene(String),
     /// Tracing failed.
     Backend(BackendError),
+    /// The base level asks for more leaves or links than the limits allow.
+    TooLarge(String),
 }
 
 impl fmt::Display for RadiosityError {
@@ -137,6 +149,7 @@ impl fmt::Display for RadiosityError {
         match self {
             RadiosityError::Scene(s) => f.write_str(s),
             RadiosityError::Backend(e) => write!(f, "{e}"),
+            RadiosityError::TooLarge(s) => f.write_str(s),
         }
     }
 }
@@ -214,6 +227,33 @@ fn conservation(
     Ok(Conservation::new(h, links, seen))
 }
 
+/// Splits every root of `h` to `settings.base_level` and returns the
+/// leaves, refusing (before splitting) more leaves than `max_elements` or
+/// more initial pairs than the refinement's cap of 64 link evaluations
+/// per allowed element.
+///
+/// # Errors
+/// [`RadiosityError::TooLarge`], one line with the counts.
+fn base_leaves(h: &mut Hierarchy, settings: &Settings) -> Result<Vec<ElementId>, RadiosityError> {
+    let level = settings.base_level;
+    let leaves = (h.roots.len() as u64).saturating_mul(4u64.saturating_pow(level));
+    let pairs = leaves.saturating_mul(leaves);
+    let cap = settings.max_elements as u64;
+    if leaves > cap || pairs > 64 * cap {
+        return Err(RadiosityError::TooLarge(format!(
+            "base level {level}: {leaves} leaves and up to {pairs} initial links, above --max-elements {cap} \
+             (at most {cap} leaves and {} links): lower the base level or raise --max-elements",
+            64 * cap
+        )));
+    }
+    for _ in 0..level {
+        for e in h.leaves() {
+            h.split(e);
+        }
+    }
+    Ok(h.leaves())
+}
+
 /// Solves `scene` with `settings`: the whole pipeline.
 ///
 /// # Errors
@@ -249,7 +289,7 @@ pub fn solve(
         seed: settings.seed,
         total_area,
     };
-    let roots: Vec<ElementId> = h.roots.iter().map(|r| r.element).collect();
+    let roots = base_leaves(&mut h, settings)?;
     let pairs: Vec<(ElementId, ElementId)> =
         roots.iter().flat_map(|&i| roots.iter().map(move |&j| (i, j))).filter(|&(i, j)| facing(&h, i, j)).collect();
     let (mut links, mut rays) = sampler.evaluate(&h, &pairs, Stage::Refine)?;
@@ -260,7 +300,7 @@ pub fn solve(
     let mut sweeps =
         gather::solve(&h, &links, &surfaces, &k, &mut b, &mut irradiance, settings.tolerance, settings.max_sweeps);
     let min_area = settings.min_area * total_area;
-    let mut leaves = h.roots.len();
+    let mut leaves = roots.len();
     let mut capped = false;
     let mut passes = 0;
     while passes < settings.max_passes {
@@ -419,5 +459,31 @@ pub(crate) mod tests {
         }
         assert!((mean - 2.0).abs() < 0.01, "mean B = {mean}, expected 2 to 0.5%");
         assert!((ratio - 1.0).abs() < 0.005, "absorbed / emitted = {ratio}");
+    }
+
+    #[test]
+    fn a_base_level_splits_every_root_first_and_refuses_too_many_links() {
+        // The uniform enclosure at base level 2: 6 faces x 16 leaves before
+        // any oracle, and still B = E / (1 - rho) = 2 on average.
+        let scene = glowing_cube(1, 0.5, 1.0);
+        let p = Prepared::new(&scene);
+        let t = CpuTracer::new(&p);
+        let settings = Settings { epsilon: 1e6, samples: 64, base_level: 2, ..Settings::default() };
+        let s = solve(&scene, &p, &t, &settings).unwrap();
+        assert_eq!(s.leaves().len(), 6 * 16, "nothing refined beyond the base level at a huge epsilon");
+        assert!(s.leaves().iter().all(|&e| s.hierarchy.elements[e as usize].level == 2));
+        let (mut ab, mut a) = (0.0, 0.0);
+        for &e in &s.leaves() {
+            let el = &s.hierarchy.elements[e as usize];
+            ab += el.area * s.radiosity[e as usize][0];
+            a += el.area;
+        }
+        assert!((ab / a - 2.0).abs() < 0.02, "mean B = {}, expected 2", ab / a);
+        // 6 x 4^4 = 1536 leaves, 2.4M pairs: above 64 x 16k evaluations.
+        let big = Settings { base_level: 4, max_elements: 16_000, ..settings };
+        match solve(&scene, &p, &t, &big) {
+            Err(RadiosityError::TooLarge(m)) => assert!(m.contains("base level 4"), "{m}"),
+            other => panic!("expected TooLarge, got {:?}", other.map(|s| s.leaves().len())),
+        }
     }
 }

@@ -180,7 +180,10 @@ fn path_between_two_objects() {
         "5",
     ];
     let r = run(&[&args[..], &["--json", "--out", s(&out), "--image", "64"]].concat());
-    assert!(out.join("path-between.png").metadata().unwrap().len() > 100);
+    for name in ["path-between.png", "tour.png", "objects.png"] {
+        assert!(out.join(name).metadata().unwrap().len() > 100, "{name}");
+        assert!(r["wrote"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().ends_with(name)), "{name}");
+    }
     let p = &r["path_between"][0];
     let objects = r["objects"].as_array().unwrap();
     let (from, to) = (&objects[2], &objects[3]);

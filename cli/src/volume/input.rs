@@ -26,7 +26,8 @@ pub(super) fn volume_help() -> String {
     s.push_str(") or a file of lines 'value opacity r g b' over the scalar normalised to [0, 1],\n");
     s.push_str("or a .json file {\"points\": [{\"value\": V, \"opacity\": A, \"colour\": [R, G, B]}, ...]}.\n");
     s.push_str("--out DIR gets best.png, worst.png, best-n.png, sphere.png, vomi.png, colour-vomi.png, volume.json\n");
-    s.push_str("(and path-between.png with --path-between).\n");
+    s.push_str("and tour.png (the exploration path's views); for labelled volumes objects.png (each object's\n");
+    s.push_str("characteristic view) and path-between.png with --path-between.\n");
     let (syntax, what) = itgfx_backends::volume::series::SERIES_BUILT_IN;
     s.push_str(&format!(
         "--time SERIES (instead of VOLUME): the built-in {syntax}\n      {what}\n\

@@ -193,7 +193,10 @@ fn run_in(
     let between =
         o.path_between.as_deref().map(|s| between::labels(&volume, s, o.path_steps.unwrap_or(8))).transpose()?;
     let between_png = o.out.as_ref().filter(|_| between.is_some()).map(|d| d.join(between::PICTURE));
-    if let Some(p) = &between_png {
+    // The guided tour's montage, and each object's characteristic view for a labelled volume.
+    let tour_png = o.out.as_ref().map(|d| d.join(pictures::TOUR));
+    let objects_png = o.out.as_ref().filter(|_| volume.labels.is_some()).map(|d| d.join(pictures::OBJECTS));
+    for p in [&between_png, &tour_png, &objects_png].into_iter().flatten() {
         crate::output::check("--out", p)?;
     }
     let (lo, hi) = volume.range();
@@ -381,11 +384,18 @@ fn run_in(
         };
         shots.write(dir, &m, &best_n.views)?;
         let mut files: Vec<String> = outputs.iter().map(|p| p.display().to_string()).collect();
+        let mut montages: Vec<(&PathBuf, Vec<glam::DVec3>)> = Vec::new();
         if let (Some(p), Some(png)) = (&path_between, &between_png) {
-            let half = (o.image / 2).max(16);
-            let imgs: Vec<_> =
-                p.directions.iter().map(|&d| pictures::view(&caster, d, o.distance, shots.radius, half)).collect();
-            crate::export::write_png(&crate::export::montage(&imgs, imgs.len().min(8)), png)?;
+            montages.push((png, p.directions.clone()));
+        }
+        if let Some(png) = &tour_png {
+            montages.push((png, tour.path.iter().map(|&v| dirs[v]).collect()));
+        }
+        if let (Some(ob), Some(png)) = (&objects, &objects_png) {
+            montages.push((png, ob.characteristic.iter().flatten().map(|&v| dirs[v]).collect()));
+        }
+        for (png, directions) in montages {
+            pictures::montage_of(&caster, &directions, o.distance, shots.radius, o.image, png)?;
             files.push(png.display().to_string());
         }
         r.texts("wrote", files);

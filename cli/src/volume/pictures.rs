@@ -73,6 +73,30 @@ impl Shots<'_> {
     }
 }
 
+/// The montage of the exploration path's views under `--out`.
+pub(super) const TOUR: &str = "tour.png";
+
+/// The montage of each object's characteristic view (labelled volumes).
+pub(super) const OBJECTS: &str = "objects.png";
+
+/// Writes the volume seen from each of `directions` (tiles of half the
+/// picture side, at most 8 a row) to `path`.
+///
+/// # Errors
+/// Encoding and I/O errors, one line.
+pub(super) fn montage_of(
+    caster: &Caster<'_>,
+    directions: &[DVec3],
+    distance: f64,
+    radius: f64,
+    side: u32,
+    path: &Path,
+) -> Result<(), CliError> {
+    let half = (side / 2).max(16);
+    let imgs: Vec<_> = directions.iter().map(|&d| view(caster, d, distance, radius, half)).collect();
+    write_png(&montage(&imgs, imgs.len().clamp(1, 8)), path)
+}
+
 /// The volume seen from `direction` at `distance` radii, framed on the
 /// sphere of `radius`, `s × s`.
 pub(super) fn view(caster: &Caster<'_>, direction: DVec3, distance: f64, radius: f64, s: u32) -> image::RgbImage {

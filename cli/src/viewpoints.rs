@@ -105,14 +105,19 @@ pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
     let an = ViewpointAnalysis::new(&ch, weights, background).map_err(core_err)?;
     let m = an.measures(&scene.areas(), base).map_err(core_err)?;
     let neighbours = ch.neighbours(6);
-    let instability = an.instability(&neighbours, base).map_err(core_err)?;
+    // One logarithm per channel entry, shared by the instability and the
+    // best-n search (each row meets many others), freed before saliency
+    // takes its own per-column table.
+    let logs = an.entry_logs();
+    let instability = an.instability_logs(&neighbours, &logs, base).map_err(core_err)?;
+    let best_n = best_views(&an, &m, capture, max_views, base, Some(&logs)).map_err(core_err)?;
+    drop(logs);
     let poly_info = an.polygonal_information(base).map_err(core_err)?;
     let adjacency = patch_adjacency(&scene);
     let saliency = mesh_saliency(&an, &adjacency, base).map_err(core_err)?;
     let view_saliency = viewpoint_saliency(&an, &saliency);
     let importance = importance_information(&an, &saliency, base).map_err(core_err)?;
     let best_importance = argmin(&importance);
-    let best_n = best_views(&an, &m, capture, max_views, base).map_err(core_err)?;
     let tour = exploration(&an, &neighbours, m.best, steps, base).map_err(core_err)?;
     let seconds = t0.elapsed().as_secs_f64();
 

@@ -158,12 +158,25 @@ fn adjacency_of_closed_meshes() {
 fn best_views_exploration_and_importance() {
     let (scene, ch, an) = analyse("torus:24,12", 0, 64);
     let m = an.measures(&scene.areas(), Base::Bits).unwrap();
-    let b = best_views(&an, &m, 1.0, 64, Base::Bits).unwrap();
+    let b = best_views(&an, &m, 1.0, 64, Base::Bits, None).unwrap();
+    // Precomputed logarithms change no bit of the search (nor of the instability).
+    let logs = an.entry_logs();
+    let with_logs = best_views(&an, &m, 1.0, 64, Base::Bits, Some(&logs)).unwrap();
+    assert_eq!(with_logs.views, b.views);
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&with_logs.merged_information), bits(&b.merged_information));
+    assert_eq!(bits(&with_logs.captured), bits(&b.captured));
+    let nb6 = ch.neighbours(6);
+    assert_eq!(
+        bits(&an.instability_logs(&nb6, &logs, Base::Bits).unwrap()),
+        bits(&an.instability_lean(&nb6, Base::Bits).unwrap())
+    );
+    assert!(an.dissimilarity_logs(0, 1, &logs[1..], Base::Bits).is_err(), "a short log table is refused");
     assert_eq!(b.views[0], m.best);
     assert_eq!(b.views.len(), 12, "all 12 views are needed to capture all of I(V;O)");
     assert!(b.merged_information.windows(2).all(|w| w[1] <= w[0] + 1e-12), "{:?}", b.merged_information);
     assert!((b.captured.last().unwrap() - 1.0).abs() < 1e-9 && b.merged_information.last().unwrap().abs() < 1e-9);
-    let some = best_views(&an, &m, 0.5, 64, Base::Bits).unwrap();
+    let some = best_views(&an, &m, 0.5, 64, Base::Bits, None).unwrap();
     assert!(*some.captured.last().unwrap() >= 0.5 && some.views.len() < 12);
     let nb = ch.neighbours(5);
     let t = exploration(&an, &nb, m.best, 6, Base::Bits).unwrap();

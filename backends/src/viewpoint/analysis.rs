@@ -283,22 +283,66 @@ impl ViewpointAnalysis {
         jensen_shannon_sparse((self.p_v[a] / t, self.p_v[b] / t), self.row(a), self.row(b), base)
     }
 
+    /// `ln` of every entry of the channel, in row order (8 bytes an entry):
+    /// what [`ViewpointAnalysis::dissimilarity_logs`] and
+    /// [`ViewpointAnalysis::instability_logs`] take, so that rows compared
+    /// with many others take their logarithms once.
+    #[must_use]
+    pub fn entry_logs(&self) -> Vec<f64> {
+        let mut logs = vec![0.0; self.values.len()];
+        logs.par_chunks_mut(4096).zip(self.values.par_chunks(4096)).for_each(|(l, v)| itgfx_core::sparse_logs(v, l));
+        logs
+    }
+
+    /// Row `x` with its entries' logarithms (`logs` from
+    /// [`ViewpointAnalysis::entry_logs`]).
+    fn row_logs<'a>(&'a self, x: usize, logs: &'a [f64]) -> (&'a [u32], &'a [f64], &'a [f64]) {
+        let r = self.starts[x]..self.starts[x + 1];
+        (&self.cols[r.clone()], &self.values[r.clone()], &logs[r])
+    }
+
+    /// [`ViewpointAnalysis::dissimilarity`] on precomputed logarithms
+    /// ([`jensen_shannon_sparse_logs`]: the same merge, the same bits).
+    ///
+    /// # Errors
+    /// [`Error::LengthMismatch`] if `logs` is not one per entry.
+    pub fn dissimilarity_logs(&self, a: usize, b: usize, logs: &[f64], base: Base) -> Result<f64, Error> {
+        if logs.len() != self.values.len() {
+            return Err(Error::LengthMismatch { expected: self.values.len(), found: logs.len() });
+        }
+        let t = self.p_v[a] + self.p_v[b];
+        jensen_shannon_sparse_logs(
+            (self.p_v[a] / t, self.p_v[b] / t),
+            self.row_logs(a, logs),
+            self.row_logs(b, logs),
+            base,
+        )
+    }
+
     /// Viewpoint instability: the mean dissimilarity of each viewpoint to
     /// its neighbours that see the object (low = stable); NaN for
     /// viewpoints that see nothing. `neighbours` is over all viewpoints.
+    /// Every row meets about six neighbours, so its logarithms are taken
+    /// once ([`ViewpointAnalysis::entry_logs`], 8 bytes per entry).
     ///
     /// # Errors
     /// None in practice.
     pub fn instability(&self, neighbours: &[Vec<usize>], base: Base) -> Result<Vec<f64>, Error> {
-        // Every row meets about six neighbours: its logarithms are taken once
-        // (same values, same bits), at 8 bytes per entry of the channel.
-        let mut logs = vec![0.0; self.values.len()];
-        logs.par_chunks_mut(4096).zip(self.values.par_chunks(4096)).for_each(|(l, v)| itgfx_core::sparse_logs(v, l));
-        let row = |x: usize| {
-            let r = self.starts[x]..self.starts[x + 1];
-            (&self.cols[r.clone()], &self.values[r.clone()], &logs[r])
-        };
-        self.instability_by(neighbours, |w, x, y| jensen_shannon_sparse_logs(w, row(x), row(y), base))
+        self.instability_logs(neighbours, &self.entry_logs(), base)
+    }
+
+    /// [`ViewpointAnalysis::instability`] on logarithms the caller holds
+    /// (from [`ViewpointAnalysis::entry_logs`]); the same bits.
+    ///
+    /// # Errors
+    /// [`Error::LengthMismatch`] if `logs` is not one per entry.
+    pub fn instability_logs(&self, neighbours: &[Vec<usize>], logs: &[f64], base: Base) -> Result<Vec<f64>, Error> {
+        if logs.len() != self.values.len() {
+            return Err(Error::LengthMismatch { expected: self.values.len(), found: logs.len() });
+        }
+        self.instability_by(neighbours, |w, x, y| {
+            jensen_shannon_sparse_logs(w, self.row_logs(x, logs), self.row_logs(y, logs), base)
+        })
     }
 
     /// [`ViewpointAnalysis::instability`] without holding a logarithm per

@@ -257,7 +257,7 @@ fn run_in(
         .map_err(err)?;
     let v = &m.views;
     let t_measures = t0.elapsed().as_secs_f64() - t_channel;
-    let best_n = best_views(&m.analysis, v, o.selection.capture, o.selection.best_n, base).map_err(err)?;
+    let best_n = best_views(&m.analysis, v, o.selection.capture, o.selection.best_n, base, None).map_err(err)?;
     let tour = exploration(&m.analysis, &neighbours, v.best, o.selection.explore, base).map_err(err)?;
     // Without a logarithm held per entry: the memory estimate counts 12 bytes an entry.
     let instability = m.analysis.instability_lean(&neighbours, base).map_err(err)?;

@@ -342,6 +342,42 @@ mod tests {
         }
     }
 
+    /// Time per global line of the single and the interleaved walk (best
+    /// of 8), which must find the same crossings: a timing for
+    /// `docs/TRACING.md`, run with `--release --ignored --nocapture`.
+    #[test]
+    #[ignore = "timing"]
+    fn interleaved_timing() {
+        if !node8::has_avx2() {
+            return;
+        }
+        for spec in ["cube-enclosure:3", "cube-enclosure:30", "cubes-room:512", "cube-enclosure:100"] {
+            let t = CpuTracer::new(&Prepared::new(&built_in(spec).unwrap()));
+            let bvh = t.bvh.as_ref().unwrap();
+            let n = 200_000;
+            let lines: Vec<Line> = (0..n).map(|i| global_line(1, i, crate::visibility::SPHERE_SCALE)).collect();
+            let (mut single, mut interleaved) = (f64::MAX, f64::MAX);
+            for _ in 0..8 {
+                let (mut a, mut b) = (CrossingBuffer::default(), CrossingBuffer::default());
+                let clock = std::time::Instant::now();
+                for c in lines.chunks(1024) {
+                    a.clear();
+                    t.trace_single(c, &mut a);
+                }
+                single = single.min(clock.elapsed().as_secs_f64());
+                let clock = std::time::Instant::now();
+                for c in lines.chunks(1024) {
+                    b.clear();
+                    t.trace_interleaved(bvh, c, &mut b);
+                }
+                interleaved = interleaved.min(clock.elapsed().as_secs_f64());
+                assert_eq!((a.offsets, a.crossings), (b.offsets, b.crossings), "{spec}");
+            }
+            let ns = |s: f64| s / n as f64 * 1e9;
+            eprintln!("{spec}: single walk {:.1} ns/line, interleaved {:.1} ns/line", ns(single), ns(interleaved));
+        }
+    }
+
     /// Lines grazing the scene's box (along a face, through an edge, just
     /// outside and just inside it) and global lines: the box test rejects
     /// many, and every line, rejected or not, has exactly the reference

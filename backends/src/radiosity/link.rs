@@ -45,6 +45,26 @@ pub struct Link {
     pub oracle: f64,
     /// Rays its estimate cast.
     pub rays: u32,
+    /// How many [`Share`]s of the evaluation's table are this link's (in
+    /// link order): where its transport samples landed on the source's
+    /// leaves. 0: the link carries `F_ij` times the source's mean.
+    pub shares: u16,
+}
+
+/// One leaf's part of a final link: the transport samples of link `j → i`
+/// whose source points `y_k` fell in `leaf` (a leaf under `j`) carry
+/// `form_factor` of `F_ij`, so the link gathers `Σ F_ijℓ B_ℓ` over its
+/// shares, `(1/A_i) ∫_i ∫_j K B` estimated with the radiosity where each
+/// sample lands (the leaf a ray leaves from carries its own radiosity, as
+/// in Bekaert's hierarchical Monte Carlo radiosity, Part III §1.7), instead
+/// of `F_ij B̄_j`, which misses the covariance of kernel and radiosity over
+/// the source.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Share {
+    /// The leaf of the source's subtree.
+    pub leaf: ElementId,
+    /// Its part of the link's form factor.
+    pub form_factor: f32,
 }
 
 /// What a batch of link evaluations needs.
@@ -67,6 +87,9 @@ struct PairSamples {
     weight: Vec<f64>,
     shared: Vec<bool>,
     rays: Vec<(usize, Line)>,
+    /// At [`Stage::Transport`] from a split source: the leaf under the
+    /// source holding each sample's visibility point (empty otherwise).
+    leaf: Vec<ElementId>,
 }
 
 /// Lines per tracer call.
@@ -103,14 +126,38 @@ impl Sampler<'_> {
         pairs: &[(ElementId, ElementId)],
         stage: Stage,
     ) -> Result<(Vec<Link>, u64), BackendError> {
+        let (mut links, _, rays) = self.evaluate_shared(h, pairs, stage)?;
+        for l in &mut links {
+            l.shares = 0;
+        }
+        Ok((links, rays))
+    }
+
+    /// [`Self::evaluate`] with, at [`Stage::Transport`], every link's
+    /// [`Share`]s (in link order, `Link::shares` each; none for a link whose
+    /// source is a leaf): 8 bytes per distinct leaf a link's samples meet,
+    /// at most `N_s` per link.
+    ///
+    /// # Errors
+    /// Tracing errors.
+    pub fn evaluate_shared(
+        &self,
+        h: &Hierarchy,
+        pairs: &[(ElementId, ElementId)],
+        stage: Stage,
+    ) -> Result<(Vec<Link>, Vec<Share>, u64), BackendError> {
         let mut links = Vec::with_capacity(pairs.len());
+        let mut shares = Vec::new();
         let mut rays = 0;
         for chunk in pairs.chunks(PAIRS_PER_CHUNK) {
             let (l, r) = self.evaluate_chunk(h, chunk, stage)?;
-            links.extend(l);
+            for (link, s) in l {
+                links.push(link);
+                shares.extend(s);
+            }
             rays += r;
         }
-        Ok((links, rays))
+        Ok((links, shares, rays))
     }
 
     /// [`Self::evaluate`] on one chunk of pairs: the samples, segments and
@@ -121,7 +168,7 @@ impl Sampler<'_> {
         h: &Hierarchy,
         pairs: &[(ElementId, ElementId)],
         stage: Stage,
-    ) -> Result<(Vec<Link>, u64), BackendError> {
+    ) -> Result<(Vec<(Link, Vec<Share>)>, u64), BackendError> {
         let per_pair: Vec<PairSamples> = pairs.par_iter().map(|&(i, j)| self.unoccluded(h, i, j, stage)).collect();
         let mut lines = Vec::new();
         let mut owner = Vec::new();
@@ -167,19 +214,20 @@ impl Sampler<'_> {
                         num += w;
                     }
                 }
-                let f = if den > 0.0 { ps.analytic.iter().sum::<f64>() / n * (num / den) } else { 0.0 };
+                let scale = ps.analytic.iter().sum::<f64>() / n;
+                let f = if den > 0.0 { scale * (num / den) } else { 0.0 };
                 if f <= 0.0 {
-                    return (stage == Stage::Refine && facing(h, i, j)).then_some(Link {
-                        receiver: i,
-                        source: j,
-                        form_factor: 0.0,
-                        oracle: 0.0,
-                        rays,
-                    });
+                    return (stage == Stage::Refine && facing(h, i, j)).then_some((
+                        Link { receiver: i, source: j, form_factor: 0.0, oracle: 0.0, rays, shares: 0 },
+                        Vec::new(),
+                    ));
                 }
                 let (ai, aj) = (h.elements[i as usize].area, h.elements[j as usize].area);
                 let oracle = if stage == Stage::Refine { self.oracle_value(ai, aj, f, &ps.kernel) } else { 0.0 };
-                Some(Link { receiver: i, source: j, form_factor: f, oracle, rays })
+                let shares = shares(&ps.leaf, &ps.weight, vis, scale / den);
+                let count = u16::try_from(shares.len()).unwrap_or(0);
+                let shares = if count > 0 { shares } else { Vec::new() };
+                Some((Link { receiver: i, source: j, form_factor: f, oracle, rays, shares: count }, shares))
             })
             .collect();
         Ok((links, owner.len() as u64))
@@ -218,7 +266,13 @@ impl Sampler<'_> {
             weight: vec![0.0; n],
             shared: vec![false; n],
             rays: Vec::new(),
+            leaf: Vec::new(),
         };
+        let split = stage == Stage::Transport && ej.children.is_some();
+        if split {
+            out.leaf = vec![j; n];
+        }
+        let shape = &h.roots[ej.root as usize].shape;
         let polygon = &ej.points[..usize::from(ej.corners)];
         let kern = |x: DVec3, y: DVec3| {
             let v = y - x;
@@ -278,6 +332,9 @@ impl Sampler<'_> {
                 }
             };
             out.weight[k] = w;
+            if split {
+                out.leaf[k] = h.locate_below(j, shape.parameter(target));
+            }
             let (a, b) = (self.prepared.to_normalised(x), self.prepared.to_normalised(target));
             let len = (b - a).length();
             if len > 2.0 * GAP {
@@ -304,6 +361,25 @@ impl Sampler<'_> {
         // construction; a failure would be a bug, and refines nothing.
         v.unwrap_or(0.0)
     }
+}
+
+/// A link's shares from its samples' leaves (`leaf`, empty when the
+/// source is a leaf: no share), weights `w_k` and visibility: sample `k`
+/// carries `scale · w_k V_k` (`scale = mean_k a_k / Σ_k w_k`, so the shares
+/// sum to the link's form factor), merged per leaf in order of first
+/// appearance.
+fn shares(leaf: &[ElementId], weight: &[f64], visible: &[bool], scale: f64) -> Vec<Share> {
+    let mut out: Vec<(ElementId, f64)> = Vec::new();
+    for ((&l, &w), &v) in leaf.iter().zip(weight).zip(visible) {
+        if !v || w <= 0.0 {
+            continue;
+        }
+        match out.iter_mut().find(|s| s.0 == l) {
+            Some(s) => s.1 += scale * w,
+            None => out.push((l, scale * w)),
+        }
+    }
+    out.into_iter().map(|(leaf, f)| Share { leaf, form_factor: f as f32 }).collect()
 }
 
 /// What a link evaluation is for.

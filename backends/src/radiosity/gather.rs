@@ -2,7 +2,9 @@
 //! radiosity): every element gathers the irradiance `Σ_j F_ij B_j` over its links,
 //! pushes it down to its leaves, where `B = E + ρ H`,
 //! and pulls area-weighted averages back up. Jacobi iterations in a fixed
-//! order, so results do not depend on threads. [`Conservation`] makes what
+//! order, so results do not depend on threads. A final link with shares
+//! gathers from the leaves its transport samples landed on
+//! ([`Share`], [`parts`]). [`Conservation`] makes what
 //! the links carry equal what the leaves radiate (times their true row
 //! sums), so a closed scene absorbs what it emits.
 
@@ -22,7 +24,10 @@ pub(crate) struct Surfaces {
 /// [`Share`]s, in order (`shares` holds `Link::shares` of them per link,
 /// links in order), or the link itself with the source's mean when it has
 /// none. A link gathers `Σ F_part · send[sending element]`.
-pub(crate) fn parts<'a>(links: &'a [Link], shares: &'a [Share]) -> impl Iterator<Item = (ElementId, ElementId, f64)> + 'a {
+pub(crate) fn parts<'a>(
+    links: &'a [Link],
+    shares: &'a [Share],
+) -> impl Iterator<Item = (ElementId, ElementId, f64)> + 'a {
     let mut at = 0usize;
     links.iter().flat_map(move |l| {
         let n = usize::from(l.shares);
@@ -58,7 +63,11 @@ impl Conservation {
     ///
     /// A leaf `ℓ` radiates `A_ℓ B_ℓ`; the links of its ancestors-or-self `j`
     /// carry `A_ℓ B_ℓ S_ℓ` of it, `S_ℓ = Σ_{j ⊇ ℓ} Σ_{i ← j} A_i F_ij / A_j`
-    /// (the source-side row sum through every link that reads it). With
+    /// (the source-side row sum through every link that reads it; a link
+    /// with [`Share`]s counts each share `F_ijℓ'` at its own leaf `ℓ'`
+    /// instead: `A_i F_ijℓ' / A_ℓ'`, the power it carries from that leaf
+    /// alone, so `S_ℓ` is then the Monte Carlo estimate of the leaf's own
+    /// row sum and `c_ℓ` corrects its noise). With
     /// form factors averaged over an ancestor `S_ℓ` is not the leaf's own
     /// row sum, and power is made or lost by `Σ_ℓ A_ℓ B_ℓ (S_ℓ − T_ℓ)`, `T_ℓ`
     /// the share of the leaf's radiated power that meets a surface: its
@@ -112,7 +121,14 @@ impl Conservation {
 
 /// One Jacobi sweep: the new radiosities, irradiances and sent radiosities
 /// of every element.
-fn sweep(h: &Hierarchy, links: &[Link], shares: &[Share], s: &Surfaces, k: &Conservation, send: &[Rgb]) -> [Vec<Rgb>; 3] {
+fn sweep(
+    h: &Hierarchy,
+    links: &[Link],
+    shares: &[Share],
+    s: &Surfaces,
+    k: &Conservation,
+    send: &[Rgb],
+) -> [Vec<Rgb>; 3] {
     let mut gathered = vec![[0.0; 3]; h.elements.len()];
     for (i, j, f) in parts(links, shares) {
         let (g, src) = (&mut gathered[i as usize], send[j as usize]);

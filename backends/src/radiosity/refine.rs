@@ -302,8 +302,17 @@ pub fn solve(
     let mut shares = Vec::new();
     let mut front = Vec::new();
     let k = conservation(&h, &links, &shares, &sampler, settings, &mut front, &mut rays)?;
-    let mut sweeps =
-        gather::solve(&h, &links, &shares, &surfaces, &k, &mut b, &mut irradiance, settings.tolerance, settings.max_sweeps);
+    let mut sweeps = gather::solve(
+        &h,
+        &links,
+        &shares,
+        &surfaces,
+        &k,
+        &mut b,
+        &mut irradiance,
+        settings.tolerance,
+        settings.max_sweeps,
+    );
     let min_area = settings.min_area * total_area;
     let mut leaves = roots.len();
     let mut capped = false;
@@ -359,8 +368,17 @@ pub fn solve(
             work = new;
         }
         let k = conservation(&h, &links, &shares, &sampler, settings, &mut front, &mut rays)?;
-        sweeps +=
-            gather::solve(&h, &links, &shares, &surfaces, &k, &mut b, &mut irradiance, settings.tolerance, settings.max_sweeps);
+        sweeps += gather::solve(
+            &h,
+            &links,
+            &shares,
+            &surfaces,
+            &k,
+            &mut b,
+            &mut irradiance,
+            settings.tolerance,
+            settings.max_sweeps,
+        );
         if !changed || capped {
             break;
         }
@@ -378,8 +396,17 @@ pub fn solve(
     links = fresh;
     shares = parts;
     let k = conservation(&h, &links, &shares, &sampler, settings, &mut front, &mut rays)?;
-    sweeps +=
-        gather::solve(&h, &links, &shares, &surfaces, &k, &mut b, &mut irradiance, settings.tolerance, settings.max_sweeps);
+    sweeps += gather::solve(
+        &h,
+        &links,
+        &shares,
+        &surfaces,
+        &k,
+        &mut b,
+        &mut irradiance,
+        settings.tolerance,
+        settings.max_sweeps,
+    );
     let transport_rays = links.iter().map(|l| u64::from(l.rays)).sum();
     Ok(Solution {
         hierarchy: h,

@@ -92,6 +92,9 @@ struct PairSamples {
     leaf: Vec<ElementId>,
 }
 
+/// A link and its shares, as one chunk's evaluation returns them.
+type LinkShares = (Link, Vec<Share>);
+
 /// Lines per tracer call.
 const BATCH: usize = 8192;
 
@@ -168,7 +171,7 @@ impl Sampler<'_> {
         h: &Hierarchy,
         pairs: &[(ElementId, ElementId)],
         stage: Stage,
-    ) -> Result<(Vec<(Link, Vec<Share>)>, u64), BackendError> {
+    ) -> Result<(Vec<LinkShares>, u64), BackendError> {
         let per_pair: Vec<PairSamples> = pairs.par_iter().map(|&(i, j)| self.unoccluded(h, i, j, stage)).collect();
         let mut lines = Vec::new();
         let mut owner = Vec::new();

@@ -385,6 +385,7 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
     let (emitted, absorbed) = solution.power_balance();
     r.text("oracle", o.oracle.name()).real("epsilon", solution.settings.epsilon, None);
     r.count("elements", leaves.len() as u64).count("links", solution.links.len() as u64);
+    r.count("link_shares", solution.shares.len() as u64);
     r.count("base_level", u64::from(o.base_level));
     r.count("samples_per_link", u64::from(o.samples)).count("link_evaluations", solution.evaluations);
     r.count("rays", solution.rays).count("transport_rays", solution.transport_rays);

@@ -257,7 +257,15 @@ impl Hierarchy {
     /// The leaf of root `r` containing parameter `p`.
     #[must_use]
     pub fn locate(&self, r: u32, p: DVec2) -> ElementId {
-        let mut e = self.roots[r as usize].element;
+        self.locate_below(self.roots[r as usize].element, p)
+    }
+
+    /// The leaf under element `e` (itself when a leaf) containing parameter
+    /// `p` of `e`'s root; a point outside `e` goes to the nearest child at
+    /// each level.
+    #[must_use]
+    pub fn locate_below(&self, e: ElementId, p: DVec2) -> ElementId {
+        let mut e = e;
         while let Some(c) = self.elements[e as usize].children {
             let next = (c..c + 4).find(|&k| self.elements[k as usize].contains(p, 1e-9));
             // A point just outside every child (rounding): the nearest centre.

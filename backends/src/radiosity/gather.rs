@@ -2,12 +2,14 @@
 //! radiosity): every element gathers the irradiance `Σ_j F_ij B_j` over its links,
 //! pushes it down to its leaves, where `B = E + ρ H`,
 //! and pulls area-weighted averages back up. Jacobi iterations in a fixed
-//! order, so results do not depend on threads. [`Conservation`] makes what
+//! order, so results do not depend on threads. A final link with shares
+//! gathers from the leaves its transport samples landed on
+//! ([`Share`], [`parts`]). [`Conservation`] makes what
 //! the links carry equal what the leaves radiate (times their true row
 //! sums), so a closed scene absorbs what it emits.
 
 use super::element::{ElementId, Hierarchy};
-use super::link::Link;
+use super::link::{Link, Share};
 
 /// RGB triple.
 pub type Rgb = [f64; 3];
@@ -16,6 +18,24 @@ pub type Rgb = [f64; 3];
 pub(crate) struct Surfaces {
     pub reflectance: Vec<Rgb>,
     pub emission: Vec<Rgb>,
+}
+
+/// Every link's parts `(receiver, sending element, form factor)`: its
+/// [`Share`]s, in order (`shares` holds `Link::shares` of them per link,
+/// links in order), or the link itself with the source's mean when it has
+/// none. A link gathers `Σ F_part · send[sending element]`.
+pub(crate) fn parts<'a>(
+    links: &'a [Link],
+    shares: &'a [Share],
+) -> impl Iterator<Item = (ElementId, ElementId, f64)> + 'a {
+    let mut at = 0usize;
+    links.iter().flat_map(move |l| {
+        let n = usize::from(l.shares);
+        let own = shares.get(at..at + n).unwrap_or(&[]);
+        at += n;
+        let whole = (n == 0).then_some((l.receiver, l.source, l.form_factor));
+        own.iter().map(move |s| (l.receiver, s.leaf, f64::from(s.form_factor))).chain(whole)
+    })
 }
 
 /// How each leaf sends and receives, so that a closed scene conserves
@@ -43,7 +63,11 @@ impl Conservation {
     ///
     /// A leaf `ℓ` radiates `A_ℓ B_ℓ`; the links of its ancestors-or-self `j`
     /// carry `A_ℓ B_ℓ S_ℓ` of it, `S_ℓ = Σ_{j ⊇ ℓ} Σ_{i ← j} A_i F_ij / A_j`
-    /// (the source-side row sum through every link that reads it). With
+    /// (the source-side row sum through every link that reads it; a link
+    /// with [`Share`]s counts each share `F_ijℓ'` at its own leaf `ℓ'`
+    /// instead: `A_i F_ijℓ' / A_ℓ'`, the power it carries from that leaf
+    /// alone, so `S_ℓ` is then the Monte Carlo estimate of the leaf's own
+    /// row sum and `c_ℓ` corrects its noise). With
     /// form factors averaged over an ancestor `S_ℓ` is not the leaf's own
     /// row sum, and power is made or lost by `Σ_ℓ A_ℓ B_ℓ (S_ℓ − T_ℓ)`, `T_ℓ`
     /// the share of the leaf's radiated power that meets a surface: its
@@ -55,13 +79,13 @@ impl Conservation {
     /// front fraction `S*_ℓ` (normalised over the ancestor, so its power is
     /// kept): a leaf hidden under a box receives nothing, instead of the
     /// ancestor's mean, which it would re-emit from where no light reaches.
-    pub fn new(h: &Hierarchy, links: &[Link], seen: &[[f64; 2]]) -> Self {
+    pub fn new(h: &Hierarchy, links: &[Link], shares: &[Share], seen: &[[f64; 2]]) -> Self {
         let n = h.elements.len();
         let mut out = vec![0.0; n];
-        for l in links {
-            let (ai, aj) = (h.elements[l.receiver as usize].area, h.elements[l.source as usize].area);
+        for (i, j, f) in parts(links, shares) {
+            let (ai, aj) = (h.elements[i as usize].area, h.elements[j as usize].area);
             if aj > 0.0 {
-                out[l.source as usize] += ai * l.form_factor / aj;
+                out[j as usize] += ai * f / aj;
             }
         }
         let mut c = Self { send: vec![1.0; n], visible: vec![1.0; n], front: vec![1.0; n] };
@@ -97,12 +121,19 @@ impl Conservation {
 
 /// One Jacobi sweep: the new radiosities, irradiances and sent radiosities
 /// of every element.
-fn sweep(h: &Hierarchy, links: &[Link], s: &Surfaces, k: &Conservation, send: &[Rgb]) -> [Vec<Rgb>; 3] {
+fn sweep(
+    h: &Hierarchy,
+    links: &[Link],
+    shares: &[Share],
+    s: &Surfaces,
+    k: &Conservation,
+    send: &[Rgb],
+) -> [Vec<Rgb>; 3] {
     let mut gathered = vec![[0.0; 3]; h.elements.len()];
-    for l in links {
-        let (g, src) = (&mut gathered[l.receiver as usize], send[l.source as usize]);
+    for (i, j, f) in parts(links, shares) {
+        let (g, src) = (&mut gathered[i as usize], send[j as usize]);
         for c in 0..3 {
-            g[c] += l.form_factor * src[c];
+            g[c] += f * src[c];
         }
     }
     let mut out =
@@ -204,6 +235,7 @@ fn sent(h: &Hierarchy, k: &Conservation, b: &[Rgb]) -> Vec<Rgb> {
 pub(crate) fn solve(
     h: &Hierarchy,
     links: &[Link],
+    shares: &[Share],
     s: &Surfaces,
     k: &Conservation,
     b: &mut Vec<Rgb>,
@@ -215,7 +247,7 @@ pub(crate) fn solve(
     let mut send = sent(h, k, b);
     let mut n = 0;
     while n < max {
-        let [next, hh, sn] = sweep(h, links, s, k, &send);
+        let [next, hh, sn] = sweep(h, links, shares, s, k, &send);
         *irradiance = hh;
         send = sn;
         n += 1;

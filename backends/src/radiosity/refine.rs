@@ -20,7 +20,7 @@ use super::Oracle;
 use super::element::{ElementId, Hierarchy};
 use super::front::front_fractions;
 use super::gather::{self, Conservation, Rgb, Surfaces};
-use super::link::{Link, Sampler, Stage, facing};
+use super::link::{Link, Sampler, Share, Stage, facing};
 use crate::backend::BackendError;
 use crate::scene::Scene;
 use crate::tracer::{Prepared, Tracer};
@@ -85,6 +85,9 @@ pub struct Solution {
     pub hierarchy: Hierarchy,
     /// The final links.
     pub links: Vec<Link>,
+    /// Their shares: where each final link's transport samples landed on
+    /// its source's leaves (`Link::shares` per link, in link order).
+    pub shares: Vec<Share>,
     /// Radiosity of every element (leaves and interior, push-pulled).
     pub radiosity: Vec<Rgb>,
     /// Irradiance `H` of every element (`B = E + ρ H` at the leaves).
@@ -209,6 +212,7 @@ fn transport_seed(seed: u64) -> u64 {
 fn conservation(
     h: &Hierarchy,
     links: &[Link],
+    shares: &[Share],
     sampler: &Sampler<'_>,
     settings: &Settings,
     seen: &mut Vec<[f64; 2]>,
@@ -224,7 +228,7 @@ fn conservation(
         seen[e as usize] = v;
     }
     *rays += r;
-    Ok(Conservation::new(h, links, seen))
+    Ok(Conservation::new(h, links, shares, seen))
 }
 
 /// Splits every root of `h` to `settings.base_level` and returns the
@@ -295,10 +299,20 @@ pub fn solve(
     let (mut links, mut rays) = sampler.evaluate(&h, &pairs, Stage::Refine)?;
     let mut evaluations = pairs.len() as u64;
     let (mut b, mut irradiance) = (Vec::new(), Vec::new());
+    let mut shares = Vec::new();
     let mut front = Vec::new();
-    let k = conservation(&h, &links, &sampler, settings, &mut front, &mut rays)?;
-    let mut sweeps =
-        gather::solve(&h, &links, &surfaces, &k, &mut b, &mut irradiance, settings.tolerance, settings.max_sweeps);
+    let k = conservation(&h, &links, &shares, &sampler, settings, &mut front, &mut rays)?;
+    let mut sweeps = gather::solve(
+        &h,
+        &links,
+        &shares,
+        &surfaces,
+        &k,
+        &mut b,
+        &mut irradiance,
+        settings.tolerance,
+        settings.max_sweeps,
+    );
     let min_area = settings.min_area * total_area;
     let mut leaves = roots.len();
     let mut capped = false;
@@ -353,9 +367,18 @@ pub fn solve(
             evaluations += pairs.len() as u64;
             work = new;
         }
-        let k = conservation(&h, &links, &sampler, settings, &mut front, &mut rays)?;
-        sweeps +=
-            gather::solve(&h, &links, &surfaces, &k, &mut b, &mut irradiance, settings.tolerance, settings.max_sweeps);
+        let k = conservation(&h, &links, &shares, &sampler, settings, &mut front, &mut rays)?;
+        sweeps += gather::solve(
+            &h,
+            &links,
+            &shares,
+            &surfaces,
+            &k,
+            &mut b,
+            &mut irradiance,
+            settings.tolerance,
+            settings.max_sweeps,
+        );
         if !changed || capped {
             break;
         }
@@ -367,17 +390,28 @@ pub fn solve(
     // stream of point pairs, so the decision does not select the estimate.
     let transport = Sampler { seed: transport_seed(settings.seed), ..sampler };
     let pairs: Vec<(ElementId, ElementId)> = links.iter().map(|l| (l.receiver, l.source)).collect();
-    let (fresh, r) = transport.evaluate(&h, &pairs, Stage::Transport)?;
+    let (fresh, parts, r) = transport.evaluate_shared(&h, &pairs, Stage::Transport)?;
     rays += r;
     evaluations += pairs.len() as u64;
     links = fresh;
-    let k = conservation(&h, &links, &sampler, settings, &mut front, &mut rays)?;
-    sweeps +=
-        gather::solve(&h, &links, &surfaces, &k, &mut b, &mut irradiance, settings.tolerance, settings.max_sweeps);
+    shares = parts;
+    let k = conservation(&h, &links, &shares, &sampler, settings, &mut front, &mut rays)?;
+    sweeps += gather::solve(
+        &h,
+        &links,
+        &shares,
+        &surfaces,
+        &k,
+        &mut b,
+        &mut irradiance,
+        settings.tolerance,
+        settings.max_sweeps,
+    );
     let transport_rays = links.iter().map(|l| u64::from(l.rays)).sum();
     Ok(Solution {
         hierarchy: h,
         links,
+        shares,
         radiosity: b,
         irradiance,
         reflectance: surfaces.reflectance,

@@ -34,6 +34,11 @@ pub struct Settings {
     pub epsilon: f64,
     /// Random point pairs per link evaluation, `N_s` (10 in the tutorial).
     pub samples: u32,
+    /// Samples per final link's transport estimate (its form factor and
+    /// shares); 0: `samples`. Refinement (the oracles' `N_s`) is unchanged
+    /// by it, so the mesh is the same; what changes is the Monte Carlo
+    /// error of the final links.
+    pub transport_samples: u32,
     /// Seed of every random point pair.
     pub seed: u64,
     /// Smallest element area as a fraction of the total (RenderPark: 1e-6).
@@ -66,6 +71,7 @@ impl Default for Settings {
             oracle: Oracle::Power,
             epsilon: 1e-3,
             samples: 10,
+            transport_samples: 0,
             seed: 1,
             min_area: 1e-6,
             max_elements: 2_000_000,
@@ -388,7 +394,8 @@ pub fn solve(
     // solution came out a few per cent dark, absorbing less than it emits).
     // The transported form factors are re-estimated from an independent
     // stream of point pairs, so the decision does not select the estimate.
-    let transport = Sampler { seed: transport_seed(settings.seed), ..sampler };
+    let samples = if settings.transport_samples > 0 { settings.transport_samples } else { settings.samples };
+    let transport = Sampler { seed: transport_seed(settings.seed), samples, ..sampler };
     let pairs: Vec<(ElementId, ElementId)> = links.iter().map(|l| (l.receiver, l.source)).collect();
     let (fresh, parts, r) = transport.evaluate_shared(&h, &pairs, Stage::Transport)?;
     rays += r;

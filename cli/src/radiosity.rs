@@ -59,6 +59,9 @@ pub struct RadiosityOptions {
     /// Samples per final link's transport estimate (default: --samples); the mesh is unchanged by it
     #[arg(long, value_name = "N", value_parser = samples)]
     pub transport_samples: Option<u32>,
+    /// Final links gather the radiosity of the source leaf each transport sample lands on (fine meshes)
+    #[arg(long)]
+    pub shares: bool,
     /// Smallest element as a fraction of the total area (RenderPark: 1e-6)
     #[arg(long, value_name = "F", default_value = "1e-6", value_parser = min_area)]
     pub min_area: f64,
@@ -355,6 +358,7 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
         epsilon: o.epsilon.unwrap_or(1e-3),
         samples: o.samples,
         transport_samples: o.transport_samples.unwrap_or(o.samples),
+        shares: o.shares,
         seed: o.seed,
         min_area: o.min_area,
         max_elements: o.max_elements,

@@ -227,7 +227,7 @@ fn transport_samples_keep_the_mesh_and_only_add_transport_rays() {
         a.extend_from_slice(extra);
         json(&itgfx(&a))
     };
-    let (plain, more) = (run(&[]), run(&["--transport-samples", "30"]));
+    let (plain, more) = (run(&[]), run(&["--transport-samples", "30", "--shares"]));
     assert_eq!(plain["elements"], more["elements"], "same mesh");
     assert_eq!(more["transport_samples_per_link"].as_u64(), Some(30));
     assert_eq!(plain["transport_samples_per_link"].as_u64(), Some(10));
@@ -235,7 +235,8 @@ fn transport_samples_keep_the_mesh_and_only_add_transport_rays() {
     assert!(rays(&more) > 2 * rays(&plain), "{} vs {}", rays(&more), rays(&plain));
     assert!(more["link_shares"].as_u64().unwrap() > 0, "links from split sources keep shares");
     assert!((more["balance"].as_f64().unwrap() - 1.0).abs() < 0.005, "{more}");
-    let one = run(&["--transport-samples", "30", "--threads", "1"]);
+    assert_eq!(plain["link_shares"].as_u64(), Some(0), "no shares unless asked");
+    let one = run(&["--transport-samples", "30", "--shares", "--threads", "1"]);
     for k in ["elements", "links", "link_shares", "power_absorbed", "transport_rays"] {
         assert_eq!(one[k], more[k], "{k}: any thread count");
     }

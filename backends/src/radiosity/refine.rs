@@ -39,6 +39,11 @@ pub struct Settings {
     /// by it, so the mesh is the same; what changes is the Monte Carlo
     /// error of the final links.
     pub transport_samples: u32,
+    /// Final links from split sources gather the radiosity of the leaf each
+    /// transport sample lands on (`link::Share`) instead of the source's
+    /// mean. Off by default: the conservation weights then rest on per-leaf
+    /// sample counts, too noisy on coarse meshes (docs/RADIOSITY.md).
+    pub shares: bool,
     /// Seed of every random point pair.
     pub seed: u64,
     /// Smallest element area as a fraction of the total (RenderPark: 1e-6).
@@ -72,6 +77,7 @@ impl Default for Settings {
             epsilon: 1e-3,
             samples: 10,
             transport_samples: 0,
+            shares: false,
             seed: 1,
             min_area: 1e-6,
             max_elements: 2_000_000,
@@ -397,7 +403,12 @@ pub fn solve(
     let samples = if settings.transport_samples > 0 { settings.transport_samples } else { settings.samples };
     let transport = Sampler { seed: transport_seed(settings.seed), samples, ..sampler };
     let pairs: Vec<(ElementId, ElementId)> = links.iter().map(|l| (l.receiver, l.source)).collect();
-    let (fresh, parts, r) = transport.evaluate_shared(&h, &pairs, Stage::Transport)?;
+    let (fresh, parts, r) = if settings.shares {
+        transport.evaluate_shared(&h, &pairs, Stage::Transport)?
+    } else {
+        let (l, r) = transport.evaluate(&h, &pairs, Stage::Transport)?;
+        (l, Vec::new(), r)
+    };
     rays += r;
     evaluations += pairs.len() as u64;
     links = fresh;

@@ -102,9 +102,17 @@ pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
     if ch.is_blind() {
         return Err(CliError::usage(format!("{spec}: no viewpoint sees any polygon (an empty mesh?)")));
     }
-    let an = ViewpointAnalysis::new(&ch, weights, background).map_err(core_err)?;
-    let m = an.measures(&scene.areas(), base).map_err(core_err)?;
     let neighbours = ch.neighbours(6);
+    let (rays_per_viewpoint, channel_entries) = (ch.rays_per_viewpoint, ch.patch.len() as u64);
+    // Without the background the analysis takes the channel's rows over
+    // (the same numbers as `new`, without a second copy of its entries).
+    let an = if background {
+        ViewpointAnalysis::new(&ch, weights, background)
+    } else {
+        ViewpointAnalysis::from_channel(ch, weights)
+    }
+    .map_err(core_err)?;
+    let m = an.measures(&scene.areas(), base).map_err(core_err)?;
     // One logarithm per channel entry, shared by the instability and the
     // best-n search (each row meets many others), freed before saliency
     // takes its own per-column table.
@@ -143,9 +151,9 @@ pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
             );
         }
     } else {
-        r.count("rays_per_viewpoint", ch.rays_per_viewpoint);
+        r.count("rays_per_viewpoint", rays_per_viewpoint);
     }
-    r.count("channel_entries", ch.patch.len() as u64);
+    r.count("channel_entries", channel_entries);
     r.text("p_v", if weights == ViewpointWeights::Uniform { "uniform" } else { "projected area" });
     r.text("background", if background { "an extra polygon" } else { "excluded" });
     r.real("I_VO", m.total_mutual_information, unit).real("H_O_given_V", m.conditional_entropy, unit).real(

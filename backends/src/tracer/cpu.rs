@@ -7,10 +7,12 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::ray::Ray;
 
-use super::node8;
 use super::packet::{self, LANES};
-use super::watertight::{Shear, before, finish, push_crossing, sphere_crossings, sphere_hit, triangle_hit};
+use super::watertight::{
+    Shear, before, finish, push_crossing, sphere_crossings, sphere_hit, triangle_hit, walk_direction,
+};
 use super::{BackendError, CrossingBuffer, Hit, Prepared, Tracer};
+use super::{interleave, node8};
 use crate::lines::Line;
 
 /// Triangle boxes and build parameters shared by the CPU and Vulkan BVHs:
@@ -41,6 +43,9 @@ pub struct CpuTracer {
     ordered: Vec<[Vec3A; 3]>,
     /// Whether the 8-lane AVX2 node test is used (`node8`).
     avx2: bool,
+    /// Whether `trace_all` interleaves walks (`interleave.rs`): AVX2 and
+    /// a triangle scene.
+    interleave: bool,
     /// Centre and half-extents of the box around every triangle, padded.
     bounds: (Vec3A, Vec3A),
 }
@@ -49,6 +54,9 @@ pub struct CpuTracer {
 /// the f32 rounding of the line–box test and of the triangle test (~1e-7 at
 /// the scene's scale of 1), so a line the test puts outside crosses nothing.
 const BOUNDS_PAD: f32 = 1e-4;
+
+/// [`Tracer::batch_lines`] of the CPU backend: 32 KB of lines.
+const BATCH_LINES: usize = 1024;
 
 /// Whether the infinite line through `o` along `d` misses the box of
 /// centre `c` and half-extents `h`: the box and the line project apart on
@@ -73,7 +81,7 @@ impl CpuTracer {
             let (aabbs, params) = bvh_input(scene);
             build_cwbvh(&aabbs, params, &mut std::time::Duration::default())
         });
-        let ordered = bvh
+        let ordered: Vec<[Vec3A; 3]> = bvh
             .as_ref()
             .map(|b| b.primitive_indices.iter().map(|&i| scene.triangles[i as usize]).collect())
             .unwrap_or_default();
@@ -83,7 +91,9 @@ impl CpuTracer {
             .flatten()
             .fold((Vec3A::INFINITY, Vec3A::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
         let bounds = ((lo + hi) * 0.5, (hi - lo) * 0.5 + BOUNDS_PAD);
-        Self { scene: scene.clone(), bvh, ordered, avx2: node8::has_avx2(), bounds }
+        let avx2 = node8::has_avx2();
+        let interleave = avx2 && scene.sphere.is_none();
+        Self { scene: scene.clone(), bvh, ordered, avx2, interleave, bounds }
     }
 
     /// The first crossing of one line: the walk shrinks the interval as hits
@@ -174,13 +184,9 @@ impl CpuTracer {
     }
 }
 
-impl Tracer for CpuTracer {
-    fn name(&self) -> &'static str {
-        "cpu"
-    }
-
-    fn trace_all(&self, lines: &[Line], out: &mut CrossingBuffer) -> Result<(), BackendError> {
-        out.clear();
+impl CpuTracer {
+    /// [`Tracer::trace_all`] one line at a time, appended to `out`.
+    fn trace_single(&self, lines: &[Line], out: &mut CrossingBuffer) {
         let mut hits = Vec::with_capacity(16);
         for l in lines {
             if let Some(s) = &self.scene.sphere {
@@ -202,6 +208,64 @@ impl Tracer for CpuTracer {
             }
             finish(&mut hits, out);
         }
+    }
+
+    /// [`Tracer::trace_all`] by interleaved walks (`interleave.rs`): the
+    /// crossings found, grouped by line (a counting sort), then each line's
+    /// sorted and merged as the single walk's are.
+    #[cfg(target_arch = "x86_64")]
+    fn trace_interleaved(&self, bvh: &CwBvh, lines: &[Line], out: &mut CrossingBuffer) {
+        let mut raw = Vec::with_capacity(lines.len() * 2);
+        let take = |l: &Line| !line_misses_box(Vec3A::from(l.origin), Vec3A::from(l.direction), self.bounds);
+        // SAFETY: `self.avx2` came from `has_avx2()`.
+        unsafe { interleave::trace(bvh, &self.ordered, lines, take, &mut raw) };
+        let mut start = vec![0u32; lines.len() + 1];
+        for &(li, _, _) in &raw {
+            start[li as usize + 1] += 1;
+        }
+        for i in 0..lines.len() {
+            start[i + 1] += start[i];
+        }
+        let mut grouped = vec![(0u32, 0f32); raw.len()];
+        let mut next = start.clone();
+        for &(li, k, t) in &raw {
+            let at = &mut next[li as usize];
+            grouped[*at as usize] = (k, t);
+            *at += 1;
+        }
+        let mut hits = Vec::with_capacity(16);
+        for (li, l) in lines.iter().enumerate() {
+            let found = &grouped[start[li] as usize..start[li + 1] as usize];
+            if !found.is_empty() {
+                let dir = walk_direction(l);
+                for &(k, t) in found {
+                    push_crossing(&self.scene, dir, t, bvh.primitive_indices[k as usize] as usize, &mut hits);
+                }
+            }
+            finish(&mut hits, out);
+        }
+    }
+}
+
+impl Tracer for CpuTracer {
+    fn name(&self) -> &'static str {
+        "cpu"
+    }
+
+    fn batch_lines(&self) -> usize {
+        BATCH_LINES
+    }
+
+    fn trace_all(&self, lines: &[Line], out: &mut CrossingBuffer) -> Result<(), BackendError> {
+        out.clear();
+        #[cfg(target_arch = "x86_64")]
+        if self.interleave
+            && let Some(bvh) = &self.bvh
+        {
+            self.trace_interleaved(bvh, lines, out);
+            return Ok(());
+        }
+        self.trace_single(lines, out);
         Ok(())
     }
 
@@ -236,6 +300,83 @@ mod tests {
     use crate::lines::{LineRng, global_line};
     use crate::scene::built_in;
     use crate::tracer::ReferenceTracer;
+
+    /// The interleaved walks find exactly the single walk's crossings (and
+    /// the reference's), bit for bit, on scenes with shared edges,
+    /// occluders, open edges and thin parts, for global lines and lines
+    /// grazing the box.
+    #[test]
+    fn interleaved_walks_find_the_single_walks_crossings() {
+        if !node8::has_avx2() {
+            return;
+        }
+        for spec in ["cube-enclosure:12", "cubes-room:64", "table-chairs:2", "geosphere", "cornell-box"] {
+            let p = Prepared::new(&built_in(spec).unwrap());
+            let (cpu, reference) = (CpuTracer::new(&p), ReferenceTracer::new(&p));
+            let mut lines: Vec<Line> = (0..4_000).map(|i| global_line(3, i, 1.1)).collect();
+            // Rays from inside, some cut short.
+            lines.extend((0..2_000u64).map(|i| {
+                let r = LineRng::new(8, i);
+                let o = DVec3::new(r.uniform(0), r.uniform(1), r.uniform(2)) * 0.8 - 0.4;
+                let d = DVec3::new(r.uniform(3) - 0.5, r.uniform(4) - 0.5, r.uniform(5) - 0.5).normalize();
+                Line::ray(o, d, 0.0, 2.0 * r.uniform(6))
+            }));
+            let bvh = cpu.bvh.as_ref().unwrap();
+            let (mut a, mut b, mut c) =
+                (CrossingBuffer::default(), CrossingBuffer::default(), CrossingBuffer::default());
+            // Batches of odd sizes: lanes refill across lines of any length.
+            for batch in lines.chunks(777) {
+                let (mut x, mut y) = (CrossingBuffer::default(), CrossingBuffer::default());
+                x.clear();
+                cpu.trace_interleaved(bvh, batch, &mut x);
+                y.clear();
+                cpu.trace_single(batch, &mut y);
+                assert_eq!(x.offsets, y.offsets, "{spec}");
+                assert_eq!(x.crossings, y.crossings, "{spec}");
+                a.crossings.extend(x.crossings);
+                b.crossings.extend(y.crossings);
+            }
+            reference.trace_all(&lines, &mut c).unwrap();
+            assert!(c.crossings.len() > 2_000, "{spec}: too few crossings to compare");
+            assert_eq!(a.crossings, c.crossings, "{spec}");
+        }
+    }
+
+    /// Time per global line of the single and the interleaved walk (best
+    /// of 8), which must find the same crossings: a timing for
+    /// `docs/TRACING.md`, run with `--release --ignored --nocapture`.
+    #[test]
+    #[ignore = "timing"]
+    fn interleaved_timing() {
+        if !node8::has_avx2() {
+            return;
+        }
+        for spec in ["cube-enclosure:3", "cube-enclosure:30", "cubes-room:512", "cube-enclosure:100"] {
+            let t = CpuTracer::new(&Prepared::new(&built_in(spec).unwrap()));
+            let bvh = t.bvh.as_ref().unwrap();
+            let n = 200_000;
+            let lines: Vec<Line> = (0..n).map(|i| global_line(1, i, crate::visibility::SPHERE_SCALE)).collect();
+            let (mut single, mut interleaved) = (f64::MAX, f64::MAX);
+            for _ in 0..8 {
+                let (mut a, mut b) = (CrossingBuffer::default(), CrossingBuffer::default());
+                let clock = std::time::Instant::now();
+                for c in lines.chunks(1024) {
+                    a.clear();
+                    t.trace_single(c, &mut a);
+                }
+                single = single.min(clock.elapsed().as_secs_f64());
+                let clock = std::time::Instant::now();
+                for c in lines.chunks(1024) {
+                    b.clear();
+                    t.trace_interleaved(bvh, c, &mut b);
+                }
+                interleaved = interleaved.min(clock.elapsed().as_secs_f64());
+                assert_eq!((a.offsets, a.crossings), (b.offsets, b.crossings), "{spec}");
+            }
+            let ns = |s: f64| s / n as f64 * 1e9;
+            eprintln!("{spec}: single walk {:.1} ns/line, interleaved {:.1} ns/line", ns(single), ns(interleaved));
+        }
+    }
 
     /// Lines grazing the scene's box (along a face, through an edge, just
     /// outside and just inside it) and global lines: the box test rejects

@@ -32,6 +32,7 @@
 //! [`Prepared`]). Design notes: `docs/TRACING.md`.
 
 mod cpu;
+mod interleave;
 mod node8;
 mod packet;
 mod reference;
@@ -136,6 +137,13 @@ pub trait Tracer: Send + Sync {
     /// # Errors
     /// Device failures only.
     fn occluded(&self, lines: &[Line], out: &mut Vec<bool>) -> Result<(), BackendError>;
+
+    /// How many lines a caller with many should hand in per call: enough to
+    /// amortise a call (a device submission), few enough that a CPU batch's
+    /// lines and crossings stay in cache beside the BVH.
+    fn batch_lines(&self) -> usize {
+        1 << 16
+    }
 }
 
 impl Line {

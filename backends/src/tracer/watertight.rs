@@ -17,6 +17,8 @@ pub(crate) struct Shear {
     pub(crate) org: Vec3A,
     pub(crate) k: [usize; 3],
     pub(crate) s: [f32; 3],
+    /// The origin along the axes `k`: `[org[kx], org[ky], org[kz]]`.
+    org_k: [f32; 3],
 }
 
 /// The raw result of the test: numerator of `t`, and the three edge
@@ -42,7 +44,12 @@ impl Shear {
         if dir[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
-        Self { org, k: [kx, ky, kz], s: [dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]] }
+        Self {
+            org,
+            k: [kx, ky, kz],
+            s: [dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]],
+            org_k: [org[kx], org[ky], org[kz]],
+        }
     }
 
     /// The shear constants of line `l`, with its direction for the BVH
@@ -55,36 +62,58 @@ impl Shear {
     pub(crate) fn of(l: &Line) -> (Self, Vec3A) {
         let org = Vec3A::from(Vec3::from(l.origin));
         let dir = Vec3A::from(Vec3::from(l.direction));
-        (Self::new(org, dir), dir + Vec3A::ZERO)
+        (Self::new(org, dir), walk_direction(l))
     }
 
     #[inline(always)]
     fn raw(&self, v: &[Vec3A; 3]) -> Option<Raw> {
+        let (r, crossed) = self.raw_always(v);
+        crossed.then_some(r)
+    }
+
+    /// [`Shear::raw`]'s numbers whether or not the line crosses, and whether
+    /// it does: no branch on the answer (only on exact zeros, which are rare).
+    #[inline(always)]
+    fn raw_always(&self, v: &[Vec3A; 3]) -> (Raw, bool) {
         let [kx, ky, kz] = self.k;
         let [sx, sy, sz] = self.s;
-        let (a, b, c) = (v[0] - self.org, v[1] - self.org, v[2] - self.org);
-        let (ax, ay) = (a[kx] - sx * a[kz], a[ky] - sy * a[kz]);
-        let (bx, by) = (b[kx] - sx * b[kz], b[ky] - sy * b[kz]);
-        let (cx, cy) = (c[kx] - sx * c[kz], c[ky] - sy * c[kz]);
+        let [ox, oy, oz] = self.org_k;
+        // `(v - org)[k]` component by component: each vertex coordinate is
+        // read at its index (no branch on the axes, which differ from line
+        // to line), the subtraction is the same IEEE operation.
+        let rel = |p: &Vec3A| {
+            let p: &[f32; 3] = p.as_ref();
+            (p[kx] - ox, p[ky] - oy, p[kz] - oz)
+        };
+        let (a, b, c) = (rel(&v[0]), rel(&v[1]), rel(&v[2]));
+        let (ax, ay) = (a.0 - sx * a.2, a.1 - sy * a.2);
+        let (bx, by) = (b.0 - sx * b.2, b.1 - sy * b.2);
+        let (cx, cy) = (c.0 - sx * c.2, c.1 - sy * c.2);
+        let (az, bz, cz) = (a.2, b.2, c.2);
         let mut u = cx * by - cy * bx;
         let mut w = bx * ay - by * ax;
         let mut vv = ax * cy - ay * cx;
-        if u == 0.0 || vv == 0.0 || w == 0.0 {
+        if (u == 0.0) | (vv == 0.0) | (w == 0.0) {
             // Exact edge cases: decide in double precision.
             let f = |p: f32, q: f32, r: f32, s: f32| (f64::from(p) * f64::from(q) - f64::from(r) * f64::from(s)) as f32;
             u = f(cx, by, cy, bx);
             vv = f(ax, cy, ay, cx);
             w = f(bx, ay, by, ax);
         }
-        if (u < 0.0 || vv < 0.0 || w < 0.0) && (u > 0.0 || vv > 0.0 || w > 0.0) {
-            return None;
-        }
         let det = u + vv + w;
-        if det == 0.0 {
-            return None;
-        }
-        let num = u * sz * a[kz] + vv * sz * b[kz] + w * sz * c[kz];
-        Some(Raw { num, w: [u, vv, w], det })
+        let outside = ((u < 0.0) | (vv < 0.0) | (w < 0.0)) & ((u > 0.0) | (vv > 0.0) | (w > 0.0));
+        let num = u * sz * az + vv * sz * bz + w * sz * cz;
+        (Raw { num, w: [u, vv, w], det }, !outside & (det != 0.0))
+    }
+
+    /// [`Shear::hit`] within `[tmin, tmax]` without a branch on the answer:
+    /// `t` (meaningful only when crossed) and whether the line crosses
+    /// there; the same `t` to the bit.
+    #[inline(always)]
+    pub(crate) fn hit_within(&self, v: &[Vec3A; 3], tmin: f32, tmax: f32) -> (f32, bool) {
+        let (r, crossed) = self.raw_always(v);
+        let t = r.num / r.det;
+        (t, crossed & (t >= tmin) & (t <= tmax))
     }
 
     /// Parameter `t` of the crossing with triangle `v`, if any. Watertight:
@@ -99,6 +128,13 @@ impl Shear {
     pub(crate) fn hit_barycentric(&self, v: &[Vec3A; 3]) -> Option<(f32, [f32; 2])> {
         self.raw(v).map(|r| (r.num / r.det, [r.w[1] / r.det, r.w[2] / r.det]))
     }
+}
+
+/// The direction of `l` as the BVH walk and [`push_crossing`] take it:
+/// negative zeros made positive (see [`Shear::of`]).
+#[inline]
+pub(crate) fn walk_direction(l: &Line) -> Vec3A {
+    Vec3A::from(Vec3::from(l.direction)) + Vec3A::ZERO
 }
 
 /// Records the crossing of line `l` with triangle `tri`, if any, within `[tmin, tmax]`.

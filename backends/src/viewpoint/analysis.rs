@@ -358,25 +358,42 @@ impl ViewpointAnalysis {
     }
 
     /// The mean of `js((π_x, π_y), x, y)` over each row's neighbours that see
-    /// the object, one task per viewpoint summing its neighbours in order, so
-    /// the values do not depend on the thread count.
+    /// the object, each row summing its neighbours in order, so the values
+    /// do not depend on the thread count. A pair that are each other's
+    /// neighbours is measured once: the merge is symmetric bit for bit
+    /// (the mixture `π_x p_x + π_y p_y` and each entry's two terms are
+    /// sums of two numbers, which commute in floating point), so reading
+    /// `(y, x)` from `(x, y)` changes no value.
     fn instability_by(
         &self,
         neighbours: &[Vec<usize>],
         js: impl Fn((f64, f64), usize, usize) -> Result<f64, Error> + Sync,
     ) -> Result<Vec<f64>, Error> {
-        let rows: Vec<f64> = (0..self.seen.len())
-            .into_par_iter()
-            .map(|x| {
-                let near: Vec<usize> = neighbours[self.seen[x]].iter().filter_map(|&u| self.row_of(u)).collect();
-                let mut s = 0.0;
-                for &y in &near {
-                    let t = self.p_v[x] + self.p_v[y];
-                    s += js((self.p_v[x] / t, self.p_v[y] / t), x, y)?;
-                }
-                Ok(if near.is_empty() { 0.0 } else { s / near.len() as f64 })
+        let near: Vec<Vec<usize>> = (0..self.seen.len())
+            .map(|x| neighbours[self.seen[x]].iter().filter_map(|&u| self.row_of(u)).collect())
+            .collect();
+        let mut pairs: Vec<(usize, usize)> =
+            near.iter().enumerate().flat_map(|(x, n)| n.iter().map(move |&y| (x.min(y), x.max(y)))).collect();
+        pairs.sort_unstable();
+        pairs.dedup();
+        let values: Vec<f64> = pairs
+            .par_iter()
+            .map(|&(x, y)| {
+                let t = self.p_v[x] + self.p_v[y];
+                js((self.p_v[x] / t, self.p_v[y] / t), x, y)
             })
             .collect::<Result<_, Error>>()?;
+        let rows: Vec<f64> = near
+            .iter()
+            .enumerate()
+            .map(|(x, near)| {
+                let mut s = 0.0;
+                for &y in near {
+                    s += pairs.binary_search(&(x.min(y), x.max(y))).map_or(f64::NAN, |k| values[k]);
+                }
+                if near.is_empty() { 0.0 } else { s / near.len() as f64 }
+            })
+            .collect();
         Ok(self.expand(&rows, f64::NAN))
     }
 }

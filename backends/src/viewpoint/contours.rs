@@ -96,12 +96,13 @@ pub(super) struct Contours {
     /// image coordinate.
     tiles: usize,
     per_unit: f64,
-    /// Tile `k`'s contours are `members[starts[k]..starts[k + 1]]`.
+    /// Tile `k`'s contours are `members[starts[k]..starts[k + 1]]`, each
+    /// with its projection copied in tile order (read in sequence by
+    /// [`Contours::crosses`]) and its index into `ends`.
     starts: Vec<u32>,
-    members: Vec<u32>,
-    /// Each contour's ends, in space and projected.
+    members: Vec<([Px; 2], u32)>,
+    /// Each contour's ends in space.
     ends: Vec<[DVec3; 2]>,
-    projected: Vec<[Px; 2]>,
     /// The two triangles of every manifold edge that is not a contour (of
     /// the edges considered).
     links: Vec<[u32; 2]>,
@@ -126,9 +127,9 @@ impl Contours {
             starts: Vec::new(),
             members: Vec::new(),
             ends: Vec::new(),
-            projected: Vec::new(),
             links: Vec::new(),
         };
+        let mut projected = Vec::new();
         for ((e, apex), owners) in edges.ends.iter().zip(&edges.apex).zip(&edges.owners) {
             if let (Some(h), Some([a, b])) = (hidden, owners)
                 && h[*a as usize]
@@ -142,14 +143,14 @@ impl Contours {
             });
             if fold {
                 c.ends.push(*e);
-                c.projected.push(e.map(|p| c.project(p)));
+                projected.push(e.map(|p| c.project(p)));
             } else if let Some([a, b]) = owners {
                 c.links.push([*a, *b]);
             }
         }
         // Bucket each contour into the tiles its bounding box touches
         // (counting, then filling, so the lists are in contour order).
-        let ranges: Vec<[usize; 4]> = c.projected.iter().map(|s| c.tile_range(s)).collect();
+        let ranges: Vec<[usize; 4]> = projected.iter().map(|s| c.tile_range(s)).collect();
         let mut count = vec![0u32; tiles * tiles + 1];
         for r in &ranges {
             for y in r[2]..=r[3] {
@@ -162,12 +163,12 @@ impl Contours {
             count[k] += count[k - 1];
         }
         let mut fill = count.clone();
-        c.members = vec![0; count[tiles * tiles] as usize];
+        c.members = vec![([(0.0, 0.0); 2], 0); count[tiles * tiles] as usize];
         for (i, r) in ranges.iter().enumerate() {
             for y in r[2]..=r[3] {
                 for x in r[0]..=r[1] {
                     let k = y * tiles + x;
-                    c.members[fill[k] as usize] = i as u32;
+                    c.members[fill[k] as usize] = (projected[i], i as u32);
                     fill[k] += 1;
                 }
             }
@@ -214,17 +215,30 @@ impl Contours {
     }
 
     /// Whether some contour edge not wholly behind the plane of `v` crosses
-    /// the interior of `v`'s projection (see the module docs).
+    /// the interior of `v`'s projection (see the module docs). A contour
+    /// whose projection's box lies strictly outside the projected
+    /// triangle's box cannot meet its interior and is passed over before
+    /// the exact test; `v`'s plane is made only for a contour that crosses.
     pub(super) fn crosses(&self, v: &[DVec3; 3]) -> bool {
         let proj = v.map(|p| self.project(p));
         let sign = edge(proj[0], proj[1], proj[2]).signum();
         if sign == 0.0 {
             return false;
         }
-        let n = (v[1] - v[0]).cross(v[2] - v[0]);
-        let eye_side = n.dot(self.eye - v[0]);
-        let tol = 1e-9 * n.length_squared().sqrt();
-        let behind = |p: DVec3| {
+        let lo = (proj[0].0.min(proj[1].0).min(proj[2].0), proj[0].1.min(proj[1].1).min(proj[2].1));
+        let hi = (proj[0].0.max(proj[1].0).max(proj[2].0), proj[0].1.max(proj[1].1).max(proj[2].1));
+        let outside = |s: &[Px; 2]| {
+            (s[0].0 < lo.0 && s[1].0 < lo.0)
+                || (s[0].0 > hi.0 && s[1].0 > hi.0)
+                || (s[0].1 < lo.1 && s[1].1 < lo.1)
+                || (s[0].1 > hi.1 && s[1].1 > hi.1)
+        };
+        let mut plane: Option<(DVec3, f64, f64)> = None;
+        let mut behind = |p: DVec3| {
+            let (n, eye_side, tol) = *plane.get_or_insert_with(|| {
+                let n = (v[1] - v[0]).cross(v[2] - v[0]);
+                (n, n.dot(self.eye - v[0]), 1e-9 * n.length_squared().sqrt())
+            });
             let d = n.dot(p - v[0]);
             d.abs() > tol && d * eye_side < 0.0
         };
@@ -237,11 +251,12 @@ impl Contours {
             }
             for x in r[0]..=r[1] {
                 let k = row + x;
-                for &i in &self.members[self.starts[k] as usize..self.starts[k + 1] as usize] {
-                    let i = i as usize;
-                    if crosses_interior(&proj, sign, self.projected[i])
-                        && !(behind(self.ends[i][0]) && behind(self.ends[i][1]))
-                    {
+                for (s, i) in &self.members[self.starts[k] as usize..self.starts[k + 1] as usize] {
+                    if outside(s) || !crosses_interior(&proj, sign, *s) {
+                        continue;
+                    }
+                    let e = &self.ends[*i as usize];
+                    if !(behind(e[0]) && behind(e[1])) {
                         return true;
                     }
                 }

@@ -227,6 +227,29 @@ fn components(n: usize, links: &[[u32; 2]], flagged: &[bool]) -> Vec<u32> {
     (0..n as u32).map(|x| root(&mut parent, x)).collect()
 }
 
+/// The unflagged triangles grouped by `label` (labels increasing, each
+/// group's triangles increasing): a counting sort, the order of a stable
+/// sort by label in linear time.
+fn by_label(label: &[u32], flag: &[bool]) -> Vec<u32> {
+    let mut starts = vec![0u32; label.len() + 1];
+    for (&l, &f) in label.iter().zip(flag) {
+        if !f {
+            starts[l as usize + 1] += 1;
+        }
+    }
+    for k in 1..starts.len() {
+        starts[k] += starts[k - 1];
+    }
+    let mut out = vec![0u32; starts[label.len()] as usize];
+    for (t, (&l, &f)) in label.iter().zip(flag).enumerate() {
+        if !f {
+            out[starts[l as usize] as usize] = t as u32;
+            starts[l as usize] += 1;
+        }
+    }
+    out
+}
+
 /// One view's visibility: which triangles are seen at their centroid
 /// (meaningful for the unflagged ones) and which may change across
 /// themselves (`flag`), with the visibility rays cast.
@@ -255,8 +278,7 @@ impl Visibility {
         let flag: Vec<bool> = tris.iter().zip(&shared.cuts).map(|(tri, &cut)| cut || first.crosses(tri)).collect();
         let label = components(n, first.links(), &flag);
         drop(first);
-        let mut members: Vec<u32> = (0..n as u32).filter(|&t| !flag[t as usize]).collect();
-        members.sort_by_key(|&t| label[t as usize]);
+        let members = by_label(&label, &flag);
         let mut vis = Self { visible: vec![false; n], flag, rays: 0 };
         let mut want = vec![false; n];
         for part in members.chunk_by(|a, b| label[*a as usize] == label[*b as usize]) {
@@ -679,6 +701,16 @@ fn refine_views(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn grouping_by_label_is_the_stable_sort() {
+        let label = [0, 1, 0, 3, 1, 0, 6, 3, 1];
+        let flag = [false, false, true, false, false, false, false, false, true];
+        let mut sorted: Vec<u32> = (0..9).filter(|&t| !flag[t as usize]).collect();
+        sorted.sort_by_key(|&t| label[t as usize]);
+        assert_eq!(by_label(&label, &flag), sorted);
+        assert_eq!(sorted, [0, 5, 1, 4, 3, 7, 6]);
+    }
 
     #[test]
     fn components_join_unflagged_triangles_by_smallest_index() {

@@ -176,27 +176,14 @@ fn process_chunk(
     (first, stride, count): (u64, u64, u64),
     radius: f64,
 ) -> Result<ChunkResult, CountsError> {
-    let mut lines = Vec::with_capacity(count as usize);
-    let mut origins = Vec::new();
     let seed = SeedHash::new(opts.seed);
-    for i in (0..count).map(|k| first + k * stride) {
-        if let Some(s) = sampler {
-            let (patch, x, n, l) = s.line(p, opts.seed, i);
-            origins.push((patch, x, n));
-            lines.push(l);
-        } else {
-            lines.push(global_line_of(seed, i, radius));
-        }
-    }
+    let batch = tracer.batch_lines().clamp(1, CHUNK as usize) as u64;
+    let mut lines = Vec::with_capacity(batch.min(count) as usize);
+    let mut origins = Vec::new();
     let mut buf = CrossingBuffer::default();
     // Local lines need only the first crossing past the origin: a closest-hit
     // query from just short of that threshold (see `first_past_origin`).
     let mut nearest: Vec<Option<Crossing>> = Vec::new();
-    if sampler.is_some() {
-        nearest = first_past_origin(tracer, &lines, &origins)?;
-    } else {
-        tracer.trace_all(&lines, &mut buf)?;
-    }
     let mut keys = Vec::new();
     let mut background = Vec::new();
     let mut endpoint = Endpoints::new(p.patches);
@@ -216,68 +203,88 @@ fn process_chunk(
     };
     let (mut segments, mut escaped) = (0, 0);
     let mut kept = Vec::new();
-    for (li, line) in lines.iter().enumerate() {
-        if let Some(&(from, _x, n)) = origins.get(li) {
-            // Local line: the nearest crossing past the origin, not on it.
-            let d = DVec3::from(line.direction.map(f64::from));
-            match nearest[li] {
-                Some(h) if h.cos < 0.0 => {
-                    keys.push(key(from, h.patch));
-                    let r = f64::from(h.t) - BACKOFF;
-                    sample(n.dot(d) * f64::from(-h.cos) / (std::f64::consts::PI * r * r), &[from], &mut endpoint);
-                    segments += 1;
-                }
-                _ => {
-                    background.push((from, 1));
-                    escaped += 1;
-                }
+    // Batches of the tracer's size: a CPU batch's lines and crossings stay
+    // in cache beside the BVH (the chunk's lines alone were 512 KB).
+    for b0 in (0..count).step_by(batch as usize) {
+        lines.clear();
+        origins.clear();
+        for i in (b0..count.min(b0 + batch)).map(|k| first + k * stride) {
+            if let Some(s) = sampler {
+                let (patch, x, n, l) = s.line(p, opts.seed, i);
+                origins.push((patch, x, n));
+                lines.push(l);
+            } else {
+                lines.push(global_line_of(seed, i, radius));
             }
-            continue;
         }
-        let hits = buf.line(li);
-        // Global line. Crossings less than 1e-6 apart that face both ways are
-        // a touch (the line grazes an edge or clips a corner by < 1e-6):
-        // whether it was in free space or not, it still is; drop the cluster.
-        kept.clear();
-        let mut a = 0;
-        while a < hits.len() {
-            let mut b = a + 1;
-            while b < hits.len() && hits[b].t - hits[b - 1].t <= 1e-6 {
-                b += 1;
-            }
-            let forward = hits[a].cos > 0.0;
-            if hits[a..b].iter().all(|h| (h.cos > 0.0) == forward) {
-                kept.push(hits[a]);
-            }
-            a = b;
+        if sampler.is_some() {
+            nearest = first_past_origin(tracer, &lines, &origins)?;
+        } else {
+            tracer.trace_all(&lines, &mut buf)?;
         }
-        let hits = &kept[..];
-        // Pair forward-facing crossings with the next backward-facing one.
-        let mut k = 0;
-        while k < hits.len() {
-            let h = hits[k];
-            if h.cos > 0.0 {
-                match hits.get(k + 1) {
-                    Some(g) if g.cos < 0.0 => {
-                        let r = f64::from(g.t - h.t);
-                        let f = f64::from(h.cos) * f64::from(-g.cos) / (std::f64::consts::PI * r * r);
-                        // Both directions (Part III Fig. 8): one unordered key.
-                        keys.push(sym_key(h.patch, g.patch));
-                        sample(f, &[h.patch, g.patch], &mut endpoint);
+        for (li, line) in lines.iter().enumerate() {
+            if let Some(&(from, _x, n)) = origins.get(li) {
+                // Local line: the nearest crossing past the origin, not on it.
+                let d = DVec3::from(line.direction.map(f64::from));
+                match nearest[li] {
+                    Some(h) if h.cos < 0.0 => {
+                        keys.push(key(from, h.patch));
+                        let r = f64::from(h.t) - BACKOFF;
+                        sample(n.dot(d) * f64::from(-h.cos) / (std::f64::consts::PI * r * r), &[from], &mut endpoint);
                         segments += 1;
-                        k += 2;
-                        continue;
                     }
                     _ => {
-                        background.push((h.patch, 1));
+                        background.push((from, 1));
                         escaped += 1;
                     }
                 }
-            } else {
-                background.push((h.patch, 1));
-                escaped += 1;
+                continue;
             }
-            k += 1;
+            let hits = buf.line(li);
+            // Global line. Crossings less than 1e-6 apart that face both ways are
+            // a touch (the line grazes an edge or clips a corner by < 1e-6):
+            // whether it was in free space or not, it still is; drop the cluster.
+            kept.clear();
+            let mut a = 0;
+            while a < hits.len() {
+                let mut b = a + 1;
+                while b < hits.len() && hits[b].t - hits[b - 1].t <= 1e-6 {
+                    b += 1;
+                }
+                let forward = hits[a].cos > 0.0;
+                if hits[a..b].iter().all(|h| (h.cos > 0.0) == forward) {
+                    kept.push(hits[a]);
+                }
+                a = b;
+            }
+            let hits = &kept[..];
+            // Pair forward-facing crossings with the next backward-facing one.
+            let mut k = 0;
+            while k < hits.len() {
+                let h = hits[k];
+                if h.cos > 0.0 {
+                    match hits.get(k + 1) {
+                        Some(g) if g.cos < 0.0 => {
+                            let r = f64::from(g.t - h.t);
+                            let f = f64::from(h.cos) * f64::from(-g.cos) / (std::f64::consts::PI * r * r);
+                            // Both directions (Part III Fig. 8): one unordered key.
+                            keys.push(sym_key(h.patch, g.patch));
+                            sample(f, &[h.patch, g.patch], &mut endpoint);
+                            segments += 1;
+                            k += 2;
+                            continue;
+                        }
+                        _ => {
+                            background.push((h.patch, 1));
+                            escaped += 1;
+                        }
+                    }
+                } else {
+                    background.push((h.patch, 1));
+                    escaped += 1;
+                }
+                k += 1;
+            }
         }
     }
     keys.sort_unstable();

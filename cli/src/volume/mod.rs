@@ -175,6 +175,15 @@ fn check_combinations(o: &VolumeOptions) -> Result<(), CliError> {
     Ok(())
 }
 
+/// The files `names` in `--out` (none without it), each checked writable
+/// before any work; `run` removes the folder it made if the run then fails,
+/// so this does not use `output::out_files` (which only undoes failed checks).
+fn out_paths(o: &VolumeOptions, names: &[&str]) -> Result<Vec<PathBuf>, CliError> {
+    let paths: Vec<PathBuf> = o.out.as_ref().map_or_else(Vec::new, |d| names.iter().map(|n| d.join(n)).collect());
+    paths.iter().try_for_each(|p| crate::output::check("--out", p))?;
+    Ok(paths)
+}
+
 #[allow(clippy::too_many_lines)]
 fn run_in(
     o: &VolumeOptions,
@@ -184,10 +193,7 @@ fn run_in(
     unit: Option<&'static str>,
 ) -> Result<Report, CliError> {
     shard::check(o)?;
-    let outputs: Vec<PathBuf> = o.out.as_ref().map_or_else(Vec::new, |d| PICTURES.iter().map(|n| d.join(n)).collect());
-    for p in &outputs {
-        crate::output::check("--out", p)?;
-    }
+    let outputs = out_paths(o, &PICTURES)?;
     let volume = load(o, spec)?;
     let focus = o.focus.as_deref().map(|f| focus(&volume, f)).transpose()?;
     let between =

@@ -10,7 +10,7 @@
 //!   total VMI with the camera turning at most `--max-turn` between two
 //!   frames (exact dynamic programming, `volume::paths::dynamic_path`).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use glam::DVec3;
@@ -166,11 +166,7 @@ pub(super) fn run(
     base: itgfx_core::Base,
     unit: Option<&'static str>,
 ) -> Result<Report, CliError> {
-    let outputs: Vec<PathBuf> =
-        o.out.as_ref().map_or_else(Vec::new, |d| SERIES_FILES.iter().map(|n| d.join(n)).collect());
-    for p in &outputs {
-        crate::output::check("--out", p)?;
-    }
+    let outputs = super::out_paths(o, &SERIES_FILES)?;
     let frames = frames(o, spec)?;
     let range = common_range(&frames);
     if range.0 >= range.1 {

@@ -29,7 +29,12 @@ fn edge(a: Px, b: Px, q: Px) -> f64 {
 /// The edges of a mesh, each with the third vertices of its two triangles
 /// (`None` for a boundary or non-manifold edge: always a contour).
 pub(super) struct MeshEdges {
+    /// Each triangle's vertex ids, and each vertex once: a view projects
+    /// every vertex once ([`Contours::new`]), not once per triangle.
+    corners: Vec<[u32; 3]>,
+    vertices: Vec<DVec3>,
     ends: Vec<[DVec3; 2]>,
+    end_ids: Vec<[u32; 2]>,
     apex: Vec<Option<[DVec3; 2]>>,
     /// The triangles of each edge (one repeated for a boundary edge; `None`
     /// for a non-manifold edge).
@@ -60,10 +65,17 @@ impl MeshEdges {
             }
         }
         all.sort_unstable();
-        let (mut ends, mut apex, mut owners) = (Vec::new(), Vec::new(), Vec::new());
+        let mut vertices = vec![DVec3::ZERO; ids.len()];
+        for (t, v) in vid.iter().enumerate() {
+            for c in 0..3 {
+                vertices[v[c] as usize] = tris[t][c];
+            }
+        }
+        let (mut ends, mut end_ids, mut apex, mut owners) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for run in all.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)) {
             let (t, c) = (run[0].2 as usize, usize::from(run[0].3));
             ends.push([tris[t][(c + 1) % 3], tris[t][(c + 2) % 3]]);
+            end_ids.push([vid[t][(c + 1) % 3], vid[t][(c + 2) % 3]]);
             apex.push(match run {
                 [x, y] if x.2 != y.2 => {
                     Some([tris[x.2 as usize][usize::from(x.3)], tris[y.2 as usize][usize::from(y.3)]])
@@ -76,7 +88,12 @@ impl MeshEdges {
                 _ => None,
             });
         }
-        Self { ends, apex, owners }
+        Self { corners: vid, vertices, ends, end_ids, apex, owners }
+    }
+
+    /// Vertex ids of triangle `t` (what [`Contours::crosses`] takes).
+    pub(super) fn corners(&self, t: usize) -> [u32; 3] {
+        self.corners[t]
     }
 }
 
@@ -96,13 +113,16 @@ pub(super) struct Contours {
     /// image coordinate.
     tiles: usize,
     per_unit: f64,
+    /// Every vertex of the mesh projected (by [`MeshEdges`] id).
+    points: Vec<Px>,
     /// Tile `k`'s contours are `members[starts[k]..starts[k + 1]]`, each
-    /// with its projection copied in tile order (read in sequence by
-    /// [`Contours::crosses`]) and its index into `ends`.
+    /// with its projection's box `[x0, x1, y0, y1]` copied in tile order
+    /// (read in sequence by [`Contours::crosses`]) and its index.
     starts: Vec<u32>,
-    members: Vec<([Px; 2], u32)>,
-    /// Each contour's ends in space.
+    members: Vec<([f64; 4], u32)>,
+    /// Each contour's ends, in space and projected.
     ends: Vec<[DVec3; 2]>,
+    projected: Vec<[Px; 2]>,
     /// The two triangles of every manifold edge that is not a contour (of
     /// the edges considered).
     links: Vec<[u32; 2]>,
@@ -124,13 +144,15 @@ impl Contours {
             up,
             tiles,
             per_unit: 0.5 * tiles as f64 / cone,
+            points: Vec::new(),
             starts: Vec::new(),
             members: Vec::new(),
             ends: Vec::new(),
+            projected: Vec::new(),
             links: Vec::new(),
         };
-        let mut projected = Vec::new();
-        for ((e, apex), owners) in edges.ends.iter().zip(&edges.apex).zip(&edges.owners) {
+        c.points = edges.vertices.iter().map(|&p| c.project(p)).collect();
+        for (((e, ids), apex), owners) in edges.ends.iter().zip(&edges.end_ids).zip(&edges.apex).zip(&edges.owners) {
             if let (Some(h), Some([a, b])) = (hidden, owners)
                 && h[*a as usize]
                 && h[*b as usize]
@@ -143,14 +165,14 @@ impl Contours {
             });
             if fold {
                 c.ends.push(*e);
-                projected.push(e.map(|p| c.project(p)));
+                c.projected.push(ids.map(|k| c.points[k as usize]));
             } else if let Some([a, b]) = owners {
                 c.links.push([*a, *b]);
             }
         }
         // Bucket each contour into the tiles its bounding box touches
         // (counting, then filling, so the lists are in contour order).
-        let ranges: Vec<[usize; 4]> = projected.iter().map(|s| c.tile_range(s)).collect();
+        let ranges: Vec<[usize; 4]> = c.projected.iter().map(|s| c.tile_range(s)).collect();
         let mut count = vec![0u32; tiles * tiles + 1];
         for r in &ranges {
             for y in r[2]..=r[3] {
@@ -163,12 +185,13 @@ impl Contours {
             count[k] += count[k - 1];
         }
         let mut fill = count.clone();
-        c.members = vec![([(0.0, 0.0); 2], 0); count[tiles * tiles] as usize];
+        c.members = vec![([0.0; 4], 0); count[tiles * tiles] as usize];
         for (i, r) in ranges.iter().enumerate() {
             for y in r[2]..=r[3] {
                 for x in r[0]..=r[1] {
                     let k = y * tiles + x;
-                    c.members[fill[k] as usize] = (projected[i], i as u32);
+                    let [a, b] = c.projected[i];
+                    c.members[fill[k] as usize] = ([a.0.min(b.0), a.0.max(b.0), a.1.min(b.1), a.1.max(b.1)], i as u32);
                     fill[k] += 1;
                 }
             }
@@ -219,20 +242,17 @@ impl Contours {
     /// whose projection's box lies strictly outside the projected
     /// triangle's box cannot meet its interior and is passed over before
     /// the exact test; `v`'s plane is made only for a contour that crosses.
-    pub(super) fn crosses(&self, v: &[DVec3; 3]) -> bool {
-        let proj = v.map(|p| self.project(p));
+    /// `corners` are `v`'s vertex ids ([`MeshEdges::corners`]).
+    pub(super) fn crosses(&self, corners: [u32; 3], v: &[DVec3; 3]) -> bool {
+        let proj = corners.map(|k| self.points[k as usize]);
         let sign = edge(proj[0], proj[1], proj[2]).signum();
         if sign == 0.0 {
             return false;
         }
         let lo = (proj[0].0.min(proj[1].0).min(proj[2].0), proj[0].1.min(proj[1].1).min(proj[2].1));
         let hi = (proj[0].0.max(proj[1].0).max(proj[2].0), proj[0].1.max(proj[1].1).max(proj[2].1));
-        let outside = |s: &[Px; 2]| {
-            (s[0].0 < lo.0 && s[1].0 < lo.0)
-                || (s[0].0 > hi.0 && s[1].0 > hi.0)
-                || (s[0].1 < lo.1 && s[1].1 < lo.1)
-                || (s[0].1 > hi.1 && s[1].1 > hi.1)
-        };
+        // Without branches: most members fail, unpredictably.
+        let outside = |b: &[f64; 4]| (b[1] < lo.0) | (b[0] > hi.0) | (b[3] < lo.1) | (b[2] > hi.1);
         let mut plane: Option<(DVec3, f64, f64)> = None;
         let mut behind = |p: DVec3| {
             let (n, eye_side, tol) = *plane.get_or_insert_with(|| {
@@ -251,8 +271,8 @@ impl Contours {
             }
             for x in r[0]..=r[1] {
                 let k = row + x;
-                for (s, i) in &self.members[self.starts[k] as usize..self.starts[k + 1] as usize] {
-                    if outside(s) || !crosses_interior(&proj, sign, *s) {
+                for (b, i) in &self.members[self.starts[k] as usize..self.starts[k + 1] as usize] {
+                    if outside(b) || !crosses_interior(&proj, sign, self.projected[*i as usize]) {
                         continue;
                     }
                     let e = &self.ends[*i as usize];
@@ -401,13 +421,15 @@ mod tests {
         // In the folded pair the lower triangle is crossed by the upper one's
         // rim edges in front of it; the upper one, in front, by none.
         let tris = d(&folded);
-        let c = Contours::new(&MeshEdges::new(&folded, &tris), eye, 8, None);
-        assert!(c.crosses(&tris[0]));
-        assert!(!c.crosses(&tris[1]));
+        let edges = MeshEdges::new(&folded, &tris);
+        let c = Contours::new(&edges, eye, 8, None);
+        assert!(c.crosses(edges.corners(0), &tris[0]));
+        assert!(!c.crosses(edges.corners(1), &tris[1]));
         // Flat: nothing crosses either.
         let tris = d(&flat);
-        let c = Contours::new(&MeshEdges::new(&flat, &tris), eye, 8, None);
-        assert!(!c.crosses(&tris[0]) && !c.crosses(&tris[1]));
+        let edges = MeshEdges::new(&flat, &tris);
+        let c = Contours::new(&edges, eye, 8, None);
+        assert!(!c.crosses(edges.corners(0), &tris[0]) && !c.crosses(edges.corners(1), &tris[1]));
     }
 
     #[test]

@@ -18,13 +18,17 @@ use super::{ViewpointAnalysis, ViewpointMeasures};
 struct Merged<'a> {
     an: &'a ViewpointAnalysis,
     m: Vec<f64>,
+    /// `m_o ln(m_o/p(o))` of every output, kept so that each candidate's
+    /// [`Merged::kl_with`] reads its rows' old terms instead of taking
+    /// their logarithms again (the same values).
+    terms: Vec<f64>,
     w: f64,
     a: f64,
 }
 
 impl<'a> Merged<'a> {
     fn new(an: &'a ViewpointAnalysis) -> Self {
-        Self { an, m: vec![0.0; an.outputs()], w: 0.0, a: 0.0 }
+        Self { an, m: vec![0.0; an.outputs()], terms: vec![0.0; an.outputs()], w: 0.0, a: 0.0 }
     }
 
     fn term(m: f64, q: f64) -> f64 {
@@ -39,7 +43,7 @@ impl<'a> Merged<'a> {
         let (mut a_out, mut m_out, mut inside) = (self.a, self.w, 0.0);
         for (&o, &q) in cols.iter().zip(p) {
             let (mo, po) = (self.m[o as usize], self.an.p_o[o as usize]);
-            a_out -= Self::term(mo, po);
+            a_out -= self.terms[o as usize];
             m_out -= mo;
             let mn = (mo + pv * q) / w2;
             inside += Self::term(mn, po);
@@ -55,7 +59,10 @@ impl<'a> Merged<'a> {
         }
         self.w += pv;
         // Recomputed in full: no drift from incremental updates.
-        self.a = self.m.iter().zip(&self.an.p_o).map(|(&m, &q)| Self::term(m, q)).sum();
+        for ((t, &m), &q) in self.terms.iter_mut().zip(&self.m).zip(&self.an.p_o) {
+            *t = Self::term(m, q);
+        }
+        self.a = self.terms.iter().sum();
     }
 
     fn kl(&self) -> f64 {

@@ -275,7 +275,12 @@ impl Visibility {
         let (tris, n) = (&shared.tris, shared.tris.len());
         let tiles = contour_tiles(n);
         let first = Contours::new(&shared.edges, eye, tiles, None);
-        let flag: Vec<bool> = tris.iter().zip(&shared.cuts).map(|(tri, &cut)| cut || first.crosses(tri)).collect();
+        let flag: Vec<bool> = tris
+            .iter()
+            .zip(&shared.cuts)
+            .enumerate()
+            .map(|(t, (tri, &cut))| cut || first.crosses(shared.edges.corners(t), tri))
+            .collect();
         let label = components(n, first.links(), &flag);
         drop(first);
         let members = by_label(&label, &flag);
@@ -302,7 +307,7 @@ impl Visibility {
             let hidden: Vec<bool> = vis.flag.iter().zip(&vis.visible).map(|(&f, &v)| !f && !v).collect();
             let contours = Contours::new(&shared.edges, eye, tiles, Some(&hidden));
             for t in 0..n {
-                if vis.flag[t] && !shared.cuts[t] && !contours.crosses(&tris[t]) {
+                if vis.flag[t] && !shared.cuts[t] && !contours.crosses(shared.edges.corners(t), &tris[t]) {
                     vis.flag[t] = false;
                     want[t] = true;
                 }

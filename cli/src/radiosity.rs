@@ -56,6 +56,12 @@ pub struct RadiosityOptions {
     /// Random point pairs (lines) per link evaluation, N_s (tutorial: 10)
     #[arg(long, value_name = "N", default_value = "10", value_parser = samples)]
     pub samples: u32,
+    /// Samples per final link's transport estimate (default: --samples); the mesh is unchanged by it
+    #[arg(long, value_name = "N", value_parser = samples)]
+    pub transport_samples: Option<u32>,
+    /// Final links gather the radiosity of the source leaf each transport sample lands on (fine meshes)
+    #[arg(long)]
+    pub shares: bool,
     /// Smallest element as a fraction of the total area (RenderPark: 1e-6)
     #[arg(long, value_name = "F", default_value = "1e-6", value_parser = min_area)]
     pub min_area: f64,
@@ -351,6 +357,8 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
         oracle: o.oracle,
         epsilon: o.epsilon.unwrap_or(1e-3),
         samples: o.samples,
+        transport_samples: o.transport_samples.unwrap_or(o.samples),
+        shares: o.shares,
         seed: o.seed,
         min_area: o.min_area,
         max_elements: o.max_elements,
@@ -388,6 +396,7 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
     r.count("link_shares", solution.shares.len() as u64);
     r.count("base_level", u64::from(o.base_level));
     r.count("samples_per_link", u64::from(o.samples)).count("link_evaluations", solution.evaluations);
+    r.count("transport_samples_per_link", u64::from(o.transport_samples.unwrap_or(o.samples)));
     r.count("rays", solution.rays).count("transport_rays", solution.transport_rays);
     r.count("oracle_only_rays", solution.rays - solution.transport_rays);
     r.count("passes", u64::from(solution.passes)).count("iterations", u64::from(solution.sweeps));

@@ -147,6 +147,7 @@ fn bad_input_is_one_line_and_exit_2() {
     assert!(e.contains("polygons"), "{e}");
     failure(&itgfx(&["radiosity", "cornell-box", "--elements", "100", "--epsilon", "1e-3"]));
     failure(&itgfx(&["radiosity", "cornell-box", "--samples", "1"]));
+    failure(&itgfx(&["radiosity", "cornell-box", "--transport-samples", "1"]));
     failure(&itgfx(&["radiosity", "cornell-box", "--epsilon", "nan"]));
     // A negative threshold is a value out of range, not an unknown option "-1".
     let e = failure(&itgfx(&["radiosity", "cornell-box", "--epsilon", "-1"]));
@@ -214,4 +215,29 @@ fn check_paths_sets_every_patch_against_the_renderers_path_tracer() {
     let csv = std::fs::read_to_string(dir.join("patches.csv")).unwrap();
     assert_eq!(csv.lines().count(), 18, "a header and a row per patch");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `--transport-samples` re-estimates only the final links: the same mesh
+/// (refinement reads `--samples` alone), more transport rays, the same
+/// numbers for any thread count, and power still balanced.
+#[test]
+fn transport_samples_keep_the_mesh_and_only_add_transport_rays() {
+    let run = |extra: &[&str]| {
+        let mut a = vec!["radiosity", "cornell-box", "--oracle", "kl", "--epsilon", "1e-3", "--size", "16", "--json"];
+        a.extend_from_slice(extra);
+        json(&itgfx(&a))
+    };
+    let (plain, more) = (run(&[]), run(&["--transport-samples", "30", "--shares"]));
+    assert_eq!(plain["elements"], more["elements"], "same mesh");
+    assert_eq!(more["transport_samples_per_link"].as_u64(), Some(30));
+    assert_eq!(plain["transport_samples_per_link"].as_u64(), Some(10));
+    let rays = |v: &serde_json::Value| v["transport_rays"].as_u64().unwrap();
+    assert!(rays(&more) > 2 * rays(&plain), "{} vs {}", rays(&more), rays(&plain));
+    assert!(more["link_shares"].as_u64().unwrap() > 0, "links from split sources keep shares");
+    assert!((more["balance"].as_f64().unwrap() - 1.0).abs() < 0.005, "{more}");
+    assert_eq!(plain["link_shares"].as_u64(), Some(0), "no shares unless asked");
+    let one = run(&["--transport-samples", "30", "--shares", "--threads", "1"]);
+    for k in ["elements", "links", "link_shares", "power_absorbed", "transport_rays"] {
+        assert_eq!(one[k], more[k], "{k}: any thread count");
+    }
 }

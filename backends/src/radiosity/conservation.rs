@@ -169,6 +169,11 @@ fn a_closed_scene_absorbs_what_it_emits_within_half_a_percent() {
             );
             assert!(s.leaves().len() > 300, "refined: {} leaves", s.leaves().len());
             assert!((balance(&s) - 1.0).abs() < 0.005, "block at {y}, seed {seed}: {}", balance(&s));
+            // With shares (each transport sample gathers its source leaf's
+            // radiosity; the weights count each share at its leaf).
+            let shared = solve(&scene, &p, &t, &Settings { shares: true, ..settings }).unwrap();
+            eprintln!("  with shares: balance {}", balance(&shared));
+            assert!((balance(&shared) - 1.0).abs() < 0.005, "shares, block at {y}, seed {seed}: {}", balance(&shared));
         }
     }
 }

@@ -98,7 +98,8 @@ type LinkShares = (Link, Vec<Share>);
 /// Lines per tracer call.
 const BATCH: usize = 8192;
 
-/// Pairs evaluated at once: their transient samples and segments (about
+/// Pairs evaluated at once at `N_s ≤ 10`, fewer in proportion above (see
+/// [`Sampler::chunk`]): their transient samples and segments (about
 /// 1.9 kB a pair at `N_s = 10`) were the whole run's peak memory when every
 /// final link was re-estimated in one batch (14.2 GiB at 8.1M links). Each
 /// pair draws from its own stream, so the chunking changes no number.
@@ -152,7 +153,7 @@ impl Sampler<'_> {
         let mut links = Vec::with_capacity(pairs.len());
         let mut shares = Vec::new();
         let mut rays = 0;
-        for chunk in pairs.chunks(PAIRS_PER_CHUNK) {
+        for chunk in pairs.chunks(self.chunk()) {
             let (l, r) = self.evaluate_chunk(h, chunk, stage)?;
             for (link, s) in l {
                 links.push(link);
@@ -161,6 +162,12 @@ impl Sampler<'_> {
             rays += r;
         }
         Ok((links, shares, rays))
+    }
+
+    /// Pairs per chunk: [`PAIRS_PER_CHUNK`] scaled by `10 / N_s` above 10
+    /// samples, so a chunk's transient memory stays about 125 MB.
+    fn chunk(&self) -> usize {
+        (PAIRS_PER_CHUNK * 10 / (self.samples as usize).max(10)).max(1)
     }
 
     /// [`Self::evaluate`] on one chunk of pairs: the samples, segments and

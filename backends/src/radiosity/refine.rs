@@ -34,6 +34,16 @@ pub struct Settings {
     pub epsilon: f64,
     /// Random point pairs per link evaluation, `N_s` (10 in the tutorial).
     pub samples: u32,
+    /// Samples per final link's transport estimate (its form factor and
+    /// shares); 0: `samples`. Refinement (the oracles' `N_s`) is unchanged
+    /// by it, so the mesh is the same; what changes is the Monte Carlo
+    /// error of the final links.
+    pub transport_samples: u32,
+    /// Final links from split sources gather the radiosity of the leaf each
+    /// transport sample lands on (`link::Share`) instead of the source's
+    /// mean. Off by default: the conservation weights then rest on per-leaf
+    /// sample counts, too noisy on coarse meshes (docs/RADIOSITY.md).
+    pub shares: bool,
     /// Seed of every random point pair.
     pub seed: u64,
     /// Smallest element area as a fraction of the total (RenderPark: 1e-6).
@@ -66,6 +76,8 @@ impl Default for Settings {
             oracle: Oracle::Power,
             epsilon: 1e-3,
             samples: 10,
+            transport_samples: 0,
+            shares: false,
             seed: 1,
             min_area: 1e-6,
             max_elements: 2_000_000,
@@ -388,9 +400,15 @@ pub fn solve(
     // solution came out a few per cent dark, absorbing less than it emits).
     // The transported form factors are re-estimated from an independent
     // stream of point pairs, so the decision does not select the estimate.
-    let transport = Sampler { seed: transport_seed(settings.seed), ..sampler };
+    let samples = if settings.transport_samples > 0 { settings.transport_samples } else { settings.samples };
+    let transport = Sampler { seed: transport_seed(settings.seed), samples, ..sampler };
     let pairs: Vec<(ElementId, ElementId)> = links.iter().map(|l| (l.receiver, l.source)).collect();
-    let (fresh, parts, r) = transport.evaluate_shared(&h, &pairs, Stage::Transport)?;
+    let (fresh, parts, r) = if settings.shares {
+        transport.evaluate_shared(&h, &pairs, Stage::Transport)?
+    } else {
+        let (l, r) = transport.evaluate(&h, &pairs, Stage::Transport)?;
+        (l, Vec::new(), r)
+    };
     rays += r;
     evaluations += pairs.len() as u64;
     links = fresh;

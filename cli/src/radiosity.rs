@@ -68,7 +68,7 @@ pub struct RadiosityOptions {
     /// Split every polygon L times (4^L elements each) before the first links
     #[arg(long, value_name = "L", default_value = "0", value_parser = base_level)]
     pub base_level: u32,
-    /// Stop refining at this many elements (memory grows with the links: 0.44 GiB measured at 67k elements, 1.05 GiB at 114k)
+    /// Stop refining at this many elements (memory grows with the links: 0.44 GiB measured at 67k elements, 1.05 GiB at 114k, default samples, no --shares; --shares adds 8 bytes per share, at most min(transport samples, source leaves) per link)
     #[arg(long, value_name = "N", default_value = "200000", value_parser = max_elements)]
     pub max_elements: usize,
     /// Seed; same seed, same mesh and numbers, any thread count

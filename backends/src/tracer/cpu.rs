@@ -215,9 +215,14 @@ impl CpuTracer {
     /// sorted and merged as the single walk's are.
     #[cfg(target_arch = "x86_64")]
     fn trace_interleaved(&self, bvh: &CwBvh, lines: &[Line], out: &mut CrossingBuffer) {
+        if !self.avx2 {
+            // The interleaved walk needs AVX2; the single walk finds the same crossings.
+            self.trace_single(lines, out);
+            return;
+        }
         let mut raw = Vec::with_capacity(lines.len() * 2);
         let take = |l: &Line| !line_misses_box(Vec3A::from(l.origin), Vec3A::from(l.direction), self.bounds);
-        // SAFETY: `self.avx2` came from `has_avx2()`.
+        // SAFETY: checked just above: `self.avx2` is true, and it came from `has_avx2()`.
         unsafe { interleave::trace(bvh, &self.ordered, lines, take, &mut raw) };
         let mut start = vec![0u32; lines.len() + 1];
         for &(li, _, _) in &raw {
@@ -305,6 +310,7 @@ mod tests {
     /// the reference's), bit for bit, on scenes with shared edges,
     /// occluders, open edges and thin parts, for global lines and lines
     /// grazing the box.
+    #[cfg(target_arch = "x86_64")]
     #[test]
     fn interleaved_walks_find_the_single_walks_crossings() {
         if !node8::has_avx2() {
@@ -345,6 +351,7 @@ mod tests {
     /// Time per global line of the single and the interleaved walk (best
     /// of 8), which must find the same crossings: a timing for
     /// `docs/TRACING.md`, run with `--release --ignored --nocapture`.
+    #[cfg(target_arch = "x86_64")]
     #[test]
     #[ignore = "timing"]
     fn interleaved_timing() {

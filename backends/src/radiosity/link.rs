@@ -130,10 +130,7 @@ impl Sampler<'_> {
         pairs: &[(ElementId, ElementId)],
         stage: Stage,
     ) -> Result<(Vec<Link>, u64), BackendError> {
-        let (mut links, _, rays) = self.evaluate_shared(h, pairs, stage)?;
-        for l in &mut links {
-            l.shares = 0;
-        }
+        let (links, _, rays) = self.evaluate_with(h, pairs, stage, false)?;
         Ok((links, rays))
     }
 
@@ -150,11 +147,24 @@ impl Sampler<'_> {
         pairs: &[(ElementId, ElementId)],
         stage: Stage,
     ) -> Result<(Vec<Link>, Vec<Share>, u64), BackendError> {
+        self.evaluate_with(h, pairs, stage, true)
+    }
+
+    /// [`Self::evaluate_shared`], the source leaves under the samples looked
+    /// up only when `want_shares` (the default solve drops them: no tree
+    /// descent per sample, no share lists built for nothing).
+    fn evaluate_with(
+        &self,
+        h: &Hierarchy,
+        pairs: &[(ElementId, ElementId)],
+        stage: Stage,
+        want_shares: bool,
+    ) -> Result<(Vec<Link>, Vec<Share>, u64), BackendError> {
         let mut links = Vec::with_capacity(pairs.len());
         let mut shares = Vec::new();
         let mut rays = 0;
         for chunk in pairs.chunks(self.chunk()) {
-            let (l, r) = self.evaluate_chunk(h, chunk, stage)?;
+            let (l, r) = self.evaluate_chunk(h, chunk, stage, want_shares)?;
             for (link, s) in l {
                 links.push(link);
                 shares.extend(s);
@@ -178,8 +188,10 @@ impl Sampler<'_> {
         h: &Hierarchy,
         pairs: &[(ElementId, ElementId)],
         stage: Stage,
+        want_shares: bool,
     ) -> Result<(Vec<LinkShares>, u64), BackendError> {
-        let per_pair: Vec<PairSamples> = pairs.par_iter().map(|&(i, j)| self.unoccluded(h, i, j, stage)).collect();
+        let per_pair: Vec<PairSamples> =
+            pairs.par_iter().map(|&(i, j)| self.unoccluded(h, i, j, stage, want_shares)).collect();
         let mut lines = Vec::new();
         let mut owner = Vec::new();
         for (p, ps) in per_pair.iter().enumerate() {
@@ -265,7 +277,7 @@ impl Sampler<'_> {
     /// counted by area rather than weighted by the kernel: an inconsistent
     /// estimate (14 % low for a floor under a floating block, whatever
     /// `N_s`).
-    fn unoccluded(&self, h: &Hierarchy, i: ElementId, j: ElementId, stage: Stage) -> PairSamples {
+    fn unoccluded(&self, h: &Hierarchy, i: ElementId, j: ElementId, stage: Stage, want_shares: bool) -> PairSamples {
         let (ei, ej) = (&h.elements[i as usize], &h.elements[j as usize]);
         let n = self.samples as usize;
         let rng = LineRng::new(self.seed, (u64::from(i) << 32) | u64::from(j));
@@ -278,7 +290,7 @@ impl Sampler<'_> {
             rays: Vec::new(),
             leaf: Vec::new(),
         };
-        let split = stage == Stage::Transport && ej.children.is_some();
+        let split = want_shares && stage == Stage::Transport && ej.children.is_some();
         if split {
             out.leaf = vec![j; n];
         }

@@ -20,7 +20,9 @@ use crate::values::{
     version,
     about = "itgfx — information theory for computer graphics",
     after_help = "Every command accepts --json (one JSON object on stdout); those that report information measures take --base 2|e|10.\n\
-                  Errors are one line on stderr and exit code 2.",
+                  Errors are one line on stderr: exit code 2 for a usage error (bad options or input, refused before any work), \
+                  1 for a failure on the way (an output or standard output that could not be written). \
+                  Output files are written all or none, at the end of the run.",
     arg_required_else_help = true
 )]
 pub struct Cli {

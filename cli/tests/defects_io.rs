@@ -19,3 +19,73 @@ fn renyi_and_tsallis_next_to_one() {
     let s = v["tsallis_entropy"].as_f64().unwrap();
     assert!((s - 4f64.ln()).abs() < 1e-12, "{s}");
 }
+
+/// Exit code `code` and one line on stderr containing `needle`.
+fn fails_with(args: &[&str], code: i32, needle: &str) {
+    let out = itgfx(args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(code), "{args:?}: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: one line: {err}");
+    assert!(err.contains(needle), "{args:?}: {err:?} lacks {needle:?}");
+}
+
+fn sh(script: &str) -> std::process::Output {
+    std::process::Command::new("sh").args(["-c", script, "sh", env!("CARGO_BIN_EXE_itgfx")]).output().expect("run sh")
+}
+
+/// A write error on stdout was ignored (`> /dev/full` exited 0, silent):
+/// one line and exit 1, for a report and for `--help`; a closed pipe
+/// (`| head`) ends the run quietly.
+#[test]
+fn stdout_write_errors_are_reported() {
+    for args in ["measure entropy 0.5 0.5", "measure entropy 0.5 0.5 --json", "--help", "complexity --help"] {
+        let out = sh(&format!("\"$1\" {args} > /dev/full"));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args}: {err}");
+        assert!(err.contains("standard output") && err.contains("No space left"), "{args}: {err}");
+    }
+    // A reader that closed the pipe before the write (EPIPE): no message, success.
+    for args in ["measure entropy 0.5 0.5", "--help"] {
+        let out = std::process::Command::new("bash")
+            .args(["-c", &format!("{{ sleep 0.3; \"$1\" {args}; }} | true; echo ${{PIPESTATUS[0]}}"), "bash"])
+            .arg(env!("CARGO_BIN_EXE_itgfx"))
+            .output()
+            .unwrap();
+        assert_eq!(String::from_utf8_lossy(&out.stdout).trim(), "0", "{args}");
+        assert!(out.stderr.is_empty(), "{args}: {}", String::from_utf8_lossy(&out.stderr));
+    }
+}
+
+/// An output that fails at the end left the others written: `--export-ply
+/// good.ply --image /dev/full` left good.ply, `viewpoints --out D
+/// --ao-image /dev/full` wrote five PNGs. Now all or none, and D (made by
+/// the run) goes again.
+#[test]
+fn outputs_are_all_or_none() {
+    let d = temp("defio", "all-or-none");
+    let good = d.join("good.ply");
+    fails_with(
+        &["complexity", "cube", "--lines", "1000", "--export-ply", s(&good), "--image", "/dev/full"],
+        1,
+        "/dev/full",
+    );
+    assert!(!good.exists(), "good.ply left behind");
+    let v = d.join("v");
+    fails_with(&["viewpoints", "cube", "--out", s(&v), "--ao-image", "/dev/full"], 1, "/dev/full");
+    assert!(!v.exists(), "the --out directory made by the run is left: {:?}", std::fs::read_dir(&v).map(|r| r.count()));
+    // A directory that was there stays, empty, with no temporary in it.
+    std::fs::create_dir(&v).unwrap();
+    fails_with(&["viewpoints", "cube", "--out", s(&v), "--ao-image", "/dev/full"], 1, "/dev/full");
+    assert_eq!(std::fs::read_dir(&v).unwrap().count(), 0);
+    // Stdout failing after the files were made: no file either.
+    let out = sh(&format!("\"$1\" complexity cube --lines 1000 --export-ply '{}' > /dev/full", s(&good)));
+    assert_eq!(out.status.code(), Some(1));
+    assert!(!good.exists());
+    assert_eq!(std::fs::read_dir(&d).unwrap().count(), 1, "only v: no temporary left");
+    // And a run that succeeds writes them all.
+    let ok =
+        itgfx(&["complexity", "cube", "--lines", "1000", "--export-ply", s(&good), "--image", s(&d.join("i.png"))]);
+    assert!(ok.status.success(), "{}", String::from_utf8_lossy(&ok.stderr));
+    assert!(good.is_file() && d.join("i.png").is_file());
+}

@@ -159,7 +159,18 @@ pub fn parse_vector_text(source: &str, text: &str) -> Result<Vec<f64>, InputErro
 }
 
 fn read(path: &str) -> Result<String, InputError> {
-    std::fs::read_to_string(path).map_err(|e| InputError::Io { path: path.to_string(), message: e.to_string() })
+    itgfx_backends::files::read_regular_to_string(Path::new(path))
+        .map_err(|e| InputError::Io { path: path.to_string(), message: e.to_string() })
+}
+
+/// Refuses, before anything opens it, an input `path` that is not a
+/// regular file: `open()` on a FIFO with no writer waits for ever
+/// ([`itgfx_backends::files::check_regular`]). One line, `flag path: why`.
+///
+/// # Errors
+/// Missing, a directory, a FIFO, a device.
+pub fn regular(flag: &str, path: &Path) -> Result<(), crate::CliError> {
+    itgfx_backends::files::check_regular(path).map_err(|e| crate::CliError::usage(format!("{flag} {path:?}: {e}")))
 }
 
 fn looks_like_file(arg: &str) -> bool {

@@ -217,7 +217,7 @@ fn exr(px: &[Rgb], width: u32, height: u32, path: &Path) -> Result<(), CliError>
 /// Reads `--reference`: OpenEXR (by its magic number) or the PFM of [`pfm`].
 fn read_reference(path: &Path) -> Result<(u32, u32, Vec<Rgb>), CliError> {
     let mut magic = [0u8; 4];
-    let is_exr = std::fs::File::open(path)
+    let is_exr = itgfx_backends::files::open_regular(path)
         .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut magic))
         .is_ok_and(|()| magic == [0x76, 0x2f, 0x31, 0x01]);
     if !is_exr {
@@ -233,7 +233,7 @@ fn read_reference(path: &Path) -> Result<(u32, u32, Vec<Rgb>), CliError> {
 /// Reads a PFM written by [`pfm`] (colour, little-endian).
 fn read_pfm(path: &Path) -> Result<(u32, u32, Vec<Rgb>), CliError> {
     let bad = |why: &str| CliError::usage(format!("--reference {path:?}: {why}"));
-    let bytes = std::fs::read(path).map_err(|e| bad(&e.to_string()))?;
+    let bytes = itgfx_backends::files::read_regular(path).map_err(|e| bad(&e.to_string()))?;
     let mut fields = Vec::new();
     let mut at = 0;
     while fields.len() < 4 && at < bytes.len().min(256) {
@@ -306,10 +306,8 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
     {
         return Err(CliError::usage(format!("--elements {n} is above --max-elements {}", o.max_elements)));
     }
-    if let Some(r) = &o.reference
-        && !r.is_file()
-    {
-        return Err(CliError::usage(format!("--reference {r:?}: not a regular file")));
+    if let Some(r) = &o.reference {
+        crate::input::regular("--reference", r)?;
     }
     let scene = load_scene(&spec, o.subdivide)?;
     check_scene(&scene).map_err(usage)?;

@@ -89,3 +89,72 @@ fn outputs_are_all_or_none() {
     assert!(ok.status.success(), "{}", String::from_utf8_lossy(&ok.stderr));
     assert!(good.is_file() && d.join("i.png").is_file());
 }
+
+/// Runs `args`, killing it after 30 s: a hang fails the test instead of
+/// stalling the suite.
+fn no_hang(args: &[&str]) -> std::process::Output {
+    use std::process::{Command, Stdio};
+    use std::time::{Duration, Instant};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_itgfx"))
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(30) {
+            child.kill().unwrap();
+            let _ = child.wait();
+            panic!("{args:?} hangs");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// A FIFO with no writer given as an input hung in `open()`: OBJ, MTL,
+/// counts, shard, EXR, PNG and CSV inputs are refused at once, one line.
+#[test]
+fn fifo_inputs_are_refused() {
+    let d = temp("defio", "fifo");
+    let fifo = |name: &str| {
+        let p = d.join(name);
+        assert!(std::process::Command::new("mkfifo").arg(&p).status().unwrap().success());
+        s(&p).to_string()
+    };
+    let (obj, counts, shard, exr, png, csv, tf) = (
+        fifo("a.obj"),
+        fifo("a.counts"),
+        fifo("a.shard.json"),
+        fifo("a.exr"),
+        fifo("a.png"),
+        fifo("a.csv"),
+        fifo("tf.json"),
+    );
+    let mtl = d.join("m.obj");
+    std::fs::write(&mtl, format!("mtllib {}\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", fifo("m.mtl"))).unwrap();
+    let good_exr = d.join("g.exr");
+    let out = itgfx(&["render", "cornell-box", "--spp", "1", "--size", "8x8", "--out", s(&d.join("r"))]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    std::fs::copy(d.join("r").join("image.exr"), &good_exr).unwrap();
+    let out_dir = d.join("o");
+    let cases: Vec<Vec<&str>> = vec![
+        vec!["complexity", &obj, "--lines", "1000"],
+        vec!["complexity", s(&mtl), "--lines", "1000"],
+        vec!["complexity", "cube", "--lines", "1000", "--merge", &counts],
+        vec!["viewpoints", "cube", "--merge", &shard],
+        vec!["render", "--merge", &shard, "--out", s(&out_dir)],
+        vec!["compare", &exr, s(&good_exr)],
+        vec!["segment", &png, "--out", s(&out_dir)],
+        vec!["measure", "entropy", &csv],
+        vec!["volume", "hydrogen", "--tf", &tf],
+    ];
+    for args in &cases {
+        let out = no_hang(args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert!(err.contains("FIFO"), "{args:?}: {err}");
+    }
+}

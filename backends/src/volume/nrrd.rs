@@ -27,7 +27,7 @@ const MAX_HEADER: u64 = 64 << 10;
 /// One line naming the file and the field at fault.
 pub fn read_nrrd(path: &Path) -> Result<Volume, VolumeError> {
     let q = |e: String| VolumeError::new(format!("{path:?}: {e}"));
-    let file = std::fs::File::open(path).map_err(|e| q(e.to_string()))?;
+    let file = crate::files::open_regular(path).map_err(|e| q(e.to_string()))?;
     let len = file.metadata().map_err(|e| q(e.to_string()))?.len();
     let mut reader = BufReader::new(file.take(MAX_HEADER));
     let mut header_bytes = 0u64;

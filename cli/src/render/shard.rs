@@ -144,10 +144,8 @@ pub fn merged(files: &[PathBuf]) -> Result<(RenderShard, Frame, f64), CliError> 
 /// # Errors
 /// Shard errors, output errors, one line each.
 pub fn run_merge(o: &RenderOptions) -> Result<Report, CliError> {
-    if let Some(r) = &o.reference
-        && !r.is_file()
-    {
-        return Err(CliError::usage(format!("--reference {r:?}: not a regular file")));
+    if let Some(r) = &o.reference {
+        crate::input::regular("--reference", r)?;
     }
     let (dir, made) = super::out_dir(o)?;
     let result = merge_into(o, &dir);

@@ -103,6 +103,11 @@ pub fn run(m: &Measure) -> Result<Report, CliError> {
             r.real("normalized_entropy", if max > 0.0 { h / max } else { 0.0 }, None);
         }
         Measure::Binary(v) => {
+            if v.normalize {
+                return Err(CliError::usage(
+                    "--normalize: binary takes one probability p, there is no sum to divide by",
+                ));
+            }
             let v = positional_vector(&v.values)?;
             if v.len() != 1 {
                 return Err(CliError::usage("binary takes one probability p"));

@@ -84,7 +84,10 @@ pub struct RadiosityOptions {
     #[arg(long, value_name = "R.exr", value_parser = out_path, conflicts_with = "path_trace")]
     pub reference: Option<PathBuf>,
     /// Make the reference instead: W random walks per pixel (no mesh, no oracle)
-    #[arg(long, value_name = "W", value_parser = walks, conflicts_with_all = ["elements", "epsilon"])]
+    #[arg(long, value_name = "W", value_parser = walks, conflicts_with_all = [
+        "elements", "epsilon", "shares", "oracle", "samples", "base_level", "transport_samples", "min_area",
+        "count_tolerance", "max_trials",
+    ])]
     pub path_trace: Option<u32>,
     /// Check the solution patch by patch: N paths of the renderer's path tracer per patch
     #[arg(long, value_name = "N", value_parser = walks, conflicts_with = "path_trace")]

@@ -158,3 +158,51 @@ fn fifo_inputs_are_refused() {
         assert!(err.contains("FIFO"), "{args:?}: {err}");
     }
 }
+
+/// Options that were accepted and ignored in some combinations: each is
+/// refused with one line, exit 2, before any work.
+#[test]
+fn ignored_options_are_refused() {
+    for extra in [
+        &["--shares"][..],
+        &["--oracle", "ks"],
+        &["--samples", "5"],
+        &["--base-level", "1"],
+        &["--transport-samples", "4"],
+        &["--min-area", "1e-5"],
+        &["--count-tolerance", "0.1"],
+        &["--max-trials", "5"],
+    ] {
+        let mut args = vec!["radiosity", "cornell-box", "--path-trace", "4"];
+        args.extend_from_slice(extra);
+        fails(&args, &format!("--path-trace cannot be used with {}", extra[0]));
+    }
+    let cases: &[(&[&str], &str)] = &[
+        (&["render", "--merge", "x.json", "--save-shard", "y.json", "--out", "o"], "--save-shard"),
+        (&["render", "--merge", "x.json", "--backend", "cpu", "--out", "o"], "--backend"),
+        (&["complexity", "--merge", "a.counts", "--seed", "3"], "--seed"),
+        (&["complexity", "--merge", "a.counts", "--blocks", "4"], "--blocks"),
+        (&["volume", "--time", "hydrogen-beat", "--best-n", "3"], "--best-n"),
+        (&["volume", "--time", "hydrogen-beat", "--explore", "3"], "--explore"),
+        (&["volume", "--time", "hydrogen-beat", "--capture", "0.5"], "--capture"),
+        (&["measure", "binary", "--normalize", "0.3"], "--normalize"),
+        (&["compare", "a.exr", "b.exr", "--base", "2"], "--base"),
+        (&["segment", "x.png", "--out", "o", "--regions", "3", "--ratio", "0.5"], "--ratio"),
+        (&["simplify", "cube", "--evaluate", "x.obj", "--metric", "ve"], "--metric"),
+        (&["volume", "hydrogen", "--image", "64"], "missing --out"),
+        (&["viewpoints", "cube", "--smooth", "3"], "--ao-image"),
+        (&["complexity", "cube", "--color-by", "delta"], "--image"),
+    ];
+    for (args, needle) in cases {
+        fails(args, needle);
+    }
+    // Where they mean something they are still taken.
+    let d = temp("defio", "taken");
+    let png = d.join("c.png");
+    let out = itgfx(&["complexity", "cube", "--lines", "1000", "--color-by", "delta", "--image", s(&png)]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let ao = d.join("ao.png");
+    let out = itgfx(&["viewpoints", "cube", "--viewpoints", "12", "--smooth", "0", "--ao-image", s(&ao)]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(png.is_file() && ao.is_file());
+}

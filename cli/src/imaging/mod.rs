@@ -169,7 +169,7 @@ pub struct SegmentOptions {
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=512))]
     pub regions: Option<u32>,
     /// Without --regions: keep the fewest clusters with I(T;X) >= ratio * I(R;X) of the split
-    #[arg(long, value_name = "R", default_value = "0.9", value_parser = unit)]
+    #[arg(long, value_name = "R", default_value = "0.9", value_parser = unit, conflicts_with = "regions")]
     pub ratio: f64,
     /// Stop splitting once I(R;X) >= split-ratio * H(X)
     #[arg(long, value_name = "R", default_value = "1", value_parser = unit)]

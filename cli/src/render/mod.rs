@@ -130,7 +130,7 @@ pub struct CompareOptions {
     pub exposure: f64,
     #[command(flatten)]
     #[allow(missing_docs)]
-    pub common: Common,
+    pub common: crate::options::JsonOnly,
 }
 
 fn spp(s: &str) -> Result<u32, String> {

@@ -35,7 +35,7 @@ pub struct RenderShardOptions {
     /// rendering; no SCENE or sampler options (the shards carry them)
     #[arg(long, value_name = "F1,F2,...", value_delimiter = ',', num_args = 1..,
           conflicts_with_all = ["shard", "scene", "sampler", "spp", "size", "seed", "camera", "threshold", "tutorial_form",
-                                "delta", "binary_contrast", "maps", "max_spp", "export_scene"],
+                                "delta", "binary_contrast", "maps", "max_spp", "export_scene", "backend", "save_shard"],
           help_heading = "Shards")]
     pub merge: Vec<PathBuf>,
 }

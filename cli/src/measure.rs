@@ -231,6 +231,15 @@ pub fn run(m: &Measure) -> Result<Report, CliError> {
         }
         Measure::Huffman { block, values } => {
             let p = probabilities(values.normalize, "p", positional_vector(&values.values)?)?;
+            let n = p.len() as u64;
+            if let Some(k) = *block
+                && n.checked_pow(k).is_none_or(|m| m > core_::HUFFMAN_MAX_BLOCKS)
+            {
+                let most = (1..=k).take_while(|&j| n.pow(j) <= core_::HUFFMAN_MAX_BLOCKS).last().unwrap_or(0);
+                return Err(CliError::usage(format!(
+                    "--block {k}: {n}^{k} blocks is more than 2^22; with {n} symbols give at most --block {most}"
+                )));
+            }
             let mut s = vec![0.0; p.len()];
             let l = core_::huffman_expected_length(&p, &mut s).map_err(|e| core_err("p", e))?;
             let h = core_::entropy(&p, Base::Bits).map_err(|e| core_err("p", e))?;

@@ -149,7 +149,7 @@ pub enum Measure {
     },
     /// Huffman expected length vs entropy (Part II eqs. 24-25)
     Huffman {
-        /// Code blocks of K symbols too (1..=64)
+        /// Code blocks of K symbols too: 1..=64, and at most 2^22 blocks (n^K <= 4194304 for n symbols)
         #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=64))]
         block: Option<u32>,
         #[command(flatten)]

@@ -206,3 +206,34 @@ fn ignored_options_are_refused() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(png.is_file() && ao.is_file());
 }
+
+/// Small defects: a CSV with a byte-order mark, an absorbing chain with
+/// state 0 transient, a shift of 1e300 pixels, the huffman block limit,
+/// a 301-digit number in an error.
+#[test]
+fn small_inputs() {
+    let d = temp("defio", "small");
+    let bom = d.join("bom.csv");
+    std::fs::write(&bom, "\u{feff}0.5,0.25,0.25\n").unwrap();
+    let v = json(&itgfx(&["measure", "entropy", s(&bom), "--json"]));
+    assert!((v["entropy"].as_f64().unwrap() - 1.5).abs() < 1e-15, "{v}");
+    // Both absorbing chains have a unique stationary distribution.
+    let v = json(&itgfx(&["measure", "markov", "--matrix", "0.5,0.5;0,1", "--json"]));
+    assert_eq!(v["stationary_distribution"], serde_json::json!([0.0, 1.0]));
+    let v = json(&itgfx(&["measure", "markov", "--matrix", "1,0;0.5,0.5", "--json"]));
+    assert_eq!(v["stationary_distribution"], serde_json::json!([1.0, 0.0]));
+    fails(&["measure", "markov", "--matrix", "1,0;0,1"], "more than one closed class");
+    let ph = d.join("ph");
+    fails(&["phantom", "--out", s(&ph), "--shift", "1e300,0"], "--shift 1e300");
+    assert!(!ph.exists(), "refused before any work");
+    // The help gives the real limit, and the refusal says what to give.
+    let help = String::from_utf8(itgfx(&["measure", "huffman", "--help"]).stdout).unwrap();
+    assert!(help.contains("2^22"), "{help}");
+    fails(&["measure", "huffman", "--block", "64", "0.5,0.5"], "give at most --block 22");
+    let v = json(&itgfx(&["measure", "huffman", "--block", "22", "0.5,0.5", "--json"]));
+    assert_eq!(v["block"], 22);
+    let out = itgfx(&["register", "a.png", "b.png", "--out", s(&d.join("r")), "--levels", "1:1e300"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(err.len() < 200 && err.contains("1e300"), "{err}");
+}

@@ -31,7 +31,7 @@ pub fn levels(s: &str) -> Result<Levels, String> {
             return Err(format!("shrink {shrink} must be in 1..=64"));
         }
         if !(0.0..=64.0).contains(&sigma) {
-            return Err(format!("sigma {sigma} must be in [0, 64]"));
+            return Err(format!("sigma {:?} must be in [0, 64]", b.trim()));
         }
         out.push(Level { shrink, sigma });
     }

@@ -237,3 +237,26 @@ fn small_inputs() {
     assert_eq!(out.status.code(), Some(2));
     assert!(err.len() < 200 && err.contains("1e300"), "{err}");
 }
+
+/// NRRD `space directions` were ignored (only `spacings` read): a volume
+/// with directions (1,0,0) (0,1,0) (0,0,4) is the one with spacings 1 1 4;
+/// a rotated grid is refused.
+#[test]
+fn nrrd_space_directions() {
+    let d = temp("defio", "nrrd");
+    let data: Vec<u8> = (0..512u32).map(|i| ((i % 8) * 7 + (i / 8 % 8) * 3 + (i / 64) * 11) as u8).collect();
+    let nrrd = |name: &str, field: &str| {
+        let p = d.join(name);
+        let head = format!("NRRD0004\ntype: uchar\ndimension: 3\nsizes: 8 8 8\nencoding: raw\n{field}\n\n");
+        std::fs::write(&p, [head.as_bytes(), &data].concat()).unwrap();
+        s(&p).to_string()
+    };
+    let i_vz = |path: &str| json(&itgfx(&["volume", path, "--viewpoints", "12", "--json"]))["I_VZ"].as_f64().unwrap();
+    let directions = i_vz(&nrrd("d.nrrd", "space: right-anterior-superior\nspace directions: (1,0,0) (0,1,0) (0,0,4)"));
+    let spacings = i_vz(&nrrd("s.nrrd", "spacings: 1 1 4"));
+    let unit = i_vz(&nrrd("u.nrrd", "spacings: 1 1 1"));
+    assert_eq!(directions, spacings);
+    assert!((directions - unit).abs() > 1e-6, "{directions} vs {unit}");
+    let rotated = nrrd("r.nrrd", "space directions: (0.7,0.7,0) (-0.7,0.7,0) (0,0,1)");
+    fails(&["volume", &rotated, "--viewpoints", "12"], "not along a coordinate axis");
+}

@@ -260,3 +260,64 @@ fn nrrd_space_directions() {
     let rotated = nrrd("r.nrrd", "space directions: (0.7,0.7,0) (-0.7,0.7,0) (0,0,1)");
     fails(&["volume", &rotated, "--viewpoints", "12"], "not along a coordinate axis");
 }
+
+/// A greyscale PNG of `w × h` from `f(x, y)` (no dependencies: stored
+/// deflate blocks, the zlib Adler-32 and the PNG CRC written out).
+fn gray_png(path: &std::path::Path, w: u32, h: u32, f: impl Fn(u32, u32) -> u8) {
+    let mut raw = Vec::new();
+    for y in 0..h {
+        raw.push(0u8);
+        raw.extend((0..w).map(|x| f(x, y)));
+    }
+    let mut z = vec![0x78, 0x01];
+    for (i, block) in raw.chunks(65535).enumerate() {
+        let last = (i + 1) * 65535 >= raw.len();
+        let n = block.len() as u16;
+        z.push(u8::from(last));
+        z.extend(n.to_le_bytes());
+        z.extend((!n).to_le_bytes());
+        z.extend(block);
+    }
+    let (a, b) =
+        raw.iter().fold((1u32, 0u32), |(a, b), &x| ((a + u32::from(x)) % 65521, (b + a + u32::from(x)) % 65521));
+    z.extend(((b << 16) | a).to_be_bytes());
+    let crc = |data: &[u8]| {
+        let mut c = 0xffff_ffffu32;
+        for &byte in data {
+            c ^= u32::from(byte);
+            for _ in 0..8 {
+                c = if c & 1 == 1 { 0xedb8_8320 ^ (c >> 1) } else { c >> 1 };
+            }
+        }
+        !c
+    };
+    let chunk = |out: &mut Vec<u8>, kind: &[u8], data: &[u8]| {
+        out.extend((data.len() as u32).to_be_bytes());
+        let body = [kind, data].concat();
+        out.extend(&body);
+        out.extend(crc(&body).to_be_bytes());
+    };
+    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+    let ihdr = [&w.to_be_bytes()[..], &h.to_be_bytes(), &[8, 0, 0, 0, 0]].concat();
+    chunk(&mut png, b"IHDR", &ihdr);
+    chunk(&mut png, b"IDAT", &z);
+    chunk(&mut png, b"IEND", &[]);
+    std::fs::write(path, png).unwrap();
+}
+
+/// `register` of an image constant along y with itself returned a shift
+/// of 47 pixels: the metric is flat along y (every shift sees the same
+/// rows), and the line search followed rounding noise to its step limit.
+/// The identity stays the identity.
+#[test]
+fn register_stays_on_a_flat_direction() {
+    let d = temp("defio", "flat");
+    let png = d.join("flat.png");
+    gray_png(&png, 128, 96, |x, _| (127.0 + 100.0 * (f64::from(x) / 6.0).sin()) as u8);
+    let v = json(&itgfx(&["register", s(&png), s(&png), "--out", s(&d.join("r")), "--json"]));
+    let (a, tx, ty) = (v["angle_deg"].as_f64().unwrap(), v["tx"].as_f64().unwrap(), v["ty"].as_f64().unwrap());
+    // Along y not a step; along x and in angle, within interpolation's
+    // hundredth of a pixel of the identity.
+    assert!(ty.abs() < 1e-9 && tx.abs() < 0.01 && a.abs() < 0.01, "{v}");
+    assert!(v["overlap"].as_f64().unwrap() > 0.99, "{v}");
+}

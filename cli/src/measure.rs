@@ -32,6 +32,15 @@ pub const MEASURES: &[(&str, &str)] = &[
     ("bottleneck", "--joint M                      agglomerative information bottleneck merges (Slonim-Tishby)"),
 ];
 
+/// Merge-loss terms per CPU second of the agglomerative bottleneck (a few
+/// logarithms each) and comparisons per CPU second of its search, measured
+/// on the 2-core development machine under load (400 x 64: 1.5 s; 2,000 x 2:
+/// 42 s; 1,000 x 256: 35 s); its estimate is `terms / TERMS + comparisons /
+/// COMPARES` ([`core_::bottleneck_work`]), CPU seconds.
+const BOTTLENECK_TERMS_PER_S: f64 = 8e6;
+/// See [`BOTTLENECK_TERMS_PER_S`].
+const BOTTLENECK_COMPARES_PER_S: f64 = 3e7;
+
 fn probabilities(normalize: bool, name: &str, v: Vec<f64>) -> Result<Vec<f64>, CliError> {
     if normalize {
         let s: f64 = v.iter().sum();
@@ -286,9 +295,23 @@ pub fn run(m: &Measure) -> Result<Report, CliError> {
             );
             r.reals("I_i", per).reals("I_ij", mi);
         }
-        Measure::Bottleneck { joint, .. } => {
+        Measure::Bottleneck { joint, max_seconds, .. } => {
             let m = given(joint, "--joint")?.0;
-            let b = core_::agglomerative_bottleneck(&m.data, m.rows, m.cols, base).map_err(|e| core_err("joint", e))?;
+            let (terms, compares) = core_::bottleneck_work(m.rows, m.cols);
+            let estimate = terms as f64 / BOTTLENECK_TERMS_PER_S + compares as f64 / BOTTLENECK_COMPARES_PER_S;
+            if estimate > *max_seconds {
+                return Err(CliError::usage(format!(
+                    "bottleneck: {} rows x {} columns take about {} CPU seconds (estimate), above --max-seconds {max_seconds}; raise it to run",
+                    m.rows,
+                    m.cols,
+                    estimate.ceil()
+                )));
+            }
+            let mut progress = crate::progress::Progress::with_unit("Mcomparisons/s");
+            let b = core_::agglomerative_bottleneck_with_progress(&m.data, m.rows, m.cols, base, |d, t| {
+                progress.update(d, t);
+            })
+            .map_err(|e| core_err("joint", e))?;
             r.real("initial_information", b.initial_information, unit);
             let steps = b
                 .merges

@@ -321,3 +321,43 @@ fn register_stays_on_a_flat_direction() {
     assert!(ty.abs() < 1e-9 && tx.abs() < 0.01 && a.abs() < 0.01, "{v}");
     assert!(v["overlap"].as_f64().unwrap() > 0.99, "{v}");
 }
+
+/// `measure bottleneck` on 2,000 rows ran past 60 s with no word: the merge
+/// losses are kept now (400 x 64: 43 s -> 1.5 s CPU), progress goes to
+/// stderr, and a run estimated above `--max-seconds` (60) is refused.
+#[test]
+fn bottleneck_estimate_progress_and_refusal() {
+    let d = temp("defio", "bottleneck");
+    let csv = d.join("j.csv");
+    let (rows, cols) = (600, 64);
+    let mut state = 7u64;
+    let values: Vec<f64> = (0..rows * cols)
+        .map(|_| {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 + 0.01
+        })
+        .collect();
+    let total: f64 = values.iter().sum();
+    let text: String = values
+        .chunks(cols)
+        .map(|r| r.iter().map(|x| format!("{:?}", x / total)).collect::<Vec<_>>().join(","))
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(&csv, text).unwrap();
+    let out = itgfx(&["measure", "bottleneck", "--joint", s(&csv), "--max-seconds", "1"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("600 rows x 64 columns") && err.contains("--max-seconds 1"), "{err}");
+    let five_k = d.join("wide.csv");
+    std::fs::write(&five_k, vec!["0.0002"; 5000].join("\n")).unwrap();
+    fails(&["measure", "bottleneck", "--joint", s(&five_k)], "above --max-seconds 60");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_itgfx"))
+        .args(["measure", "bottleneck", "--joint", s(&csv), "--json"])
+        .env("ITGFX_PROGRESS", "1")
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["merges"].as_array().unwrap().len(), rows - 1);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("Mcomparisons/s"), "progress on stderr");
+}

@@ -75,7 +75,9 @@ pub mod sum;
 
 pub use base::Base;
 #[cfg(feature = "alloc")]
-pub use bottleneck::{Bottleneck, Merge, agglomerative_bottleneck};
+pub use bottleneck::{
+    Bottleneck, Merge, agglomerative_bottleneck, agglomerative_bottleneck_with_progress, bottleneck_work,
+};
 pub use channel::{Channel, ChannelMeasures, cascade_into, row_entropies_into};
 pub use coding::huffman_expected_length;
 #[cfg(feature = "alloc")]

@@ -157,11 +157,7 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
     r.maybe_real("I_S_corrected", c.mutual_information_corrected, unit);
     r.maybe_real("I_S_cont", c.continuous, unit);
     r.maybe_real("I_S_cont_stderr", c.continuous_stderr, unit);
-    r.maybe_real(
-        "discretisation_accuracy",
-        c.continuous.filter(|&ic| ic > 0.0).map(|ic| m.mutual_information / ic),
-        None,
-    );
+    r.maybe_real("discretisation_accuracy", c.discretisation_accuracy, None);
     r.real("H_S_normalized", m.normalized_entropy, None).real("I_S_normalized", m.normalized_mutual_information, None);
     r.real("seconds", seconds, Some("s"));
     // Pictures: information (or discretisation error) per unit area.

@@ -94,6 +94,21 @@ mod builtin;
 mod error;
 
 impl Scene {
+    /// The name without the `/K` suffixes [`Scene::subdivided`] appends
+    /// (`cornell-box/2` is still the Cornell box, with its camera).
+    #[must_use]
+    pub fn base_name(&self) -> &str {
+        let mut name = self.name.as_str();
+        while let Some((head, k)) = name.rsplit_once('/')
+            && !head.is_empty()
+            && !k.is_empty()
+            && k.bytes().all(|b| b.is_ascii_digit())
+        {
+            name = head;
+        }
+        name
+    }
+
     /// Total area `A_T`.
     #[must_use]
     pub fn total_area(&self) -> f64 {

@@ -22,6 +22,15 @@ pub struct Material {
     pub mirror: bool,
 }
 
+impl Material {
+    /// Largest emittance accepted per channel: 10¹². Radiosity pictures are
+    /// f32 (largest 3.4·10³⁸) and the renderer sums squared radiance over up
+    /// to 2¹⁶ samples a pixel; 10¹² keeps those sums 10⁹ below overflow,
+    /// and no physical light in scene units comes near it (the Cornell
+    /// box's is 12). `Ke 1e300` once made infinite pixels.
+    pub const MAX_EMITTANCE: f64 = 1e12;
+}
+
 impl Default for Material {
     fn default() -> Self {
         Self { name: "default".into(), reflectance: [0.7; 3], emittance: [0.0; 3], mirror: false }

@@ -137,6 +137,14 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
         crate::output::write(p, &bytes)?;
     }
     let c = counts.complexity(base);
+    if c.segments == 0 && c.lines > 0 {
+        // Kept, not refused: the measures of an empty channel are what the
+        // scene gives; but a closed mesh wound outwards is the usual cause.
+        eprintln!(
+            "itgfx: warning: {}: none of {} lines joined two patches facing each other, so every measure is that of an empty channel: complexity looks at a scene from inside (faces wound inwards); an object wound outwards is seen from outside only",
+            scene.name, c.lines
+        );
+    }
     let seconds = t0.elapsed().as_secs_f64();
     let m = &c.measures;
     let mut r = Report::new();

@@ -396,6 +396,29 @@ mod tests {
     use super::*;
 
     #[test]
+    fn entropy_and_kl_of_sums_match_the_direct_forms() {
+        let w = [3.0, 1.0, 0.0, 4.0];
+        let (s, x) = (8.0, w.iter().map(|&v| xlnx(v)).sum::<f64>());
+        let direct = entropy_of_weights(&w, Base::Nats).unwrap();
+        assert!((entropy_nats_of_sums(s, x) - direct).abs() <= 1e-15);
+        assert_eq!(entropy_nats_of_sums(0.0, 0.0), 0.0);
+        assert!(entropy_nats_of_sums(f64::NAN, 0.0).is_nan());
+        // Rounding below 0 is clamped: one weight has entropy 0.
+        assert_eq!(entropy_nats_of_sums(3.0, xlnx(3.0) * (1.0 + 1e-15)), 0.0);
+        let q = [0.25, 0.25, 0.25, 0.25];
+        let a = w.iter().zip(&q).map(|(&m, &q)| crate::kl_term(m, q)).sum::<f64>();
+        let p = w.map(|v| v / s);
+        let kl = crate::kl_divergence(&p, &q, Base::Nats).unwrap();
+        assert!((kl_nats_of_sums(a, s) - kl).abs() <= 1e-15, "{} vs {kl}", kl_nats_of_sums(a, s));
+        assert_eq!(kl_nats_of_sums(0.0, 0.0), 0.0);
+        let f = 0.01;
+        assert!((crate::log_area_form_factor(50.0, f) - libm::log(0.5)).abs() <= 1e-15);
+        // A product that overflows is a sum of logarithms.
+        let big = crate::log_area_form_factor(1e300, 1e300);
+        assert!((big - 2.0 * libm::log(1e300)).abs() <= 1e-12, "{big}");
+    }
+
+    #[test]
     fn bad_input_table() {
         let nan = f64::NAN;
         let cases: &[(&[f64], Error)] = &[

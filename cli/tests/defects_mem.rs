@@ -208,7 +208,7 @@ fn questionable_input_is_warned_about() {
     std::fs::write(&inward, format!("{cube}f 1 2 3 4\nf 5 8 7 6\nf 1 5 6 2\nf 2 6 7 3\nf 3 7 8 4\nf 4 8 5 1\n"))
         .unwrap();
     assert!(!warned(&["complexity", s(&inward), "--lines", "20000", "--json"]).contains("warning"));
-    // A face repeated (in another order).
+    // A face repeated (rotated, the same winding; the other winding is a surface's two sides).
     let twice = d.join("twice.obj");
     std::fs::write(&twice, format!("{cube}{faces}f 2 1 4 3\n")).unwrap();
     let err = warned(&["complexity", s(&twice), "--lines", "1000", "--json"]);

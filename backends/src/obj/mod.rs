@@ -131,17 +131,20 @@ struct Face {
     material: Option<usize>,
 }
 
-/// Warning `duplicate-face` for every face on the same vertices as an
-/// earlier one (in any order or winding). Kept, not refused: both faces
-/// are traced, and a line meeting the pair crosses one or the other by
+/// Warning `duplicate-face` for every face on the same vertices, wound
+/// the same way, as an earlier one. Kept, not refused: both faces are
+/// traced, and a line meeting the pair crosses one or the other by
 /// rounding, which splits the counts of one surface between two patches
-/// (visibility measures change; nothing breaks). By 16 bytes a face: a
-/// hash of the sorted indices, sorted, equal hashes compared in full.
+/// (visibility measures change; nothing breaks). The same vertices wound
+/// the other way are the two sides of one surface (e.g. a lamp's front and
+/// a mirror's back) and pass. By 16 bytes a face: a hash of the indices
+/// rotated to start at the smallest, sorted, equal hashes compared in full.
 fn duplicate_faces(name: &str, faces: &[Face], indices: &[u32], warnings: &mut Warnings) {
     use std::hash::{Hash, Hasher};
     let sorted = |f: &Face| {
         let mut v = indices[f.start..f.start + f.len].to_vec();
-        v.sort_unstable();
+        let first = v.iter().enumerate().min_by_key(|&(_, &i)| i).map_or(0, |(k, _)| k);
+        v.rotate_left(first);
         v
     };
     let mut keys: Vec<(u64, u32)> = faces

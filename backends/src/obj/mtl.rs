@@ -59,6 +59,7 @@ fn colour_of(
     for x in c {
         if !(x >= range.0 && x <= range.1) {
             let hi = if range.1 > 1e6 { format!("{:e}", range.1) } else { range.1.to_string() };
+            let x = if x.abs() > 1e6 { format!("{x:e}") } else { x.to_string() };
             return Err(e(format!("value {x} is outside [{}, {hi}]", range.0)));
         }
     }

@@ -30,6 +30,7 @@ pub mod camera;
 pub mod files;
 pub mod imaging;
 pub mod lines;
+pub mod memory;
 pub mod meshes;
 pub mod obj;
 pub mod preview;

@@ -87,12 +87,12 @@ impl LineRng {
         (f64::from(self.u32(k)) + 0.5) * (1.0 / 4_294_967_296.0)
     }
 
-    /// A uniform float in `(0, 1)` from draw `k` (24 bits of resolution:
-    /// every value is exact in f32, none is 0 or 1).
+    /// A uniform float in `(0, 1)` from draw `k`: 23 bits, so that
+    /// `m + 0.5` is exact in f32 (24 bits would round the top value to 1).
     #[inline]
     #[must_use]
     pub fn uniform32(&self, k: u32) -> f32 {
-        ((self.u32(k) >> 8) as f32 + 0.5) * (1.0 / 16_777_216.0)
+        ((self.u32(k) >> 9) as f32 + 0.5) * (1.0 / 8_388_608.0)
     }
 
     /// A uniform point on the unit sphere by Marsaglia's method (no
@@ -276,6 +276,17 @@ mod tests {
         let v = xs.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / n as f64;
         assert!((m - 0.5).abs() < 5.0 * (1.0f64 / 12.0 / n as f64).sqrt());
         assert!((v - 1.0 / 12.0).abs() < 5e-3);
+    }
+
+    #[test]
+    fn uniform32_stays_inside_the_open_interval() {
+        let r = LineRng::new(0, 0);
+        // The extreme words, through the same arithmetic.
+        for m in [0u32, 1, (1 << 23) - 1] {
+            let x = (m as f32 + 0.5) * (1.0 / 8_388_608.0);
+            assert!(x > 0.0 && x < 1.0, "{m}: {x}");
+        }
+        assert!((0..10_000).map(|k| r.uniform32(k)).all(|x| x > 0.0 && x < 1.0));
     }
 
     #[test]

@@ -97,7 +97,9 @@ impl Stratum {
     fn place(&self, (a, b): (u32, u32), which: u32, u: f32, v: f32) -> (f32, f32) {
         let cell = permute(self.index, self.count, pcg(self.key ^ which));
         let (cx, cy) = (cell % a, cell / a);
-        ((cx as f32 + u) / a as f32, (cy as f32 + v) / b as f32)
+        // `cx + u` can round up to `cx + 1`: keep the draw below 1.
+        let below_one = 1.0 - f32::EPSILON / 2.0;
+        (((cx as f32 + u) / a as f32).min(below_one), ((cy as f32 + v) / b as f32).min(below_one))
     }
 }
 
@@ -301,5 +303,41 @@ impl PathTracer<'_> {
             std::mem::swap(&mut paths, &mut next);
         }
         Ok(out.into_iter().map(|c| c.as_dvec3().to_array()).collect())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A batch's placed draws fall one in each cell of its grid (for every
+    /// permutation used), inside the unit square; batches of other keys
+    /// place them in other orders.
+    #[test]
+    fn a_batch_covers_each_cell_once() {
+        for count in [1u32, 7, 8, 60, 64, 256] {
+            let grid = strata_of(count);
+            for which in [0x4c49_4748u32, 0x4449_5245, 5u32.wrapping_mul(0x9E37_79B9) ^ 0x4c49_4748] {
+                let mut seen = vec![false; count as usize];
+                let rng = LineRng::new(3, u64::from(count));
+                for index in 0..count {
+                    let s = Stratum { index, count, key: 99 };
+                    for (u, v) in [
+                        (rng.uniform32(2 * index), rng.uniform32(2 * index + 1)),
+                        (1.0 - f32::EPSILON / 2.0, 1.0 - f32::EPSILON / 2.0),
+                    ] {
+                        let (u, v) = s.place(grid, which, u, v);
+                        assert!(u > 0.0 && u < 1.0 && v > 0.0 && v < 1.0, "{u} {v}");
+                    }
+                    let (u, v) = s.place(grid, which, 0.5, 0.5);
+                    let cell = (v * grid.1 as f32) as u32 * grid.0 + (u * grid.0 as f32) as u32;
+                    assert!(!seen[cell as usize], "count {count}: cell {cell} twice");
+                    seen[cell as usize] = true;
+                }
+            }
+        }
+        let order =
+            |key| (0..64).map(|index| Stratum { index, count: 64, key }.place((8, 8), 1, 0.5, 0.5)).collect::<Vec<_>>();
+        assert_ne!(order(1), order(2));
     }
 }

@@ -16,6 +16,9 @@ const PROBES: u32 = 64;
 /// its front wall), else a view from outside framing the bounding box.
 #[must_use]
 pub fn default_camera(scene: &Scene) -> Camera {
+    if let Some(c) = scene.camera {
+        return c;
+    }
     let d = DVec3::new;
     let base = scene.name.split(['/', ':']).next().unwrap_or_default();
     let (eye, target, fov) = match base {

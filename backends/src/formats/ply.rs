@@ -145,7 +145,10 @@ fn header(path: &str, bytes: &[u8]) -> Result<(Format, Vec<Element>, usize), Sce
             }
             ["end_header"] => break,
             _ => {
-                return Err(bad(format!("not a PLY header statement: {:?}", line.chars().take(60).collect::<String>())));
+                return Err(bad(format!(
+                    "not a PLY header statement: {:?}",
+                    line.chars().take(60).collect::<String>()
+                )));
             }
         }
     }

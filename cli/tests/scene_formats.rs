@@ -471,3 +471,67 @@ fn ascii_ply_polygons_match_obj_and_extra_properties_give_one_note() {
         assert!(e.contains(what) && !e.contains('\n'), "{what}: {e}");
     }
 }
+
+/// Seeded mutations of valid files (bytes overwritten, bit flips, cuts,
+/// digits changed) through the PLY and glTF readers in-process: each is a
+/// scene or a one-line error, never a panic. The fuzz targets do the same
+/// without a seed file; this runs in every test run.
+#[test]
+fn mutated_files_are_scenes_or_one_line_errors() {
+    use itgfx_backends::formats::gltf::{parse_gltf, relative_uri};
+    use itgfx_backends::formats::ply::parse_ply;
+    let tris = inside_cube();
+    let (j, bin) = gltf_json(&tris, true, None, "");
+    let glb_bytes = glb(&j, &bin);
+    let (text, _) = gltf_json(&tris, true, Some("b.bin"), ",\"materials\":[{\"emissiveFactor\":[1,1,1]}]");
+    let text = text.replace("\"attributes\":{\"POSITION\":0}", "\"attributes\":{\"POSITION\":0},\"material\":0");
+    let ascii = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+                 element face 2\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n";
+    let inputs: [(&str, Vec<u8>); 4] = [
+        ("glb", glb_bytes),
+        ("gltf", text.into_bytes()),
+        ("ply", soup_ply(&tris, true)),
+        ("ply", ascii.as_bytes().to_vec()),
+    ];
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    // ITGFX_MUTATIONS raises the count per input for a longer local run.
+    let n: usize = std::env::var("ITGFX_MUTATIONS").ok().and_then(|v| v.parse().ok()).unwrap_or(1500);
+    let (mut ok, mut refused) = (0, 0);
+    for (kind, base) in &inputs {
+        for _ in 0..n {
+            let mut b = base.clone();
+            for _ in 0..1 + next() % 4 {
+                let i = (next() % b.len() as u64) as usize;
+                match next() % 5 {
+                    0 => b[i] = next() as u8,
+                    1 => b[i] ^= 1 << (next() % 8),
+                    2 => b.truncate(i.max(1)),
+                    3 if b[i].is_ascii_digit() => b[i] = b'0' + (next() % 10) as u8,
+                    _ => b[i] = b"9-.e0 \n"[(next() % 7) as usize],
+                }
+            }
+            let r = if *kind == "ply" {
+                parse_ply("m.ply", &b)
+            } else {
+                parse_gltf("m.gltf", &b, |uri| relative_uri(uri).map(|_| bin.clone()))
+            };
+            match r {
+                Ok(s) => {
+                    s.validate().unwrap();
+                    ok += 1;
+                }
+                Err(e) => {
+                    assert!(!e.to_string().contains('\n'), "{e}");
+                    refused += 1;
+                }
+            }
+        }
+    }
+    assert!(ok > 100 && refused > 100, "{ok} read, {refused} refused");
+}

@@ -218,7 +218,7 @@ fn span<'a>(
     let data = &data[range];
     let count = acc.count();
     let need = if count == 0 {
-        Some(0)
+        Some(acc.offset())
     } else {
         (count - 1).checked_mul(stride).and_then(|x| x.checked_add(elem)).and_then(|x| x.checked_add(acc.offset()))
     };
@@ -290,6 +290,15 @@ pub fn parse_gltf(
         }
         if ext != "KHR_materials_emissive_strength" {
             return Err(err(name, format!("requires extension {ext}, which is not supported")));
+        }
+    }
+    // gltf-json 1.4's validation indexes the accessors by each primitive's
+    // attributes before it checks that they exist: checked here first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            if let Some(a) = prim.attributes.values().find(|a| a.value() >= root.accessors.len()) {
+                return Err(err(name, format!("mesh {m} primitive {p}: accessor {} does not exist", a.value())));
+            }
         }
     }
     let draco = root.extensions_used.iter().any(|e| e == DRACO);

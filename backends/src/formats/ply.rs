@@ -292,6 +292,10 @@ pub fn parse_ply(name: &str, bytes: &[u8]) -> Result<Scene, SceneError> {
         let per = least_bytes(e, format, (k == fi).then_some(face_list));
         least = least.saturating_add(e.count.saturating_mul(per));
     }
+    if format == Format::Ascii {
+        // The last value needs no separator after it.
+        least = least.saturating_sub(1);
+    }
     if least > body {
         return Err(err(
             name,

@@ -78,7 +78,7 @@ fn write_ply(verts: &[[f64; 3]], faces: &[Vec<u32>], big: bool) -> Vec<u8> {
         faces.len()
     )
     .into_bytes();
-    let mut put = |bytes: &mut Vec<u8>, mut x: Vec<u8>| {
+    let put = |bytes: &mut Vec<u8>, mut x: Vec<u8>| {
         if big {
             x.reverse();
         }
@@ -150,11 +150,11 @@ fn gltf_json(tris: &[[[f32; 3]; 3]], indexed: bool, uri: Option<&str>, extra: &s
 
 fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
     let mut j = json.as_bytes().to_vec();
-    while j.len() % 4 != 0 {
+    while !j.len().is_multiple_of(4) {
         j.push(b' ');
     }
     let mut b = bin.to_vec();
-    while b.len() % 4 != 0 {
+    while !b.len().is_multiple_of(4) {
         b.push(0);
     }
     let total = 12 + 8 + j.len() + 8 + b.len();

@@ -296,6 +296,15 @@ fn gltf_furnace_renders_to_two() {
         let c = c.as_f64().unwrap();
         assert!((c / 2.0 - 1.0).abs() < 0.02, "furnace radiance {c}, want 2 within 2%: {v}");
     }
+    // radiosity reads the same file (and its camera), and writes mesh.ply,
+    // which the PLY reader takes back (its radiosity and colour properties
+    // ignored with a note).
+    let out = d.join("rad");
+    let r = json(&["radiosity", s(&f), "--size", "16", "--out", s(&out), "--json"]);
+    assert!((r["balance"].as_f64().unwrap() - 1.0).abs() < 0.01, "{r}");
+    let c = json(&["complexity", s(&out.join("mesh.ply")), "--lines", "2000", "--json"]);
+    assert_eq!(c["patches"], r["elements"], "{c}");
+    refused(&["radiosity", s(&f), "--camera", "1,2,3"], "--camera");
 }
 
 /// The positions and `u32` indices as [`gltf_json`] lays them out.

@@ -31,6 +31,7 @@ pub mod camera;
 pub mod formats;
 pub mod imaging;
 pub mod lines;
+pub mod memory;
 pub mod meshes;
 pub mod obj;
 pub mod preview;

@@ -243,8 +243,14 @@ fn material(name: &str, m: &gltf::Material<'_>, warnings: &mut Warnings) -> Resu
         return Err(err(name, format!("{label:?}: baseColorFactor {rgb:?} is outside [0, 1]")));
     }
     let e = emissive.map(|x| f64::from(x) * f64::from(strength));
-    if !e.iter().all(|x| x.is_finite() && *x >= 0.0) {
-        return Err(err(name, format!("{label:?}: emission {e:?} is not finite and >= 0")));
+    if !e.iter().all(|x| (0.0..=Material::MAX_EMITTANCE).contains(x)) {
+        return Err(err(
+            name,
+            format!(
+                "{label:?}: emission {e:?} is outside [0, {:e}] (Material::MAX_EMITTANCE)",
+                Material::MAX_EMITTANCE
+            ),
+        ));
     }
     let mirror = metallic == 1.0 && roughness == 0.0;
     let textured = pbr.base_color_texture().is_some() || m.emissive_texture().is_some();

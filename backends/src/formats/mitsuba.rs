@@ -426,8 +426,15 @@ pub fn parse_mitsuba(
                     }
                     let ev = Values { path: name, defaults: &defaults, node: e };
                     m.emittance = ev.colour("radiance")?.unwrap_or([1.0; 3]);
-                    if !m.emittance.iter().all(|x| *x >= 0.0) {
-                        return Err(err(name, format!("shape {id:?}: radiance {:?} is negative", m.emittance)));
+                    if !m.emittance.iter().all(|x| (0.0..=Material::MAX_EMITTANCE).contains(x)) {
+                        return Err(err(
+                            name,
+                            format!(
+                                "shape {id:?}: radiance {:?} is outside [0, {:e}] (Material::MAX_EMITTANCE)",
+                                m.emittance,
+                                Material::MAX_EMITTANCE
+                            ),
+                        ));
                     }
                 }
                 if m.name.is_empty() {

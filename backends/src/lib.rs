@@ -11,6 +11,7 @@
 //!   reference backend.
 //! * [`backend`]: choosing and opening a backend ([`BackendChoice`],
 //!   [`open`], [`BackendError`]).
+//! * [`files`]: opening inputs (regular files only: a FIFO would hang).
 //! * [`camera`]: the pinhole camera; [`preview`]: patch-colour previews.
 //! * [`lines`]: seeded counter-based global and local lines.
 //! * [`meshes`]: built-in objects seen from outside (geodesic sphere, torus,
@@ -28,6 +29,7 @@
 
 pub mod backend;
 pub mod camera;
+pub mod files;
 pub mod formats;
 pub mod imaging;
 pub mod lines;

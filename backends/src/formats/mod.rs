@@ -65,7 +65,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         Some(f) => f,
         None => {
             let mut head = [0u8; 64];
-            let n = std::fs::File::open(path)
+            let n = crate::files::open_regular(path)
                 .and_then(|mut f| f.read(&mut head))
                 .map_err(|e| SceneError::Obj { path: path.display().to_string(), message: e.to_string() })?;
             by_magic(&head[..n])

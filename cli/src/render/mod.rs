@@ -132,7 +132,7 @@ pub struct CompareOptions {
     pub exposure: f64,
     #[command(flatten)]
     #[allow(missing_docs)]
-    pub common: Common,
+    pub common: crate::options::JsonOnly,
 }
 
 fn spp(s: &str) -> Result<u32, String> {
@@ -237,10 +237,8 @@ pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
     }
     let spec =
         o.scene.clone().ok_or_else(|| CliError::usage("give a scene: cornell-box, mirror-room or an .obj file"))?;
-    if let Some(r) = &o.reference
-        && !r.is_file()
-    {
-        return Err(CliError::usage(format!("--reference {r:?}: not a regular file")));
+    if let Some(r) = &o.reference {
+        crate::input::regular("--reference", r)?;
     }
     let adaptive = o.sampler != "uniform";
     if !adaptive && (o.max_spp.is_some() || o.threshold.is_some() || o.tutorial_form) {

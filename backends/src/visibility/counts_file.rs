@@ -267,7 +267,8 @@ impl VisibilityCounts {
 pub const BYTES_PER_FILE_BYTE: u64 = 24;
 
 /// `MemAvailable` from `/proc/meminfo` (bytes), where there is one.
-fn available_memory() -> Option<u64> {
+#[must_use]
+pub fn available_memory() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
     let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;

@@ -5,6 +5,8 @@ use std::time::Instant;
 use itgfx_backends::open;
 use itgfx_backends::scene::Scene;
 use itgfx_backends::tracer::Prepared;
+use itgfx_backends::visibility::counts_file::available_memory;
+use itgfx_backends::visibility::merge::{join_ranges, merge_memory};
 use itgfx_backends::visibility::{LineOptions, VisibilityCounts, count_visibility};
 
 use crate::CliError;
@@ -89,6 +91,46 @@ fn check_coverage(ranges: &[(u64, u64)], lines: u64) -> Result<(), CliError> {
     Err(CliError::usage(format!("--merge: the files cover {covered}, past --lines {lines} (a shard of another run?)")))
 }
 
+/// Before a `--merge` reads any counts: the headers of its files (binary
+/// counts files; a JSON file is checked as it is read, and gives no
+/// estimate), checked to be of one run, their line ranges joined (a line
+/// counted twice is refused; with `--lines N` missing lines are named),
+/// and the bytes the merge may hold at its peak estimated
+/// ([`merge_memory`]): refused if past the memory available.
+///
+/// # Errors
+/// One-line usage errors naming the file.
+fn plan_merge(o: &ComplexityOptions) -> Result<Option<u64>, CliError> {
+    let mut heads: Vec<itgfx_backends::visibility::counts_binary::CountsHeader> = Vec::with_capacity(o.merge.len());
+    for f in &o.merge {
+        let fail = |e: itgfx_backends::visibility::CountsError| CliError::usage(format!("{f:?}: {e}"));
+        let Some(h) = VisibilityCounts::peek(f).map_err(fail)? else { return Ok(None) };
+        if let Some(first) = heads.first() {
+            first.same_run(&h).map_err(fail)?;
+        }
+        heads.push(h);
+    }
+    let mut ranges = Vec::new();
+    for (f, h) in o.merge.iter().zip(&heads) {
+        ranges = join_ranges(&ranges, &h.ranges).map_err(|e| CliError::usage(format!("{f:?}: {e}")))?;
+    }
+    if let Some(n) = o.lines {
+        check_coverage(&ranges, n)?;
+    }
+    let need = merge_memory(&heads, o.save_counts.is_some());
+    if let Some(available) = available_memory()
+        && need > available
+    {
+        return Err(CliError::usage(format!(
+            "--merge: these {} files may take {} MiB to merge (estimated from their headers), {} MiB are available: merge fewer at a time (a merge tree: merge groups with --save-counts, then the results)",
+            o.merge.len(),
+            need >> 20,
+            available >> 20
+        )));
+    }
+    Ok(Some(need))
+}
+
 /// Runs `itgfx complexity`.
 ///
 /// # Errors
@@ -104,12 +146,14 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
     let prepared = Prepared::new(&scene);
     let tracer = open(o.tracing.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
     let opts = LineOptions { lines, seed, local, blocks: o.blocks, offset };
+    let mut estimate = None;
     let counts = if o.merge.is_empty() {
         let mut progress = Progress::new();
         count_visibility(&scene, &prepared, tracer.as_ref(), &opts, &mut |d, t| progress.update(d, t))
             .map_err(|e| CliError::usage(e.to_string()))?
     } else {
         // Evaluate saved shards instead of tracing.
+        estimate = plan_merge(o)?;
         let mut merged: Option<VisibilityCounts> = None;
         for f in &o.merge {
             let (_, c) = VisibilityCounts::read(f).map_err(|e| CliError::usage(format!("{f:?}: {e}")))?;
@@ -149,6 +193,9 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
         .count("seed", counts.seed);
     if let Some(s) = o.shard {
         r.text("shard", s.to_string()).count("first_line", offset);
+    }
+    if let Some(b) = estimate {
+        r.real("merge_memory_estimate_MiB", b as f64 / f64::from(1u32 << 20), None);
     }
     r.count("escaped", c.escaped).count("unsampled_patches", m.unsampled_patches as u64);
     r.real("H_P", m.positional_entropy, unit).real("H_S", m.scene_entropy, unit).real("H_J", m.joint_entropy, unit);

@@ -117,7 +117,7 @@ fn plan_merge(o: &ComplexityOptions) -> Result<Option<u64>, CliError> {
     if let Some(n) = o.lines {
         check_coverage(&ranges, n)?;
     }
-    let need = merge_memory(&heads, o.save_counts.is_some());
+    let need = merge_memory(&heads, o.save_counts.is_some(), !o.counts_only);
     if let Some(available) = available_memory()
         && need > available
     {
@@ -129,6 +129,40 @@ fn plan_merge(o: &ComplexityOptions) -> Result<Option<u64>, CliError> {
         )));
     }
     Ok(Some(need))
+}
+
+/// The report of a `--counts-only` run: what the saved counts cover, no
+/// measures.
+fn counts_report(
+    o: &ComplexityOptions,
+    scene: &Scene,
+    backend: &str,
+    counts: &VisibilityCounts,
+    estimate: Option<u64>,
+    t0: Instant,
+) -> Report {
+    let sum = |f: fn(&itgfx_backends::visibility::BlockCounts) -> u64| counts.blocks.iter().map(f).sum::<u64>();
+    let mut r = Report::new();
+    r.text("scene", scene.name.clone())
+        .text("backend", backend)
+        .text("lines_kind", if counts.local { "local" } else { "global" });
+    r.count("patches", scene.patches.len() as u64)
+        .count("lines", counts.lines())
+        .count("segments", sum(|b| b.segments))
+        .count("seed", counts.seed);
+    let ranges: Vec<String> = counts.ranges.iter().map(|r| format!("{}..{}", r.0, r.1)).collect();
+    r.text("ranges", ranges.join(", ")).count("pairs", sum(|b| b.pairs.len() as u64));
+    if let Some(s) = o.shard {
+        r.text("shard", s.to_string());
+    }
+    if let Some(b) = estimate {
+        r.real("merge_memory_estimate_MiB", b as f64 / f64::from(1u32 << 20), None);
+    }
+    if let Some(p) = &o.save_counts {
+        r.text("saved", p.display().to_string());
+    }
+    r.real("seconds", t0.elapsed().as_secs_f64(), Some("s"));
+    r
 }
 
 /// Runs `itgfx complexity`.
@@ -179,6 +213,9 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
             counts.to_binary(&scene.name)
         };
         crate::output::write(p, &bytes)?;
+    }
+    if o.counts_only {
+        return Ok((counts_report(o, &scene, tracer.name(), &counts, estimate, t0), counts, scene));
     }
     let c = counts.complexity(base);
     let seconds = t0.elapsed().as_secs_f64();

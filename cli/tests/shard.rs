@@ -121,6 +121,11 @@ fn complexity_merge_tree_equals_flat_merge_and_single_run() {
     let a = part(&[&s[0], &s[1]], "t-a.counts", 8000);
     let b = part(&[&s[2], &s[3]], "t-b.counts", 8000);
     let ab = part(&[&b, &a], "t-ab.counts", 16000);
+    // --counts-only saves the same counts, without the measures.
+    let p = path("t-ab-only.counts");
+    let v = json_of(&strs(&complexity_merge(&[&b, &a], &["--save-counts", &p, "--counts-only"])));
+    assert_eq!((v["lines"].as_u64(), v["ranges"].as_str(), v.get("I_S")), (Some(16000), Some("0..16000"), None));
+    assert_eq!(std::fs::read(&p).unwrap(), std::fs::read(&ab).unwrap());
     assert_eq!(json_of(&strs(&complexity_merge(&[&ab, &s[4]], &["--lines", LINES]))), single);
     // Lopsided: ((((4,3),2),1),0), JSON partials (the other format) on the way.
     let mut acc = part(&[&s[4], &s[3]], "t-l1.json", 8001);

@@ -275,7 +275,7 @@ pub(super) fn merge_sorted<T: Copy, K: Ord>(
 /// An estimate: allocator overhead and the few per-patch arrays of the
 /// evaluation are left out (measured against peak RSS in docs/CLUSTER.md).
 #[must_use]
-pub fn merge_memory(headers: &[CountsHeader], save: bool) -> u64 {
+pub fn merge_memory(headers: &[CountsHeader], save: bool, measures: bool) -> u64 {
     let Some(first) = headers.first() else { return 0 };
     let p = first.scene.patches;
     let (cells, rows) = (p.saturating_mul(p), p.saturating_mul(p.saturating_add(1)));
@@ -314,7 +314,7 @@ pub fn merge_memory(headers: &[CountsHeader], save: bool) -> u64 {
         tree = tree.max(total(&level).saturating_add(total(&next)));
         level = next;
     }
-    let evaluate = owned.saturating_add(tree).saturating_mul(16);
+    let evaluate = if measures { owned.saturating_add(tree).saturating_mul(16) } else { 0 };
     held.saturating_add(read.unwrap_or(0).max(write).max(evaluate))
 }
 
@@ -336,14 +336,15 @@ mod tests {
         let held = (100 + 100) * 16 + 3 * 12 + 10 * 40;
         // Block 1 has background: an owned list of 103; the sum of both blocks is capped at 10·11.
         let evaluate = (103 + 110) * 16;
-        assert_eq!(merge_memory(&[a.clone(), b.clone()], false), held + evaluate);
+        assert_eq!(merge_memory(&[a.clone(), b.clone()], false, true), held + evaluate);
+        assert_eq!(merge_memory(&[a.clone(), b.clone()], false, false), held + 100 * 5);
         let write = 200 * 12 + 3 * 12 + 10 * (4 * 2 + 40);
         assert!(write < evaluate);
         let big = header(vec![(1, 0), (1, 0)], 10_000);
         // Reading the big file (5 bytes a byte) passes writing and evaluating.
-        assert_eq!(merge_memory(&[a.clone(), big.clone()], true), (31 + 51) * 16 + 2 * 12 + 400 + 10_000 * 5);
-        assert_eq!(merge_memory(&[], false), 0);
+        assert_eq!(merge_memory(&[a.clone(), big.clone()], true, true), (31 + 51) * 16 + 2 * 12 + 400 + 10_000 * 5);
+        assert_eq!(merge_memory(&[], false, true), 0);
         // More files never estimate less.
-        assert!(merge_memory(&[a.clone(), b.clone(), big], false) >= merge_memory(&[a, b], false));
+        assert!(merge_memory(&[a.clone(), b.clone(), big], false, true) >= merge_memory(&[a, b], false, true));
     }
 }

@@ -5,7 +5,6 @@ use std::time::Instant;
 use itgfx_backends::open;
 use itgfx_backends::scene::Scene;
 use itgfx_backends::tracer::Prepared;
-use itgfx_backends::visibility::counts_file::available_memory;
 use itgfx_backends::visibility::merge::{join_ranges, merge_memory};
 use itgfx_backends::visibility::{LineOptions, VisibilityCounts, count_visibility};
 
@@ -96,7 +95,8 @@ fn check_coverage(ranges: &[(u64, u64)], lines: u64) -> Result<(), CliError> {
 /// estimate), checked to be of one run, their line ranges joined (a line
 /// counted twice is refused; with `--lines N` missing lines are named),
 /// and the bytes the merge may hold at its peak estimated
-/// ([`merge_memory`]): refused if past the memory available.
+/// ([`merge_memory`]): refused if past the memory budget
+/// (`itgfx_backends::memory`).
 ///
 /// # Errors
 /// One-line usage errors naming the file.
@@ -118,16 +118,15 @@ fn plan_merge(o: &ComplexityOptions) -> Result<Option<u64>, CliError> {
         check_coverage(&ranges, n)?;
     }
     let need = merge_memory(&heads, o.save_counts.is_some(), !o.counts_only);
-    if let Some(available) = available_memory()
-        && need > available
-    {
-        return Err(CliError::usage(format!(
-            "--merge: these {} files may take {} MiB to merge (estimated from their headers), {} MiB are available: merge fewer at a time (a merge tree: merge groups with --save-counts, then the results)",
-            o.merge.len(),
-            need >> 20,
-            available >> 20
-        )));
-    }
+    itgfx_backends::memory::check(
+        || format!("--merge of these {} files (estimated from their headers)", o.merge.len()),
+        need,
+    )
+    .map_err(|e| {
+        CliError::usage(format!(
+            "{e}: merge fewer at a time (a merge tree: merge groups with --save-counts --counts-only, then the results)"
+        ))
+    })?;
     Ok(Some(need))
 }
 
@@ -218,6 +217,14 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
         return Ok((counts_report(o, &scene, tracer.name(), &counts, estimate, t0), counts, scene));
     }
     let c = counts.complexity(base);
+    if c.segments == 0 && c.lines > 0 {
+        // Kept, not refused: the measures of an empty channel are what the
+        // scene gives; but a closed mesh wound outwards is the usual cause.
+        eprintln!(
+            "itgfx: warning: {}: none of {} lines joined two patches facing each other, so every measure is that of an empty channel: complexity looks at a scene from inside (faces wound inwards); an object wound outwards is seen from outside only",
+            scene.name, c.lines
+        );
+    }
     let seconds = t0.elapsed().as_secs_f64();
     let m = &c.measures;
     let mut r = Report::new();
@@ -241,11 +248,7 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
     r.maybe_real("I_S_corrected", c.mutual_information_corrected, unit);
     r.maybe_real("I_S_cont", c.continuous, unit);
     r.maybe_real("I_S_cont_stderr", c.continuous_stderr, unit);
-    r.maybe_real(
-        "discretisation_accuracy",
-        c.continuous.filter(|&ic| ic > 0.0).map(|ic| m.mutual_information / ic),
-        None,
-    );
+    r.maybe_real("discretisation_accuracy", c.discretisation_accuracy, None);
     r.real("H_S_normalized", m.normalized_entropy, None).real("I_S_normalized", m.normalized_mutual_information, None);
     r.real("seconds", seconds, Some("s"));
     // Pictures: information (or discretisation error) per unit area.

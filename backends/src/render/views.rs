@@ -17,8 +17,7 @@ const PROBES: u32 = 64;
 #[must_use]
 pub fn default_camera(scene: &Scene) -> Camera {
     let d = DVec3::new;
-    let base = scene.name.split(['/', ':']).next().unwrap_or_default();
-    let (eye, target, fov) = match base {
+    let (eye, target, fov) = match scene.base_name().split(':').next().unwrap_or_default() {
         "cornell-box" => (d(278.0, 273.0, 15.0), d(278.0, 273.0, 559.2), 54.0),
         "mirror-room" => (d(2.0, 1.45, 0.25), d(2.0, 1.05, 5.0), 62.0),
         _ => {

@@ -386,10 +386,10 @@ impl VisibilityCounts {
             .map_err(|_| invalid("the scene name is not UTF-8"))?;
         let (patches, areas_hash) = (f.u64("the patch count")?, f.u64("the areas hash")?);
         let nr = f.u64("the range count")?;
-        let raw = f.bytes(nr.saturating_mul(16), "line ranges")?;
+        let raw = f.bytes(f.declared(nr, 16, "line ranges")?, "line ranges")?;
         let at = |b: &[u8], i: usize| u64::from_le_bytes(b[i..i + 8].try_into().expect("8 bytes"));
         let ranges = raw.chunks_exact(16).map(|r| (at(r, 0), at(r, 8))).collect();
-        f.skip(patches.saturating_mul(32), "the areas and endpoints")?;
+        f.skip(f.declared(patches, 32, "patches")?, "the areas and endpoints")?;
         let mut sizes = Vec::with_capacity(blocks as usize);
         for k in 0..blocks {
             f.skip(64, &format!("block {k}'s totals"))?;
@@ -402,9 +402,11 @@ impl VisibilityCounts {
                 )));
             }
             f.skip(patches.saturating_mul(4), &format!("block {k}'s rows"))?;
-            f.skip(pairs.saturating_mul(tw + cw), &format!("block {k}'s pairs"))?;
+            let what = format!("block {k}'s pairs");
+            f.skip(f.declared(pairs, tw + cw, &what)?, &what)?;
             let bg = f.u64(&format!("block {k}'s background entry count"))?;
-            f.skip(bg.saturating_mul(12), &format!("block {k}'s background entries"))?;
+            let what = format!("block {k}'s background entries");
+            f.skip(f.declared(bg, 12, &what)?, &what)?;
             sizes.push((pairs, bg));
         }
         Ok(Some(CountsHeader {
@@ -426,6 +428,17 @@ struct Peek {
 }
 
 impl Peek {
+    /// The bytes of `declared` items of `size` bytes, refused (as the
+    /// reader does) if past the bytes left.
+    fn declared(&self, declared: u64, size: u64, what: &str) -> Result<u64, CountsError> {
+        let left = self.len - self.at;
+        match declared.checked_mul(size) {
+            Some(bytes) if bytes <= left => Ok(bytes),
+            _ => Err(CountsError::Format(format!(
+                "{what}: {declared} declared but only {left} bytes are left in the file"
+            ))),
+        }
+    }
     fn check(&self, n: u64, what: &str) -> Result<(), CountsError> {
         if n > self.len - self.at {
             return Err(CountsError::Format(format!("the binary counts file ends inside {what} (truncated?)")));

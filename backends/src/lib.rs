@@ -4,6 +4,8 @@
 //!
 //! * [`scene`]: patches of triangles; built-in scenes ([`scene::built_in`])
 //!   and Wavefront OBJ ([`obj::load_obj`]), subdivision.
+//! * [`formats`]: scene files by extension or magic ([`formats::load`]):
+//!   OBJ, PLY, glTF 2.0 / GLB and Mitsuba 3 XML (read and written).
 //! * [`tracer`]: the [`tracer::Tracer`] seam (every crossing, closest hit,
 //!   occlusion), the CPU backend (rayon + obvhs) and the brute-force
 //!   reference backend.
@@ -26,6 +28,7 @@
 
 pub mod backend;
 pub mod camera;
+pub mod formats;
 pub mod imaging;
 pub mod lines;
 pub mod memory;

@@ -80,6 +80,10 @@ pub struct RadiosityOptions {
     /// Picture width and height in pixels (8..=2048)
     #[arg(long, value_name = "W", default_value = "256", value_parser = size)]
     pub size: u32,
+    /// Camera of the pictures in scene units: eye, target, up (3 numbers each) and vertical field of
+    /// view in degrees (default: the scene file's camera, else the scene's default view)
+    #[arg(long, value_name = "EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV", value_parser = crate::render::camera)]
+    pub camera: Option<itgfx_backends::camera::Camera>,
     /// Score the solution against a path-traced reference (reference.exr or .pfm of --path-trace)
     #[arg(long, value_name = "R.exr", value_parser = out_path, conflicts_with = "path_trace")]
     pub reference: Option<PathBuf>,
@@ -350,7 +354,7 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
     let t0 = Instant::now();
     let prepared = Prepared::new(&scene);
     let tracer = open(o.tracing.backend, &prepared).map_err(usage)?;
-    let camera = default_camera(&scene);
+    let camera = o.camera.unwrap_or_else(|| default_camera(&scene));
     let mut r = Report::new();
     r.text("scene", scene.name.clone()).text("backend", tracer.name());
     r.count("polygons", h0.roots.len() as u64).count("pixels", u64::from(o.size) * u64::from(o.size));

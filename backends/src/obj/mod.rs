@@ -363,7 +363,7 @@ pub fn parse_obj(
 /// magnitude near 1 when it is above `2^RESCALE_EXPONENT`, or, for tiny
 /// scenes, their extent near 1 when it is below `2^-RESCALE_EXPONENT` (but
 /// never the magnitude above `2^RESCALE_EXPONENT`); else 0.
-fn rescale_exponent(used: impl Iterator<Item = DVec3>) -> i32 {
+pub(crate) fn rescale_exponent(used: impl Iterator<Item = DVec3>) -> i32 {
     let mut lo = DVec3::splat(f64::INFINITY);
     let mut hi = DVec3::splat(f64::NEG_INFINITY);
     for v in used {
@@ -383,7 +383,7 @@ fn rescale_exponent(used: impl Iterator<Item = DVec3>) -> i32 {
 }
 
 /// `v · 2^k` in two exact steps (`2^k` alone may not be a normal number).
-fn scale_by(v: DVec3, k: i32) -> DVec3 {
+pub(crate) fn scale_by(v: DVec3, k: i32) -> DVec3 {
     v * 2f64.powi(k / 2) * 2f64.powi(k - k / 2)
 }
 

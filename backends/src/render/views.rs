@@ -16,6 +16,9 @@ const PROBES: u32 = 64;
 /// its front wall), else a view from outside framing the bounding box.
 #[must_use]
 pub fn default_camera(scene: &Scene) -> Camera {
+    if let Some(c) = scene.camera {
+        return c;
+    }
     let d = DVec3::new;
     let (eye, target, fov) = match scene.base_name().split(':').next().unwrap_or_default() {
         "cornell-box" => (d(278.0, 273.0, 15.0), d(278.0, 273.0, 559.2), 54.0),

@@ -5,6 +5,7 @@ use std::time::Instant;
 use itgfx_backends::open;
 use itgfx_backends::scene::Scene;
 use itgfx_backends::tracer::Prepared;
+use itgfx_backends::visibility::merge::{join_ranges, merge_memory};
 use itgfx_backends::visibility::{LineOptions, VisibilityCounts, count_visibility};
 
 use crate::CliError;
@@ -89,6 +90,80 @@ fn check_coverage(ranges: &[(u64, u64)], lines: u64) -> Result<(), CliError> {
     Err(CliError::usage(format!("--merge: the files cover {covered}, past --lines {lines} (a shard of another run?)")))
 }
 
+/// Before a `--merge` reads any counts: the headers of its files (binary
+/// counts files; a JSON file is checked as it is read, and gives no
+/// estimate), checked to be of one run, their line ranges joined (a line
+/// counted twice is refused; with `--lines N` missing lines are named),
+/// and the bytes the merge may hold at its peak estimated
+/// ([`merge_memory`]): refused if past the memory budget
+/// (`itgfx_backends::memory`).
+///
+/// # Errors
+/// One-line usage errors naming the file.
+fn plan_merge(o: &ComplexityOptions) -> Result<Option<u64>, CliError> {
+    let mut heads: Vec<itgfx_backends::visibility::counts_binary::CountsHeader> = Vec::with_capacity(o.merge.len());
+    for f in &o.merge {
+        let fail = |e: itgfx_backends::visibility::CountsError| CliError::usage(format!("{f:?}: {e}"));
+        let Some(h) = VisibilityCounts::peek(f).map_err(fail)? else { return Ok(None) };
+        if let Some(first) = heads.first() {
+            first.same_run(&h).map_err(fail)?;
+        }
+        heads.push(h);
+    }
+    let mut ranges = Vec::new();
+    for (f, h) in o.merge.iter().zip(&heads) {
+        ranges = join_ranges(&ranges, &h.ranges).map_err(|e| CliError::usage(format!("{f:?}: {e}")))?;
+    }
+    if let Some(n) = o.lines {
+        check_coverage(&ranges, n)?;
+    }
+    let need = merge_memory(&heads, o.save_counts.is_some(), !o.counts_only);
+    itgfx_backends::memory::check(
+        || format!("--merge of these {} files (estimated from their headers)", o.merge.len()),
+        need,
+    )
+    .map_err(|e| {
+        CliError::usage(format!(
+            "{e}: merge fewer at a time (a merge tree: merge groups with --save-counts --counts-only, then the results)"
+        ))
+    })?;
+    Ok(Some(need))
+}
+
+/// The report of a `--counts-only` run: what the saved counts cover, no
+/// measures.
+fn counts_report(
+    o: &ComplexityOptions,
+    scene: &Scene,
+    backend: &str,
+    counts: &VisibilityCounts,
+    estimate: Option<u64>,
+    t0: Instant,
+) -> Report {
+    let sum = |f: fn(&itgfx_backends::visibility::BlockCounts) -> u64| counts.blocks.iter().map(f).sum::<u64>();
+    let mut r = Report::new();
+    r.text("scene", scene.name.clone())
+        .text("backend", backend)
+        .text("lines_kind", if counts.local { "local" } else { "global" });
+    r.count("patches", scene.patches.len() as u64)
+        .count("lines", counts.lines())
+        .count("segments", sum(|b| b.segments))
+        .count("seed", counts.seed);
+    let ranges: Vec<String> = counts.ranges.iter().map(|r| format!("{}..{}", r.0, r.1)).collect();
+    r.text("ranges", ranges.join(", ")).count("pairs", sum(|b| b.pairs.len() as u64));
+    if let Some(s) = o.shard {
+        r.text("shard", s.to_string());
+    }
+    if let Some(b) = estimate {
+        r.real("merge_memory_estimate_MiB", b as f64 / f64::from(1u32 << 20), None);
+    }
+    if let Some(p) = &o.save_counts {
+        r.text("saved", p.display().to_string());
+    }
+    r.real("seconds", t0.elapsed().as_secs_f64(), Some("s"));
+    r
+}
+
 /// Runs `itgfx complexity`.
 ///
 /// # Errors
@@ -104,12 +179,14 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
     let prepared = Prepared::new(&scene);
     let tracer = open(o.tracing.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
     let opts = LineOptions { lines, seed, local, blocks: o.blocks, offset };
+    let mut estimate = None;
     let counts = if o.merge.is_empty() {
         let mut progress = Progress::new();
         count_visibility(&scene, &prepared, tracer.as_ref(), &opts, &mut |d, t| progress.update(d, t))
             .map_err(|e| CliError::usage(e.to_string()))?
     } else {
         // Evaluate saved shards instead of tracing.
+        estimate = plan_merge(o)?;
         let mut merged: Option<VisibilityCounts> = None;
         for f in &o.merge {
             let (_, c) = VisibilityCounts::read(f).map_err(|e| CliError::usage(format!("{f:?}: {e}")))?;
@@ -136,6 +213,9 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
         };
         crate::output::write(p, &bytes)?;
     }
+    if o.counts_only {
+        return Ok((counts_report(o, &scene, tracer.name(), &counts, estimate, t0), counts, scene));
+    }
     let c = counts.complexity(base);
     if c.segments == 0 && c.lines > 0 {
         // Kept, not refused: the measures of an empty channel are what the
@@ -157,6 +237,9 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
         .count("seed", counts.seed);
     if let Some(s) = o.shard {
         r.text("shard", s.to_string()).count("first_line", offset);
+    }
+    if let Some(b) = estimate {
+        r.real("merge_memory_estimate_MiB", b as f64 / f64::from(1u32 << 20), None);
     }
     r.count("escaped", c.escaped).count("unsampled_patches", m.unsampled_patches as u64);
     r.real("H_P", m.positional_entropy, unit).real("H_S", m.scene_entropy, unit).real("H_J", m.joint_entropy, unit);

@@ -180,6 +180,10 @@ pub struct ComplexityOptions {
     /// Shard i of n (0-based) of the --lines run: lines [i*N/n, (i+1)*N/n), for job arrays
     #[arg(long, value_name = "i/n", value_parser = crate::shard::parse, conflicts_with = "offset")]
     pub shard: Option<crate::shard::Shard>,
+    /// Save the counts (--save-counts) and report what they cover, without the measures: the inner
+    /// steps of a merge tree (over half a partial merge's time is the measures' evaluation)
+    #[arg(long, requires = "save_counts", conflicts_with_all = ["export_ply", "image"])]
+    pub counts_only: bool,
     /// Write the counts to F (binary; JSON if F ends in .json)
     #[arg(long, value_name = "F", value_parser = out_path)]
     pub save_counts: Option<PathBuf>,

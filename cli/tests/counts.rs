@@ -26,11 +26,16 @@ fn path(name: &str) -> String {
     d.join(name).to_str().unwrap().to_string()
 }
 
+/// The JSON output without the wall-clock time and a merge's memory
+/// estimate (binary inputs only: a merge of JSON files has none).
 fn json_of(args: &[&str]) -> Value {
     let out = itgfx(args);
     assert!(out.status.success(), "itgfx {args:?}: {}", String::from_utf8_lossy(&out.stderr));
     let mut v: Value = serde_json::from_slice(&out.stdout).unwrap();
     v.as_object_mut().unwrap().remove("seconds");
+    if let Some(m) = v.as_object_mut().unwrap().remove("merge_memory_estimate_MiB") {
+        assert!(m.as_f64().is_some_and(|m| m > 0.0) && args.contains(&"--merge"), "{m}");
+    }
     v
 }
 

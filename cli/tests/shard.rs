@@ -21,12 +21,16 @@ fn path(name: &str) -> String {
     d.join(name).to_str().unwrap().to_string()
 }
 
-/// The JSON output without the wall-clock time.
+/// The JSON output without the wall-clock time and a merge's memory estimate.
 fn json_of(args: &[&str]) -> Value {
     let out = itgfx(args);
     assert!(out.status.success(), "itgfx {args:?}: {}", String::from_utf8_lossy(&out.stderr));
     let mut v: Value = serde_json::from_slice(&out.stdout).unwrap();
     v.as_object_mut().unwrap().remove("seconds");
+    if let Some(m) = v.as_object_mut().unwrap().remove("merge_memory_estimate_MiB") {
+        assert!(m.as_f64().is_some_and(|m| m > 0.0), "{m}");
+        assert!(args.contains(&"--merge"), "a memory estimate without --merge");
+    }
     v
 }
 
@@ -94,6 +98,48 @@ fn complexity_merge_refuses_missing_duplicate_and_foreign_shards() {
     refused(&strs(&m(&[&s[0], &s[1], &seed], &[])), "seed 5 and seed 6");
     let other = ["complexity", "cube-enclosure:3", "--merge", &s[0], "--json"];
     refused(&other, "the counts are of scene \"cube-enclosure:2\"");
+}
+
+/// A merge tree: partial merges (`--merge … --save-counts`) are counts
+/// files that record the ranges they cover, so they merge again; a tree of
+/// merges (((0,1),(2,3)),4) and a lopsided one equal the flat merge and the
+/// single run bit for bit. A partial merge overlapping another input, or a
+/// tree missing a piece, is refused with one line before any counts are read.
+#[test]
+fn complexity_merge_tree_equals_flat_merge_and_single_run() {
+    let single = json_of(&["complexity", SCENE, "--lines", LINES, "--seed", "5", "--json"]);
+    let s: Vec<String> = (0..5).map(|i| complexity_shard(i, 5, "5")).collect();
+    let flat = json_of(&strs(&complexity_merge(&s.iter().collect::<Vec<_>>(), &["--lines", LINES])));
+    assert_eq!(flat, single);
+    // A partial merge of `files` saved to `name`: it reports the lines it covers.
+    let part = |files: &[&String], name: &str, lines: u64| {
+        let p = path(name);
+        let v = json_of(&strs(&complexity_merge(files, &["--save-counts", &p])));
+        assert_eq!(v["lines"].as_u64(), Some(lines), "{name}");
+        p
+    };
+    let a = part(&[&s[0], &s[1]], "t-a.counts", 8000);
+    let b = part(&[&s[2], &s[3]], "t-b.counts", 8000);
+    let ab = part(&[&b, &a], "t-ab.counts", 16000);
+    // --counts-only saves the same counts, without the measures.
+    let p = path("t-ab-only.counts");
+    let v = json_of(&strs(&complexity_merge(&[&b, &a], &["--save-counts", &p, "--counts-only"])));
+    assert_eq!((v["lines"].as_u64(), v["ranges"].as_str(), v.get("I_S")), (Some(16000), Some("0..16000"), None));
+    assert_eq!(std::fs::read(&p).unwrap(), std::fs::read(&ab).unwrap());
+    assert_eq!(json_of(&strs(&complexity_merge(&[&ab, &s[4]], &["--lines", LINES]))), single);
+    // Lopsided: ((((4,3),2),1),0), JSON partials (the other format) on the way.
+    let mut acc = part(&[&s[4], &s[3]], "t-l1.json", 8001);
+    for (i, lines) in [(2usize, 12001), (1, 16001)] {
+        acc = part(&[&acc, &s[i]], &format!("t-l{i}.counts"), lines);
+    }
+    assert_eq!(json_of(&strs(&complexity_merge(&[&s[0], &acc], &["--lines", LINES]))), single);
+    // A piece twice (a shard inside a partial), or a piece missing.
+    let m = |f: &[&String], e: &[&str]| complexity_merge(f, e);
+    refused(&strs(&m(&[&ab, &s[1], &s[4]], &[])), "lines 4000..8000 are counted twice");
+    refused(&strs(&m(&[&a, &ab], &[])), "are counted twice");
+    refused(&strs(&m(&[&a, &s[4]], &["--lines", LINES])), "lines 8000..16000 of --lines 20001 are missing");
+    let other = complexity_shard(4, 5, "6");
+    refused(&strs(&m(&[&ab, &other], &[])), "seed 5 and seed 6");
 }
 
 /// Bad `--shard` values and combinations are refused before any work.

@@ -330,6 +330,144 @@ fn read_block(r: &mut Reader<'_>, n: usize, k: usize) -> Result<BlockCounts, Cou
     Ok(BlockCounts { lines, segments, escaped, pairs, background, continuous: ContinuousSums { samples, sum, sum_sq } })
 }
 
+/// What a binary counts file says about itself without its counts: the run
+/// (scene, line kind, seed, blocks), the line ranges it covers and each
+/// block's pair and background entry counts. A merge reads these of every
+/// file first, to refuse overlapping or missing ranges and to estimate its
+/// memory ([`super::merge::merge_memory`]) before reading any counts.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CountsHeader {
+    /// The scene the counts are of.
+    pub scene: SceneFingerprint,
+    /// Local lines (else global).
+    pub local: bool,
+    /// The run's seed.
+    pub seed: u64,
+    /// The line ranges the counts cover.
+    pub ranges: Vec<(u64, u64)>,
+    /// Per jackknife block: (pairs, background entries).
+    pub blocks: Vec<(u64, u64)>,
+    /// The file's size in bytes.
+    pub bytes: u64,
+}
+
+impl VisibilityCounts {
+    /// Reads the header of the binary counts file at `path` and steps over
+    /// each block's counts (seeking, reading only the sizes): `None` for a
+    /// JSON counts file. Every declared size is checked against the file's
+    /// length; the counts themselves are checked when read.
+    ///
+    /// # Errors
+    /// [`CountsError::Format`] for an unreadable, foreign or truncated file,
+    /// [`CountsError::Invalid`] for a bad block count or width.
+    pub fn peek(path: &std::path::Path) -> Result<Option<CountsHeader>, CountsError> {
+        let io = |e: std::io::Error| CountsError::Format(format!("{}: {e}", path.display()));
+        let file = std::fs::File::open(path).map_err(io)?;
+        let len = file.metadata().map_err(io)?.len();
+        let mut f = Peek { file: std::io::BufReader::new(file), at: 0, len };
+        if len < 8 || f.bytes(8, "the magic")? != MAGIC {
+            return Ok(None);
+        }
+        let version = f.u32("the version")?;
+        if version != BINARY_VERSION {
+            return Err(CountsError::Format(format!(
+                "a binary counts file of version {version}: this itgfx reads version {BINARY_VERSION}; count again with --save-counts"
+            )));
+        }
+        let (flags, seed, blocks) = (f.u32("the flags")?, f.u64("the seed")?, f.u32("the block count")?);
+        if flags > 1 {
+            return Err(invalid(format!("flags {flags:#x}: only bit 0 (local lines) is defined")));
+        }
+        if !(1..=MAX_BLOCKS).contains(&blocks) {
+            return Err(invalid(format!("{blocks} jackknife blocks: expected 1..={MAX_BLOCKS}")));
+        }
+        let name_len = f.u32("the scene name's length")?;
+        let name = String::from_utf8(f.bytes(u64::from(name_len), "the scene name")?)
+            .map_err(|_| invalid("the scene name is not UTF-8"))?;
+        let (patches, areas_hash) = (f.u64("the patch count")?, f.u64("the areas hash")?);
+        let nr = f.u64("the range count")?;
+        let raw = f.bytes(f.declared(nr, 16, "line ranges")?, "line ranges")?;
+        let at = |b: &[u8], i: usize| u64::from_le_bytes(b[i..i + 8].try_into().expect("8 bytes"));
+        let ranges = raw.chunks_exact(16).map(|r| (at(r, 0), at(r, 8))).collect();
+        f.skip(f.declared(patches, 32, "patches")?, "the areas and endpoints")?;
+        let mut sizes = Vec::with_capacity(blocks as usize);
+        for k in 0..blocks {
+            f.skip(64, &format!("block {k}'s totals"))?;
+            let pairs = f.u64(&format!("block {k}'s pair count"))?;
+            let w = f.bytes(2, &format!("block {k}'s widths"))?;
+            let (tw, cw) = (u64::from(w[0]), u64::from(w[1]));
+            if ![1, 2, 4].contains(&tw) || ![1, 2, 4, 8].contains(&cw) {
+                return Err(invalid(format!(
+                    "block {k}: widths {tw} and {cw}: expected 1, 2 or 4 bytes per step and 1, 2, 4 or 8 per count"
+                )));
+            }
+            f.skip(patches.saturating_mul(4), &format!("block {k}'s rows"))?;
+            let what = format!("block {k}'s pairs");
+            f.skip(f.declared(pairs, tw + cw, &what)?, &what)?;
+            let bg = f.u64(&format!("block {k}'s background entry count"))?;
+            let what = format!("block {k}'s background entries");
+            f.skip(f.declared(bg, 12, &what)?, &what)?;
+            sizes.push((pairs, bg));
+        }
+        Ok(Some(CountsHeader {
+            scene: SceneFingerprint { name, patches, areas_hash },
+            local: flags == 1,
+            seed,
+            ranges,
+            blocks: sizes,
+            bytes: len,
+        }))
+    }
+}
+
+/// Reads a file front to back by pieces, each checked against its length.
+struct Peek {
+    file: std::io::BufReader<std::fs::File>,
+    at: u64,
+    len: u64,
+}
+
+impl Peek {
+    /// The bytes of `declared` items of `size` bytes, refused (as the
+    /// reader does) if past the bytes left.
+    fn declared(&self, declared: u64, size: u64, what: &str) -> Result<u64, CountsError> {
+        let left = self.len - self.at;
+        match declared.checked_mul(size) {
+            Some(bytes) if bytes <= left => Ok(bytes),
+            _ => Err(CountsError::Format(format!(
+                "{what}: {declared} declared but only {left} bytes are left in the file"
+            ))),
+        }
+    }
+    fn check(&self, n: u64, what: &str) -> Result<(), CountsError> {
+        if n > self.len - self.at {
+            return Err(CountsError::Format(format!("the binary counts file ends inside {what} (truncated?)")));
+        }
+        Ok(())
+    }
+    fn bytes(&mut self, n: u64, what: &str) -> Result<Vec<u8>, CountsError> {
+        use std::io::Read;
+        self.check(n, what)?;
+        let mut buf = vec![0; usize::try_from(n).map_err(|_| invalid(format!("{what}: too large")))?];
+        self.file.read_exact(&mut buf).map_err(|e| CountsError::Format(format!("{what}: {e}")))?;
+        self.at += n;
+        Ok(buf)
+    }
+    fn skip(&mut self, n: u64, what: &str) -> Result<(), CountsError> {
+        self.check(n, what)?;
+        let step = i64::try_from(n).map_err(|_| invalid(format!("{what}: too large")))?;
+        self.file.seek_relative(step).map_err(|e| CountsError::Format(format!("{what}: {e}")))?;
+        self.at += n;
+        Ok(())
+    }
+    fn u32(&mut self, what: &str) -> Result<u32, CountsError> {
+        Ok(u32::from_le_bytes(self.bytes(4, what)?.try_into().expect("4 bytes")))
+    }
+    fn u64(&mut self, what: &str) -> Result<u64, CountsError> {
+        Ok(u64::from_le_bytes(self.bytes(8, what)?.try_into().expect("8 bytes")))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -423,5 +561,36 @@ mod tests {
         let mut b = bytes;
         b[8..12].copy_from_slice(&2u32.to_le_bytes());
         assert!(VisibilityCounts::from_binary(&b).unwrap_err().to_string().contains("version 2"));
+    }
+
+    /// `peek` reads what the file says without its counts: the header
+    /// matches the counts, each block's sizes too; a JSON file gives
+    /// `None`; every truncation within the header or a block's sizes, or
+    /// short of a block's counts, is refused.
+    #[test]
+    fn peek_reads_the_header_and_block_sizes() {
+        let c = counts(300, true);
+        let bytes = c.to_binary("cube-enclosure:2");
+        let dir = std::env::temp_dir().join(format!("itgfx-peek-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("c.counts");
+        std::fs::write(&p, &bytes).unwrap();
+        let h = VisibilityCounts::peek(&p).unwrap().unwrap();
+        assert_eq!((h.local, h.seed, &h.ranges, h.bytes), (true, 3, &c.ranges, bytes.len() as u64));
+        assert_eq!(h.scene, c.scene);
+        let sizes: Vec<(u64, u64)> =
+            c.blocks.iter().map(|b| (b.pairs.len() as u64, b.background.len() as u64)).collect();
+        assert_eq!(h.blocks, sizes);
+        assert!(sizes.iter().any(|s| s.0 > 0));
+        for cut in [9, 30, 60, bytes.len() / 2, bytes.len() - 1] {
+            std::fs::write(&p, &bytes[..cut]).unwrap();
+            let e = VisibilityCounts::peek(&p).unwrap_err().to_string();
+            assert!(e.contains("truncated"), "cut at {cut}: {e}");
+        }
+        let mut json = Vec::new();
+        c.save("cube-enclosure:2", &mut json).unwrap();
+        std::fs::write(&p, &json).unwrap();
+        assert_eq!(VisibilityCounts::peek(&p).unwrap(), None);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -71,6 +71,19 @@ struct Pilot {
     display_variance: f64,
 }
 
+impl Pilot {
+    /// Adds one sample to the sums.
+    fn add(&mut self, c: &[f64; 3]) {
+        for ((s, q), v) in self.sum.iter_mut().zip(&mut self.squares).zip(c) {
+            *s += v;
+            *q += v * v;
+        }
+    }
+}
+
+/// A pixel's estimate: mean, sample variance, samples.
+type Estimate = ([f64; 3], [f64; 3], u32);
+
 /// Display-space variance of one sample of a pixel with samples `s`, to
 /// first order: `Σ_c (255 · sRGB'(m_c))² s_c² / 3` with `m_c`, `s_c²` the
 /// mean and sample variance of channel `c` (equal channel weights, as
@@ -130,12 +143,7 @@ pub fn render(
                 .chunks(n)
                 .map(|s| {
                     let mut p = Pilot { display_variance: display_variance(s), ..Pilot::default() };
-                    for c in s {
-                        for k in 0..3 {
-                            p.sum[k] += c[k];
-                            p.squares[k] += c[k] * c[k];
-                        }
-                    }
+                    s.iter().for_each(|c| p.add(c));
                     p
                 })
                 .collect();
@@ -153,7 +161,7 @@ pub fn render(
     let (first_row, end_row) = view.rows;
     let mine = u64::from(end_row - first_row).max(1);
     let done = AtomicU64::new(0);
-    let rows: Vec<Vec<([f64; 3], [f64; 3], u32)>> = (first_row..end_row)
+    let rows: Vec<Vec<Estimate>> = (first_row..end_row)
         .into_par_iter()
         .map(|y| {
             let batches: Vec<Batch> = (0..w)
@@ -166,12 +174,7 @@ pub fn render(
             let mut k = 0;
             for b in &batches {
                 let p = &mut acc[b.slot as usize];
-                for c in &rgb[k..k + b.n as usize] {
-                    for j in 0..3 {
-                        p.sum[j] += c[j];
-                        p.squares[j] += c[j] * c[j];
-                    }
-                }
+                rgb[k..k + b.n as usize].iter().for_each(|c| p.add(c));
                 k += b.n as usize;
             }
             let row = (0..w)
@@ -237,12 +240,7 @@ mod tests {
     fn sums_give_the_sample_variance() {
         let s = [[1.0, 0.0, 2.0], [3.0, 0.0, 2.0], [5.0, 0.0, 2.0]];
         let mut p = Pilot::default();
-        for c in &s {
-            for k in 0..3 {
-                p.sum[k] += c[k];
-                p.squares[k] += c[k] * c[k];
-            }
-        }
+        s.iter().for_each(|c| p.add(c));
         let (m, v) = from_sums(&p, 3);
         assert_eq!(m, [3.0, 0.0, 2.0]);
         assert!((v[0] - 4.0).abs() < 1e-12 && v[1] == 0.0 && v[2].abs() < 1e-12);

@@ -28,6 +28,7 @@ pub mod backend;
 pub mod camera;
 pub mod imaging;
 pub mod lines;
+pub mod memory;
 pub mod meshes;
 pub mod obj;
 pub mod preview;

@@ -62,11 +62,14 @@ pub fn geosphere(name: &str, level: u32) -> Scene {
 }
 
 /// A ring torus around the y axis with radii `big` and `small`, split into
-/// `around × across` planar quads.
+/// `around × across` planar quads. Closed: the last ring and band of quads
+/// reuse the first ones' vertices (angle 2π is taken as 0, whose sine and
+/// cosine round differently), so the seams share vertices exactly.
 #[must_use]
 pub fn torus(name: &str, big: f64, small: f64, around: u32, across: u32) -> Scene {
     let mut s = Scene::named(name);
     let p = |i: u32, j: u32| {
+        let (i, j) = (i % around, j % across);
         let (u, w) = (
             std::f64::consts::TAU * f64::from(i) / f64::from(around),
             std::f64::consts::TAU * f64::from(j) / f64::from(across),

@@ -137,6 +137,14 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
         crate::output::write(p, &bytes)?;
     }
     let c = counts.complexity(base);
+    if c.segments == 0 && c.lines > 0 {
+        // Kept, not refused: the measures of an empty channel are what the
+        // scene gives; but a closed mesh wound outwards is the usual cause.
+        eprintln!(
+            "itgfx: warning: {}: none of {} lines joined two patches facing each other, so every measure is that of an empty channel: complexity looks at a scene from inside (faces wound inwards); an object wound outwards is seen from outside only",
+            scene.name, c.lines
+        );
+    }
     let seconds = t0.elapsed().as_secs_f64();
     let m = &c.measures;
     let mut r = Report::new();
@@ -157,11 +165,7 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
     r.maybe_real("I_S_corrected", c.mutual_information_corrected, unit);
     r.maybe_real("I_S_cont", c.continuous, unit);
     r.maybe_real("I_S_cont_stderr", c.continuous_stderr, unit);
-    r.maybe_real(
-        "discretisation_accuracy",
-        c.continuous.filter(|&ic| ic > 0.0).map(|ic| m.mutual_information / ic),
-        None,
-    );
+    r.maybe_real("discretisation_accuracy", c.discretisation_accuracy, None);
     r.real("H_S_normalized", m.normalized_entropy, None).real("I_S_normalized", m.normalized_mutual_information, None);
     r.real("seconds", seconds, Some("s"));
     // Pictures: information (or discretisation error) per unit area.

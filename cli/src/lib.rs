@@ -58,5 +58,7 @@ impl std::error::Error for CliError {}
 /// A core error, prefixed with what was being measured.
 #[must_use]
 pub fn core_err(what: &str, e: itgfx_core::Error) -> CliError {
-    CliError { message: format!("{what}: {e}") }
+    // The core names no option; the CLI says which one helps.
+    let hint = if matches!(e, itgfx_core::Error::NotNormalized { .. }) { " (--normalize does)" } else { "" };
+    CliError { message: format!("{what}: {e}{hint}") }
 }

@@ -258,6 +258,7 @@ pub fn run(m: &Measure) -> Result<Report, CliError> {
             }
             let m = core_::scene_measures(&a, &f.data, base).map_err(|e| core_err("scene", e))?;
             let n = a.len();
+            reciprocity_warning(&a, &f.data);
             let mut mi = vec![0.0; n * n];
             let mut per = vec![0.0; n];
             core_::mutual_information_matrix_into(&a, &f.data, base, &mut mi, &mut per)
@@ -290,6 +291,38 @@ pub fn run(m: &Measure) -> Result<Report, CliError> {
         }
     }
     Ok(r)
+}
+
+/// Largest relative departure from reciprocity `a_i F_ij = a_j F_ji`
+/// (Part III eq. (42)) that passes without a warning.
+const RECIPROCITY_TOLERANCE: f64 = 1e-3;
+
+/// Warns (stderr, one line) when the form factors are not reciprocal: the
+/// measures take `p_ij = a_i F_ij` as the joint and `a` as both marginals
+/// (eqs. (42)-(46)), which only a reciprocal matrix makes true. A warning,
+/// not a refusal: estimated form factors are reciprocal only up to their
+/// noise, and no tolerance would suit every estimate.
+fn reciprocity_warning(a: &[f64], f: &[f64]) {
+    let n = a.len();
+    let total: f64 = a.iter().sum();
+    let mut worst = (0.0, 0, 0);
+    for i in 0..n {
+        for j in i + 1..n {
+            let (x, y) = (a[i] / total * f[i * n + j], a[j] / total * f[j * n + i]);
+            let scale = x.abs().max(y.abs());
+            if scale > 0.0 && (x - y).abs() / scale > worst.0 {
+                worst = ((x - y).abs() / scale, i, j);
+            }
+        }
+    }
+    if worst.0 > RECIPROCITY_TOLERANCE {
+        eprintln!(
+            "itgfx: warning: scene: the form factors are not reciprocal (a_i F_ij = a_j F_ji, Part III eq. (42)): patches {} and {} differ by {:.3}%; the measures take a as both marginals",
+            worst.1,
+            worst.2,
+            100.0 * worst.0
+        );
+    }
 }
 
 #[cfg(test)]

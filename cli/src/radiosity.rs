@@ -195,6 +195,18 @@ fn outputs(o: &RadiosityOptions) -> Result<Vec<(&'static str, PathBuf)>, CliErro
     Ok(names.iter().copied().zip(paths).collect())
 }
 
+/// Refuses a picture whose linear values do not fit the f32 of the EXR and
+/// PFM outputs (or are not finite), before any file is written: a value
+/// past 3.4e38 would be written as infinity.
+fn fits_f32(what: &str, px: &[Option<Rgb>]) -> Result<(), CliError> {
+    match px.iter().flatten().flatten().find(|c| !(c.abs() <= f64::from(f32::MAX))) {
+        Some(c) => Err(CliError::usage(format!(
+            "{what}: a pixel's radiosity {c:e} does not fit the f32 of the pictures: lower the emittances (MTL Ke)"
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// A linear RGB picture as PFM (little-endian, bottom row first).
 fn pfm(px: &[Rgb], width: u32, height: u32) -> Vec<u8> {
     let mut out = format!("PF\n{width} {height}\n-1.0\n").into_bytes();
@@ -418,6 +430,7 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
     let v = view(&scene, &prepared, tracer.as_ref(), h, &camera, (o.size, o.size)).map_err(usage)?;
     let (gouraud, leaf) = picture(h, &solution.radiosity, &v, true);
     let (flat, _) = picture(h, &solution.radiosity, &v, false);
+    fits_f32(&scene.name, &gouraud)?;
     let reference_white = reference.as_ref().map(|(_, _, px)| {
         white_point(&px.iter().map(|p| (p.iter().sum::<f64>() > 0.0).then_some(*p)).collect::<Vec<_>>())
     });
@@ -493,6 +506,7 @@ fn reference_report(
     t0: Instant,
     file: &dyn Fn(&str) -> Option<PathBuf>,
 ) -> Result<Report, CliError> {
+    fits_f32("the path-traced reference", &reference.mean)?;
     let white = white_point(&reference.mean);
     let mean = dense(&reference.mean);
     let [na, np, _, _] = scores(&display(&reference.halves[0], white), &display(&reference.halves[1], white))?;

@@ -82,8 +82,42 @@ pub fn entropy_of_weight_sums<T: Real>(sum: T, xlnx_sum: T, base: Base) -> Resul
     if s <= 0.0 {
         return Err(Error::ZeroMass);
     }
-    let h = ln(s) - x / s;
-    Ok(T::from_f64(if h < 0.0 { 0.0 } else { h * base.per_nat() }))
+    Ok(T::from_f64(entropy_nats_of_sums(s, x) * base.per_nat()))
+}
+
+/// Entropy in nats (Part II eq. (2)) of weights known by `S = Σ w` and
+/// `X = Σ w ln w` (terms from [`xlnx`](crate::xlnx)): `ln S − X / S`,
+/// clamped at 0 below (rounding), the infallible form of
+/// [`entropy_of_weight_sums`] for engines that keep their own sums. 0 when
+/// `S ≤ 0` (no mass: nothing is uncertain); NaN sums give NaN.
+#[inline]
+#[must_use]
+pub fn entropy_nats_of_sums(sum: f64, xlnx_sum: f64) -> f64 {
+    if !(sum > 0.0) {
+        return if sum.is_nan() { f64::NAN } else { 0.0 };
+    }
+    let h = ln(sum) - xlnx_sum / sum;
+    if h < 0.0 { 0.0 } else { h }
+}
+
+/// Kullback–Leibler divergence in nats (Part II eq. (5)) of the weights
+/// `m` normalised by their sum `W = Σ m` from a distribution `q`, known by
+/// `A = Σ m ln(m/q)` (terms from [`kl_term`](crate::kl_term)):
+///
+/// ```text
+/// D(m/W ‖ q) = (A − W ln W) / W
+/// ```
+/// clamped at 0 below (rounding); 0 when `W ≤ 0`. With `m` a merged
+/// view's projected areas and `q = p(O)`, the VMI of the merge (Part V
+/// eq. (7)).
+#[inline]
+#[must_use]
+pub fn kl_nats_of_sums(kl_sum: f64, mass: f64) -> f64 {
+    if !(mass > 0.0) {
+        return if mass.is_nan() { f64::NAN } else { 0.0 };
+    }
+    let d = (kl_sum - xlnx(mass)) / mass;
+    if d < 0.0 { 0.0 } else { d }
 }
 
 /// Mutual information `I(X;Y) = H(X) + H(Y) − H(X,Y)` (Part II eq. (7)) of
@@ -360,6 +394,29 @@ pub fn differential_entropy_from_bins<T: Real>(p: &[T], delta: f64, base: Base) 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn entropy_and_kl_of_sums_match_the_direct_forms() {
+        let w = [3.0, 1.0, 0.0, 4.0];
+        let (s, x) = (8.0, w.iter().map(|&v| xlnx(v)).sum::<f64>());
+        let direct = entropy_of_weights(&w, Base::Nats).unwrap();
+        assert!((entropy_nats_of_sums(s, x) - direct).abs() <= 1e-15);
+        assert_eq!(entropy_nats_of_sums(0.0, 0.0), 0.0);
+        assert!(entropy_nats_of_sums(f64::NAN, 0.0).is_nan());
+        // Rounding below 0 is clamped: one weight has entropy 0.
+        assert_eq!(entropy_nats_of_sums(3.0, xlnx(3.0) * (1.0 + 1e-15)), 0.0);
+        let q = [0.25, 0.25, 0.25, 0.25];
+        let a = w.iter().zip(&q).map(|(&m, &q)| crate::kl_term(m, q)).sum::<f64>();
+        let p = w.map(|v| v / s);
+        let kl = crate::kl_divergence(&p, &q, Base::Nats).unwrap();
+        assert!((kl_nats_of_sums(a, s) - kl).abs() <= 1e-15, "{} vs {kl}", kl_nats_of_sums(a, s));
+        assert_eq!(kl_nats_of_sums(0.0, 0.0), 0.0);
+        let f = 0.01;
+        assert!((crate::log_area_form_factor(50.0, f) - libm::log(0.5)).abs() <= 1e-15);
+        // A product that overflows is a sum of logarithms.
+        let big = crate::log_area_form_factor(1e300, 1e300);
+        assert!((big - 2.0 * libm::log(1e300)).abs() <= 1e-12, "{big}");
+    }
 
     #[test]
     fn bad_input_table() {

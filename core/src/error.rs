@@ -90,7 +90,7 @@ impl fmt::Display for Error {
             Error::Negative { index } => write!(f, "value at index {index} is negative"),
             Error::ZeroMass => write!(f, "all values are zero"),
             Error::NotNormalized { sum } => {
-                write!(f, "probabilities sum to {sum}, not 1 (use weights/--normalize for unnormalised data)")
+                write!(f, "probabilities sum to {sum}, not 1 (unnormalised data are weights: normalise them first)")
             }
             Error::RowNotNormalized { row, sum } => {
                 write!(f, "row {row} of the conditional matrix sums to {sum}, not 1")

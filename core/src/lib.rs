@@ -86,8 +86,8 @@ pub use divergence::{
     hellinger, jensen_shannon, kl_divergence, l_alpha, log_sum_terms, vasershtein_ornstein,
 };
 pub use entropy::{
-    JointEntropies, binary_entropy, conditional_entropy, differential_entropy_from_bins, entropy,
-    entropy_of_weight_sums, entropy_of_weights, joint_entropies, joint_entropy, mutual_information,
+    JointEntropies, binary_entropy, conditional_entropy, differential_entropy_from_bins, entropy, entropy_nats_of_sums,
+    entropy_of_weight_sums, entropy_of_weights, joint_entropies, joint_entropy, kl_nats_of_sums, mutual_information,
     mutual_information_of_weight_sums, renyi_entropy, specific_information_of_weight_sums, tsallis_entropy,
     weight_log_term,
 };
@@ -97,12 +97,14 @@ pub use grouping::{Grouping, grouping, grouping_by_label};
 #[cfg(feature = "alloc")]
 pub use markov::stationary_distribution;
 pub use markov::{entropy_rate, excess_entropy_from_blocks, markov_excess_entropy, stationary_distribution_into};
+pub use math::{ln, xlnx};
 pub use matrix::MatrixRef;
 pub use pmf::Pmf;
 pub use real::Real;
+pub use scan::kl_term;
 pub use scene::{
     ContinuousMutualInformation, PairCount, SceneMeasures, continuous_mutual_information,
-    discretisation_error_area_sampling, discretisation_error_lines, mutual_information_matrix_into, point_form_factor,
-    scene_measures, scene_measures_from_counts,
+    discretisation_error_area_sampling, discretisation_error_lines, log_area_form_factor,
+    mutual_information_matrix_into, point_form_factor, scene_measures, scene_measures_from_counts,
 };
 pub use sparse::{SparseChannel, jensen_shannon_sparse, jensen_shannon_sparse_logs, sparse_logs};

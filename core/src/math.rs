@@ -36,8 +36,10 @@ const TWO54: f64 = 1.801_439_850_948_198_4e16;
 
 /// Natural logarithm of any `x`: the classical polynomial on positive finite
 /// values (subnormals included), `−∞` at `±0`, `+∞` at `+∞`, NaN below zero.
+/// The logarithm of every measure (Part II eq. (1) with base `e`); engines
+/// outside the core take theirs from here so that one function rounds them.
 #[inline(always)]
-pub(crate) fn ln(x0: f64) -> f64 {
+pub fn ln(x0: f64) -> f64 {
     // Lift subnormals by 2^54 and remember to subtract 54 from the exponent.
     let sub = x0 < f64::MIN_POSITIVE;
     let x = if sub { x0 * TWO54 } else { x0 };
@@ -66,9 +68,11 @@ pub(crate) fn ln(x0: f64) -> f64 {
     if x0 >= 0.0 { v } else { f64::NAN }
 }
 
-/// `x · ln x` with the convention `0 · ln 0 = 0` (Part II eq. (2)); `x ≥ 0` finite.
+/// `x · ln x` with the convention `0 · ln 0 = 0`, the term of the entropy
+/// (Part II eq. (2)). Infallible: meant for `x ≥ 0` finite; `x ≤ 0` gives
+/// 0 (no `0 · (−∞)` is formed), `+∞` gives `+∞`, NaN gives NaN.
 #[inline(always)]
-pub(crate) fn xlnx(x: f64) -> f64 {
+pub fn xlnx(x: f64) -> f64 {
     let safe = if x > 0.0 { x } else { 1.0 };
     x * ln(safe)
 }

@@ -257,10 +257,12 @@ pub(crate) fn kl_pass_body<T: Real>(p: &[T], q: &[T]) -> Result<(f64, f64, f64),
     Ok((sp.value(), sq.value(), d.value()))
 }
 
-/// One term `x ln(x/y)`: one logarithm of the ratio where it is a positive
-/// finite double, two logarithms otherwise (ratios that under- or overflow).
+/// One term `x ln(x/y)` of the Kullback–Leibler divergence (Part II
+/// eq. (5)), infallible: 0 for `x ≤ 0` (`0 ln(0/y) = 0`), `+∞` for `x > 0`
+/// and `y ≤ 0`; one logarithm of the ratio where it is a positive finite
+/// double, two logarithms otherwise (ratios that under- or overflow).
 #[inline(always)]
-pub(crate) fn kl_term(x: f64, y: f64) -> f64 {
+pub fn kl_term(x: f64, y: f64) -> f64 {
     if x > 0.0 {
         if y > 0.0 {
             let r = x / y;

@@ -261,10 +261,7 @@ impl ContinuousMutualInformation {
         if !(f > 0.0 && f.is_finite()) {
             return false;
         }
-        // ln(A_T F) as a sum of logs where the product under- or overflows
-        // (ln of a product that rounded to 0 or ∞ would be ∓∞).
-        let af = self.total_area * f;
-        let l = if (f64::MIN_POSITIVE..=f64::MAX).contains(&af) { ln(af) } else { ln(self.total_area) + ln(f) };
+        let l = log_area_form_factor(self.total_area, f);
         self.samples += 1;
         self.sum.add(l);
         self.sum_sq.add(l * l);
@@ -329,6 +326,17 @@ impl ContinuousMutualInformation {
         let var = ((self.sum_sq.value() - n * mean * mean) / (n - 1.0)).max(0.0);
         Some(libm::sqrt(var / n) * base.per_nat())
     }
+}
+
+/// One sample `ln(A_T F(x, y))` of `I_S^c` (Part III eq. (59)) in nats,
+/// infallible: meant for `A_T > 0` and `F > 0` finite (then the result is
+/// finite), as a sum of two logarithms where the product under- or
+/// overflows (the logarithm of a product rounded to 0 or ∞ would be ∓∞).
+#[inline]
+#[must_use]
+pub fn log_area_form_factor(total_area: f64, f: f64) -> f64 {
+    let af = total_area * f;
+    if (f64::MIN_POSITIVE..=f64::MAX).contains(&af) { ln(af) } else { ln(total_area) + ln(f) }
 }
 
 /// `I_S^c` from a slice of point-to-point form factors (Part III eq. (59)).

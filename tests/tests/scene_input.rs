@@ -129,7 +129,9 @@ fn bad_and_unsupported_materials_are_errors_or_named_warnings() {
     for (mtl, error) in [
         ("newmtl a\nKd 1.5 0 0\n", "t.mtl: line 2: Kd value 1.5 is outside [0, 1]"),
         ("newmtl a\nKd nan 0 0\n", "t.mtl: line 2: Kd value NaN is outside [0, 1]"),
-        ("newmtl a\nKe -1\n", "t.mtl: line 2: Ke value -1 is outside"),
+        ("newmtl a\nKe -1\n", "t.mtl: line 2: material \"a\": Ke value -1 is outside"),
+        ("newmtl a\nKe inf\n", "t.mtl: line 2: material \"a\": Ke value inf is outside [0, 1e12]"),
+        ("newmtl a\nKe 1 1e300 1\n", "t.mtl: line 2: material \"a\": Ke value 1e300 is outside [0, 1e12]"),
         ("newmtl a\nKd spectral x.rfl\n", "t.mtl: line 2: Kd spectral: only r g b"),
         ("newmtl a\nillum 11\n", "t.mtl: line 2: illum must be one integer in 0..=10"),
         ("Kd 1 1 1\n", "t.mtl: line 1: Kd before any newmtl"),

@@ -131,6 +131,50 @@ struct Face {
     material: Option<usize>,
 }
 
+/// Warning `duplicate-face` for every face on the same vertices, wound
+/// the same way, as an earlier one. Kept, not refused: both faces are
+/// traced, and a line meeting the pair crosses one or the other by
+/// rounding, which splits the counts of one surface between two patches
+/// (visibility measures change; nothing breaks). The same vertices wound
+/// the other way are the two sides of one surface (e.g. a lamp's front and
+/// a mirror's back) and pass. By 16 bytes a face: a hash of the indices
+/// rotated to start at the smallest, sorted, equal hashes compared in full.
+fn duplicate_faces(name: &str, faces: &[Face], indices: &[u32], warnings: &mut Warnings) {
+    use std::hash::{Hash, Hasher};
+    let sorted = |f: &Face| {
+        let mut v = indices[f.start..f.start + f.len].to_vec();
+        let first = v.iter().enumerate().min_by_key(|&(_, &i)| i).map_or(0, |(k, _)| k);
+        v.rotate_left(first);
+        v
+    };
+    let mut keys: Vec<(u64, u32)> = faces
+        .iter()
+        .enumerate()
+        .map(|(i, f)| {
+            let mut h = std::collections::hash_map::DefaultHasher::new();
+            sorted(f).hash(&mut h);
+            (h.finish(), i as u32)
+        })
+        .collect();
+    keys.sort_unstable();
+    for run in keys.chunk_by(|a, b| a.0 == b.0).filter(|r| r.len() > 1) {
+        for (k, &(_, later)) in run.iter().enumerate().skip(1) {
+            let g = &faces[later as usize];
+            if let Some(&(_, first)) = run[..k].iter().find(|&&(_, e)| sorted(&faces[e as usize]) == sorted(g)) {
+                warnings.add("duplicate-face", || {
+                    format!(
+                        "{name}: line {}: face {} has the vertices of face {} (line {}); both are kept",
+                        g.line,
+                        later + 1,
+                        first + 1,
+                        faces[first as usize].line
+                    )
+                });
+            }
+        }
+    }
+}
+
 fn decode<'a>(path: &str, bytes: &'a [u8]) -> Result<&'a str, SceneError> {
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     std::str::from_utf8(bytes).map_err(|e| err(path, format!("not UTF-8 text (byte {})", e.valid_up_to())))
@@ -281,6 +325,7 @@ pub fn parse_obj(
             format!("{name}: coordinates multiplied by 2^{k} so that areas stay finite and non-zero in f64")
         });
     }
+    duplicate_faces(name, &faces, &indices, &mut warnings);
     let mut scene = Scene { name: name.to_string(), materials, ..Scene::default() };
     scene.triangles.reserve(triangles as usize);
     let mut in_group = vec![0usize; groups.len()];

@@ -3,7 +3,8 @@
 //! What is read, precisely:
 //! * `Kd r [g b]` → [`Material::reflectance`] (default 0.7 grey); each in
 //!   `[0, 1]`.
-//! * `Ke r [g b]` → [`Material::emittance`] (default 0); finite, `>= 0`.
+//! * `Ke r [g b]` → [`Material::emittance`] (default 0); each in
+//!   `[0, 10¹²]` ([`Material::MAX_EMITTANCE`]: larger lights overflow f32 pictures).
 //! * `Ks r [g b]` in `[0, 1]`: a material is an ideal **mirror** when
 //!   `illum` is 3, 5 or 8 (the reflection models), or when `Kd` is given as
 //!   `0 0 0` and `Ks` is not zero. A mirror's reflectance is `Ks` when `Ks`
@@ -29,7 +30,20 @@ use crate::scene::{Material, SceneError};
 
 /// A parsed colour statement: 1 or 3 numbers.
 fn colour(path: &str, line: usize, key: &str, args: &[&str], range: (f64, f64)) -> Result<[f64; 3], SceneError> {
-    let e = |m: String| SceneError::Obj { path: path.to_string(), message: format!("line {line}: {key} {m}") };
+    colour_of(path, line, key, args, range, None)
+}
+
+/// [`colour`] naming the material in its errors.
+fn colour_of(
+    path: &str,
+    line: usize,
+    key: &str,
+    args: &[&str],
+    range: (f64, f64),
+    material: Option<&str>,
+) -> Result<[f64; 3], SceneError> {
+    let of = material.map(|m| format!("material {m:?}: ")).unwrap_or_default();
+    let e = |m: String| SceneError::Obj { path: path.to_string(), message: format!("line {line}: {of}{key} {m}") };
     if matches!(args.first(), Some(&"spectral" | &"xyz")) {
         return Err(e(format!("{}: only r g b colours are supported", args[0])));
     }
@@ -44,7 +58,8 @@ fn colour(path: &str, line: usize, key: &str, args: &[&str], range: (f64, f64)) 
     };
     for x in c {
         if !(x >= range.0 && x <= range.1) {
-            let hi = if range.1.is_finite() { format!("{}", range.1) } else { "inf)".into() };
+            let hi = if range.1 > 1e6 { format!("{:e}", range.1) } else { range.1.to_string() };
+            let x = if x.abs() > 1e6 { format!("{x:e}") } else { x.to_string() };
             return Err(e(format!("value {x} is outside [{}, {hi}]", range.0)));
         }
     }
@@ -134,7 +149,7 @@ pub fn parse_mtl(path: &str, text: &str, warnings: &mut Warnings) -> Result<Vec<
         match key {
             "Kd" => m.kd = Some(colour(path, line, key, &args, (0.0, 1.0))?),
             "Ks" => m.ks = Some(colour(path, line, key, &args, (0.0, 1.0))?),
-            "Ke" => m.ke = colour(path, line, key, &args, (0.0, f64::INFINITY))?,
+            "Ke" => m.ke = colour_of(path, line, key, &args, (0.0, Material::MAX_EMITTANCE), Some(&name))?,
             "Tf" => {
                 colour(path, line, key, &args, (0.0, 1.0))?;
             }

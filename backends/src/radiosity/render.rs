@@ -45,16 +45,16 @@ pub struct View {
 /// (278, 273, −800) looking down +z, 39.3°; its closed front wall faces away
 /// and is looked through), a corner of `chairs-room` seen from inside,
 /// otherwise a view from a corner of the bounding box's front-right-top,
-/// framing the scene.
+/// framing the scene. Subdivided scenes keep their built-in's camera.
 #[must_use]
 pub fn default_camera(scene: &Scene) -> Camera {
-    if scene.name == "cornell-box" {
+    if scene.base_name() == "cornell-box" {
         let d = DVec3::new;
         if let Ok(c) = Camera::look_at(d(278.0, 273.0, -800.0), d(278.0, 273.0, 0.0), DVec3::Y, 39.3) {
             return c;
         }
     }
-    if scene.name == "chairs-room"
+    if scene.base_name() == "chairs-room"
         && let Ok(c) = Camera::look_at(DVec3::new(2.3, 1.8, 2.3), DVec3::new(0.0, 0.45, 0.0), DVec3::Y, 55.0)
     {
         return c;

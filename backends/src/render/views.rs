@@ -17,7 +17,8 @@ const PROBES: u32 = 64;
 #[must_use]
 pub fn default_camera(scene: &Scene) -> Camera {
     let d = DVec3::new;
-    let (eye, target, fov) = match crate::scene::BuiltIn::of(&scene.name).and_then(|b| b.camera) {
+    // The registry entry of the scene before any --subdivide suffix.
+    let (eye, target, fov) = match crate::scene::BuiltIn::of(scene.base_name()).and_then(|b| b.camera) {
         Some(c) => (DVec3::from_array(c.eye), DVec3::from_array(c.target), c.fov_deg),
         None => {
             let (lo, hi) = scene.bounds();

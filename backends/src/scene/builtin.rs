@@ -33,10 +33,11 @@ pub struct DefaultCamera {
 }
 
 impl BuiltIn {
-    /// The registry entry of a scene spec (`"mirror-room:3"` → `mirror-room`), if it is a built-in.
+    /// The registry entry of a scene spec (`"mirror-room:3"` → `mirror-room`), if it is a built-in
+    /// (give [`Scene::base_name`] for a subdivided scene).
     #[must_use]
     pub fn of(spec: &str) -> Option<&'static BuiltIn> {
-        let name = spec.split([':', '/']).next().unwrap_or_default();
+        let name = spec.split(':').next().unwrap_or_default();
         BUILT_IN.iter().find(|b| b.name == name)
     }
 }

@@ -52,6 +52,9 @@ pub enum SceneError {
     },
     /// Geometry that cannot be traced.
     Geometry(String),
+    /// The scene's memory estimate ([`Limits::estimate_bytes`]) is over
+    /// what the process may use ([`crate::memory`]).
+    Memory(crate::memory::OutOfMemory),
 }
 
 impl fmt::Display for SceneError {
@@ -77,6 +80,7 @@ impl fmt::Display for SceneError {
             ),
             SceneError::Obj { path, message } => write!(f, "{path}: {message}"),
             SceneError::Geometry(m) => f.write_str(m),
+            SceneError::Memory(e) => write!(f, "{e}: a smaller scene"),
         }
     }
 }
@@ -86,16 +90,28 @@ impl std::error::Error for SceneError {}
 const GIB: f64 = (1u64 << 30) as f64;
 
 /// Size limits of a scene, checked from the parameters before any vertex
-/// is allocated.
+/// is allocated, and its memory estimate, compared with what the process
+/// may use ([`crate::memory`]).
 ///
-/// Memory per triangle, all stages together: the scene's three `f64`
-/// vertices and patch id (76 B), the tracer's normalised `f32` triangle and
-/// normal (64 B), the BVH (about two 32 B nodes per triangle plus index
-/// and build scratch, 112 B): 256 B. Per patch: the [`super::Patch`] with
-/// its name (about 96 B) and the visibility counters and per-patch results
-/// (about 160 B): 256 B. The caps keep the estimate near 6 GiB, which a
-/// 16 GiB machine holds with the line buffers; a `cube-enclosure:1000`
-/// (12 M triangles, 6 M patches) still fits.
+/// The estimate bounds the peak of `complexity` (`viewpoints` adds its
+/// channel's entries to it) at up to 10⁶ lines (measured with `/usr/bin/time -v`, release build: maximum RSS of
+/// `complexity cube-enclosure:300 --lines 1000` 480 MiB for 1.08 M
+/// triangles and 540 k patches, estimate 0.71 GiB; `torus:2048,512` 926 MiB
+/// for 2.1 M triangles, estimate 1.31 GiB; the analytic `sphere:1024,1024`
+/// 200 MiB for 1 M patches and no triangle, estimate 0.31 GiB;
+/// `cube-enclosure:150 --lines 1000000` 171 MiB, estimate 229 MiB; the test
+/// `the_scene_estimate_bounds_the_address_space_it_uses` of
+/// `cli/tests/defects_mem.rs` runs scenes under the tightest `ulimit -v`
+/// the check accepts). Per triangle: the scene's three `f64`
+/// vertices and patch id (76 B, up to twice that in a vector's spare
+/// capacity), the tracer's `f32` triangle and normal (64 B), the BVH build
+/// (nodes, indices, the builder's two node arrays: about 200 B): 512 B.
+/// Per patch: the [`super::Patch`] with its name and the visibility
+/// counters and per-patch results: 256 B (a sphere's cells measure 200 B).
+/// Plus [`Limits::BASE_BYTES`] for the program, its line buffers and
+/// threads. The caps keep the largest scene near 11 GiB (the
+/// `torus:4096,2048` at the caps is refused on a machine with less to give,
+/// where it once panicked inside the BVH build).
 pub struct Limits;
 
 impl Limits {
@@ -104,32 +120,37 @@ impl Limits {
     /// Most patches of a scene: 2^23.
     pub const MAX_PATCHES: u64 = 1 << 23;
     /// Estimated bytes per triangle (see the type's documentation).
-    pub const BYTES_PER_TRIANGLE: u64 = 256;
+    pub const BYTES_PER_TRIANGLE: u64 = 512;
     /// Estimated bytes per patch.
     pub const BYTES_PER_PATCH: u64 = 256;
+    /// Estimated bytes of the program besides the scene: 64 MiB.
+    pub const BASE_BYTES: u64 = 64 << 20;
     /// The reason, for messages.
     pub const REASON: &'static str =
-        "about 256 bytes per triangle (scene, tracer copy, BVH) and 256 per patch (names, counters)";
+        "about 512 bytes per triangle (scene, tracer copy, BVH) and 256 per patch (names, counters)";
 
-    /// Estimated bytes of a scene with these counts, saturating.
+    /// Estimated bytes of a scene with these counts and the program
+    /// around it, saturating: a bound on the peak (see the type's docs).
     #[must_use]
     pub fn estimate_bytes(triangles: u64, patches: u64) -> u64 {
-        triangles.saturating_mul(Self::BYTES_PER_TRIANGLE).saturating_add(patches.saturating_mul(Self::BYTES_PER_PATCH))
+        triangles
+            .saturating_mul(Self::BYTES_PER_TRIANGLE)
+            .saturating_add(patches.saturating_mul(Self::BYTES_PER_PATCH))
+            .saturating_add(Self::BASE_BYTES)
     }
 
-    /// Refuses counts over the caps, before allocating.
+    /// Refuses counts over the caps, or whose estimate is over the memory
+    /// the process may use, before allocating.
     ///
     /// # Errors
-    /// [`SceneError::TooLarge`] with the counts and the estimated bytes.
+    /// [`SceneError::TooLarge`] with the counts and the estimated bytes;
+    /// [`SceneError::Memory`] when the estimate is over the budget.
     pub fn check(what: &str, triangles: u64, patches: u64) -> Result<(), SceneError> {
+        let bytes = Self::estimate_bytes(triangles, patches);
         if triangles > Self::MAX_TRIANGLES || patches > Self::MAX_PATCHES {
-            return Err(SceneError::TooLarge {
-                what: what.to_string(),
-                triangles,
-                patches,
-                bytes: Self::estimate_bytes(triangles, patches),
-            });
+            return Err(SceneError::TooLarge { what: what.to_string(), triangles, patches, bytes });
         }
-        Ok(())
+        crate::memory::check(|| format!("{what} ({triangles} triangles, {patches} patches)"), bytes)
+            .map_err(SceneError::Memory)
     }
 }

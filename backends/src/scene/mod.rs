@@ -22,6 +22,15 @@ pub struct Material {
     pub mirror: bool,
 }
 
+impl Material {
+    /// Largest emittance accepted per channel: 10¹². Radiosity pictures are
+    /// f32 (largest 3.4·10³⁸) and the renderer sums squared radiance over up
+    /// to 2¹⁶ samples a pixel; 10¹² keeps those sums 10⁹ below overflow,
+    /// and no physical light in scene units comes near it (the Cornell
+    /// box's is 12). `Ke 1e300` once made infinite pixels.
+    pub const MAX_EMITTANCE: f64 = 1e12;
+}
+
 impl Default for Material {
     fn default() -> Self {
         Self { name: "default".into(), reflectance: [0.7; 3], emittance: [0.0; 3], mirror: false }
@@ -94,6 +103,21 @@ mod builtin;
 mod error;
 
 impl Scene {
+    /// The name without the `/K` suffixes [`Scene::subdivided`] appends
+    /// (`cornell-box/2` is still the Cornell box, with its camera).
+    #[must_use]
+    pub fn base_name(&self) -> &str {
+        let mut name = self.name.as_str();
+        while let Some((head, k)) = name.rsplit_once('/')
+            && !head.is_empty()
+            && !k.is_empty()
+            && k.bytes().all(|b| b.is_ascii_digit())
+        {
+            name = head;
+        }
+        name
+    }
+
     /// Total area `A_T`.
     #[must_use]
     pub fn total_area(&self) -> f64 {

@@ -47,7 +47,7 @@ fn term(x: f64) -> f64 {
 
 /// `w ln c`, the cross term of [`specific_information_of_weight_sums`] (0 when `w = 0`).
 fn cross_term(w: f64, c: f64) -> f64 {
-    if w > 0.0 && c > 0.0 { w * c.ln() } else { 0.0 }
+    if w > 0.0 && c > 0.0 { w * itgfx_core::ln(c) } else { 0.0 }
 }
 
 /// The channel's weights and running sums.

@@ -110,6 +110,8 @@ pub enum SimplifyError {
         /// Bytes needed.
         bytes: u64,
     },
+    /// The channel's weights are over what the process may use ([`crate::memory`]).
+    Memory(crate::memory::OutOfMemory),
 }
 
 impl std::fmt::Display for SimplifyError {
@@ -123,6 +125,7 @@ impl std::fmt::Display for SimplifyError {
                 *bytes as f64 / f64::from(1u32 << 30),
                 MAX_BYTES >> 30
             ),
+            SimplifyError::Memory(e) => write!(f, "{e}: use fewer --viewpoints"),
         }
     }
 }
@@ -160,13 +163,18 @@ impl Ord for Entry {
 }
 
 /// Checks, before any work, that the channel's weights for `triangles`
-/// triangles and `views` viewpoints fit in [`MAX_BYTES`].
+/// triangles and `views` viewpoints fit in [`MAX_BYTES`] and in the memory
+/// the process may use.
 ///
 /// # Errors
-/// [`SimplifyError::TooLarge`].
+/// [`SimplifyError::TooLarge`], [`SimplifyError::Memory`].
 pub fn check_memory(triangles: usize, views: usize) -> Result<(), SimplifyError> {
     let bytes = ViewState::bytes(triangles, views);
-    if bytes > MAX_BYTES { Err(SimplifyError::TooLarge { bytes }) } else { Ok(()) }
+    if bytes > MAX_BYTES {
+        return Err(SimplifyError::TooLarge { bytes });
+    }
+    crate::memory::check(|| format!("the viewpoint weights of {triangles} triangles x {views} views"), bytes)
+        .map_err(SimplifyError::Memory)
 }
 
 /// User and system CPU seconds of this process, all threads (Linux's

@@ -7,7 +7,7 @@
 //! greedy selection and the exploration path add, at each step, the view that
 //! brings `I(v̂;O)` lowest.
 
-use itgfx_core::{Base, Error};
+use itgfx_core::{Base, Error, kl_nats_of_sums, kl_term, ln};
 use rayon::prelude::*;
 
 use super::{ViewpointAnalysis, ViewpointMeasures};
@@ -31,10 +31,6 @@ impl<'a> Merged<'a> {
         Self { an, m: vec![0.0; an.outputs()], terms: vec![0.0; an.outputs()], w: 0.0, a: 0.0 }
     }
 
-    fn term(m: f64, q: f64) -> f64 {
-        if m > 0.0 { m * (m / q).ln() } else { 0.0 }
-    }
-
     /// `I(v̂;O)` in nats of the merged view with row `x` added.
     fn kl_with(&self, x: usize) -> f64 {
         let (cols, p) = self.an.row(x);
@@ -46,9 +42,9 @@ impl<'a> Merged<'a> {
             a_out -= self.terms[o as usize];
             m_out -= mo;
             let mn = (mo + pv * q) / w2;
-            inside += Self::term(mn, po);
+            inside += kl_term(mn, po);
         }
-        ((a_out - m_out * w2.ln()) / w2 + inside).max(0.0)
+        ((a_out - m_out * ln(w2)) / w2 + inside).max(0.0)
     }
 
     fn add(&mut self, x: usize) {
@@ -60,13 +56,13 @@ impl<'a> Merged<'a> {
         self.w += pv;
         // Recomputed in full: no drift from incremental updates.
         for ((t, &m), &q) in self.terms.iter_mut().zip(&self.m).zip(&self.an.p_o) {
-            *t = Self::term(m, q);
+            *t = kl_term(m, q);
         }
         self.a = self.terms.iter().sum();
     }
 
     fn kl(&self) -> f64 {
-        ((self.a - self.w * self.w.ln()) / self.w).max(0.0)
+        kl_nats_of_sums(self.a, self.w)
     }
 
     /// The candidate row with the lowest merged VMI (ties: lowest index).
@@ -170,9 +166,7 @@ fn clustered_information(an: &ViewpointAnalysis, nearest: &[(f64, usize)]) -> f6
         }
         for &o in &touched {
             let m = acc[o];
-            if m > 0.0 {
-                total += m * ((m / pc) / an.p_o[o]).ln();
-            }
+            total += pc * kl_term(m / pc, an.p_o[o]);
             acc[o] = 0.0;
         }
         touched.clear();
@@ -275,4 +269,76 @@ pub fn importance_information(an: &ViewpointAnalysis, importance: &[f64], base: 
     let mut d = vec![0.0; an.rows()];
     an.channel()?.specific_information_into(&target, base, &mut d)?;
     Ok(an.expand(&d, f64::INFINITY))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::viewpoint::{ViewpointChannel, ViewpointWeights};
+    use glam::DVec3;
+
+    /// Three viewpoints over four polygons, uneven rows.
+    fn analysis() -> ViewpointAnalysis {
+        let ch = ViewpointChannel {
+            positions: vec![DVec3::X, DVec3::Y, DVec3::Z],
+            starts: vec![0, 3, 5, 8],
+            patch: vec![0, 1, 3, 1, 2, 0, 2, 3],
+            solid_angle: vec![0.3, 0.1, 0.05, 0.2, 0.25, 0.02, 0.07, 0.4],
+            background: vec![0.0; 3],
+            patches: 4,
+            rays_per_viewpoint: 1,
+        };
+        ViewpointAnalysis::from_channel(ch, ViewpointWeights::ProjectedArea).unwrap()
+    }
+
+    /// The merged view's `p(O|v̂)` over all outputs, normalised.
+    fn merged_pmf(an: &ViewpointAnalysis, views: &[usize]) -> Vec<f64> {
+        let mut m = vec![0.0; an.outputs()];
+        for &x in views {
+            let (cols, p) = an.row(x);
+            for (&o, &q) in cols.iter().zip(p) {
+                m[o as usize] += an.p_v[x] * q;
+            }
+        }
+        let w: f64 = m.iter().sum();
+        m.iter().map(|x| x / w).collect()
+    }
+
+    #[test]
+    fn merged_vmi_is_the_cores_kl_divergence() {
+        let an = analysis();
+        let mut merged = Merged::new(&an);
+        let mut views = Vec::new();
+        for x in [2, 0, 1] {
+            let with = merged.kl_with(x);
+            merged.add(x);
+            views.push(x);
+            let core = itgfx_core::kl_divergence(&merged_pmf(&an, &views), &an.p_o, Base::Nats).unwrap();
+            assert!((merged.kl() - core).abs() <= 1e-12, "{views:?}: {} vs core {core}", merged.kl());
+            assert!((with - core).abs() <= 1e-12, "{views:?}: kl_with {with} vs core {core}");
+        }
+        assert!(merged.kl() <= 1e-12, "all views merged show p(O)");
+    }
+
+    #[test]
+    fn clustered_information_is_the_cores_mutual_information() {
+        let an = analysis();
+        // Every viewpoint its own cluster: I(V̂;O) = I(V;O).
+        let own: Vec<(f64, usize)> = (0..an.rows()).map(|x| (0.0, x)).collect();
+        let mut joint = Vec::new();
+        for x in 0..an.rows() {
+            let mut row = vec![0.0; an.outputs()];
+            let (cols, p) = an.row(x);
+            for (&o, &q) in cols.iter().zip(p) {
+                row[o as usize] = an.p_v[x] * q;
+            }
+            joint.extend(row);
+        }
+        let core = itgfx_core::mutual_information(&joint, an.rows(), an.outputs(), Base::Nats).unwrap();
+        let ours = clustered_information(&an, &own);
+        assert!((ours - core).abs() <= 1e-12, "{ours} vs core {core}");
+        // One cluster: the merged view is p(O), no information.
+        let one: Vec<(f64, usize)> = (0..an.rows()).map(|_| (0.0, 0)).collect();
+        assert!(clustered_information(&an, &one).abs() <= 1e-12);
+    }
 }

@@ -442,7 +442,7 @@ fn vmi_stderr(p: &Prepared, ch: &ViewpointChannel, views: &[View], p_o: &[f64], 
             let ln_ratio = |patch: u32| -> f64 {
                 let i = ps.partition_point(|&x| x < patch);
                 let q = a[i] / total;
-                (q / p_o[patch as usize]).ln()
+                itgfx_core::ln(q / p_o[patch as usize])
             };
             let var: f64 = view
                 .sampled

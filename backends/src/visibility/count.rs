@@ -191,7 +191,7 @@ fn process_chunk(
     let mut overflow = false;
     // One sample of eq. (59) from a point-to-point form factor `f`.
     let mut sample = |f: f64, ends: &[u32], endpoint: &mut Endpoints| {
-        let l = (total_area_norm * f).ln();
+        let l = itgfx_core::log_area_form_factor(total_area_norm, f);
         if f > 0.0 && l.is_finite() {
             let fixed = FixedSum::of(l);
             overflow |= !cont.add_fixed(fixed, l);

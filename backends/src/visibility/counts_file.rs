@@ -241,13 +241,12 @@ impl VisibilityCounts {
         (&mut file).take(MAGIC.len() as u64).read_to_end(&mut head).map_err(io)?;
         let binary = head == MAGIC;
         let needed = len.saturating_mul(if binary { BYTES_PER_BINARY_BYTE } else { BYTES_PER_FILE_BYTE });
-        if let Some(available) = available_memory()
-            && needed > available
-        {
-            return Err(CountsError::TooLarge { needed, available });
-        }
+        crate::memory::check(|| format!("reading {}", path.display()), needed).map_err(CountsError::TooLarge)?;
         // The length is a hint only (the file may grow); it fits in memory.
-        let mut bytes = Vec::with_capacity(usize::try_from(len).unwrap_or(0).saturating_add(1));
+        let mut bytes = crate::memory::try_vec(usize::try_from(len).unwrap_or(usize::MAX).saturating_add(1), || {
+            format!("reading {}", path.display())
+        })
+        .map_err(CountsError::TooLarge)?;
         bytes.extend_from_slice(&head);
         file.read_to_end(&mut bytes).map_err(io)?;
         if binary {
@@ -265,14 +264,6 @@ impl VisibilityCounts {
 /// twice that while its vector grows) and the per-patch arrays (an area of
 /// at least 2 bytes of text becomes 8 + 24 bytes).
 pub const BYTES_PER_FILE_BYTE: u64 = 24;
-
-/// `MemAvailable` from `/proc/meminfo` (bytes), where there is one.
-fn available_memory() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb.saturating_mul(1024))
-}
 
 #[cfg(test)]
 mod tests {

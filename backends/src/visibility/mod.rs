@@ -220,13 +220,8 @@ pub enum CountsError {
     Mismatch(String),
     /// A count or sum would overflow.
     Overflow(String),
-    /// The input needs more memory than is available.
-    TooLarge {
-        /// Bytes the input would need.
-        needed: u64,
-        /// Bytes available.
-        available: u64,
-    },
+    /// The input needs more memory than the process may use ([`crate::memory`]).
+    TooLarge(crate::memory::OutOfMemory),
 }
 
 impl fmt::Display for CountsError {
@@ -237,12 +232,7 @@ impl fmt::Display for CountsError {
                 write!(f, "{}", m.replace(['\n', '\r'], " "))
             }
             CountsError::Overflow(m) => write!(f, "{} overflows 64 bits", m.replace(['\n', '\r'], " ")),
-            CountsError::TooLarge { needed, available } => write!(
-                f,
-                "reading these counts needs about {} MiB but only {} MiB are available",
-                needed >> 20,
-                available >> 20
-            ),
+            CountsError::TooLarge(e) => write!(f, "{e}"),
         }
     }
 }

@@ -90,6 +90,13 @@ pub fn volume_channel(
     let wave = (rayon::current_num_threads() * 2).max(2);
     let mut starts = vec![0];
     let (mut patch, mut solid_angle, mut background) = (Vec::new(), Vec::new(), Vec::new());
+    // At most one entry per viewpoint and seeable voxel (what
+    // `channel_memory` counts): the entries grow fallibly up to that.
+    let most = o.directions.len().saturating_mul(seeable.len());
+    let short = |e: std::collections::TryReserveError| BackendError::TooLarge {
+        backend: backend.name(),
+        reason: format!("the channel's entries: {e} (fewer viewpoints or a smaller volume)"),
+    };
     for (w, dirs) in o.directions.chunks(wave).enumerate() {
         let rows: Vec<(Vec<u32>, Vec<f64>, f64)> = dirs
             .par_iter()
@@ -107,6 +114,8 @@ pub fn volume_channel(
             })
             .collect::<Result<_, BackendError>>()?;
         for (idx, val, bg) in rows {
+            crate::memory::try_grow(&mut patch, idx.len(), most).map_err(short)?;
+            crate::memory::try_grow(&mut solid_angle, val.len(), most).map_err(short)?;
             patch.extend(idx);
             solid_angle.extend(val);
             background.push(bg);

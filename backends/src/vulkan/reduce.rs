@@ -132,7 +132,7 @@ impl Reducer {
         if !(s > 0.0) {
             return Err(Error::ZeroMass.into());
         }
-        let h = (s.ln() - t.xlnx.value() / s).max(0.0);
+        let h = itgfx_core::entropy_nats_of_sums(s, t.xlnx.value());
         Ok(h * base.per_nat())
     }
 }

@@ -243,7 +243,8 @@ fn memory_check(o: &RenderOptions) -> Result<(), CliError> {
             MEMORY_LIMIT >> 30
         )));
     }
-    Ok(())
+    itgfx_backends::memory::check(|| format!("{w} x {h} at up to {per_pixel} samples a pixel"), bytes)
+        .map_err(|e| CliError::usage(format!("{e}: lower --size, --spp or --max-spp")))
 }
 
 /// The output directory: must be a directory or not exist; made if missing.

@@ -230,6 +230,8 @@ fn run_in(
             MEMORY_LIMIT >> 30
         )));
     }
+    itgfx_backends::memory::check(|| format!("{}: the channel", volume.name), need)
+        .map_err(|e| CliError::usage(format!("{e}: fewer --viewpoints or a smaller volume")))?;
     let backend_err = |e: itgfx_backends::BackendError| CliError::usage(e.to_string());
     if let Some(s) = o.shards.shard {
         return shard::save(o, s, &*open(o.backend, &caster).map_err(backend_err)?, &dirs, rays, need);

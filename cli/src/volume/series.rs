@@ -200,6 +200,8 @@ pub(super) fn run(
             MEMORY_LIMIT >> 30
         )));
     }
+    itgfx_backends::memory::check(|| "--time: the series".into(), need)
+        .map_err(|e| CliError::usage(format!("{e}: fewer --viewpoints, frames or voxels")))?;
     let t0 = Instant::now();
     let weights = if o.uniform_input { ViewpointWeights::Uniform } else { ViewpointWeights::ProjectedArea };
     let (nf, nv) = (frames.len() as u64, dirs.len() as u64);

@@ -225,17 +225,18 @@ const MEMORY_LIMIT: u64 = 4 << 30;
 
 /// Refuses a run whose image or per-row sample buffers would pass
 /// [`MEMORY_LIMIT`]: about 120 bytes a pixel (radiance, counts, display
-/// values, PNG), and 48 bytes a sample of the row each worker holds.
+/// values, PNG; 200 for `adaptive`), and 48 bytes a sample of the row each worker holds.
 fn memory_check(o: &RenderOptions) -> Result<(), CliError> {
     let (w, h) = (u64::from(o.size.0), u64::from(o.size.1));
     let per_pixel = match o.sampler.as_str() {
         "uniform" => u64::from(o.spp),
         "ec" | "ic" | "cc-tree" => 680,
-        "adaptive" => u64::from(o.max_spp.unwrap_or(o.spp.saturating_mul(16).min(MAX_SPP))),
         _ => u64::from(o.max_spp.unwrap_or(o.spp.saturating_mul(16).min(MAX_SPP))),
     };
     let workers = o.tracing.threads.unwrap_or_else(rayon::current_num_threads) as u64;
-    let bytes = w * h * 120 + workers * w * per_pixel * 48;
+    // adaptive also keeps every pixel's pilot sums, weight and share (about 80 bytes).
+    let image = if o.sampler == "adaptive" { 200 } else { 120 };
+    let bytes = w * h * image + workers * w * per_pixel * 48;
     if bytes > MEMORY_LIMIT {
         return Err(CliError::usage(format!(
             "{w} x {h} at up to {per_pixel} samples a pixel needs about {:.1} GiB (limit {} GiB): lower --size, --spp or --max-spp",

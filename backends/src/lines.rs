@@ -2,7 +2,7 @@
 //! counter-based hash (PCG's output permutation chained over 32-bit words,
 //! so a shader can reproduce it), never of thread scheduling.
 
-use glam::DVec3;
+use glam::{DVec3, Vec3A};
 
 /// A line or ray in the tracer's normalised coordinates: origin,
 /// unit direction, and the parameter interval `[tmin, tmax]` it covers.
@@ -87,6 +87,14 @@ impl LineRng {
         (f64::from(self.u32(k)) + 0.5) * (1.0 / 4_294_967_296.0)
     }
 
+    /// A uniform float in `(0, 1)` from draw `k`: 23 bits, so that
+    /// `m + 0.5` is exact in f32 (24 bits would round the top value to 1).
+    #[inline]
+    #[must_use]
+    pub fn uniform32(&self, k: u32) -> f32 {
+        ((self.u32(k) >> 9) as f32 + 0.5) * (1.0 / 8_388_608.0)
+    }
+
     /// A uniform point on the unit sphere by Marsaglia's method (no
     /// trigonometry), using draws `first, first+1, ...` until accepted.
     #[inline]
@@ -157,6 +165,87 @@ pub fn cosine_direction(n: DVec3, u: f64, v: f64) -> DVec3 {
     (t * x + b * y + n * z).normalize()
 }
 
+/// `(cos 2πv, sin 2πv)` for `v` in `[0, 1)` in f32 without a library
+/// call: the quarter turn `⌊4v⌋` is applied exactly, and the angle left,
+/// in `[0, π/2)`, goes through Taylor polynomials to `x¹¹`/`x¹²` (error
+/// below 6e-8, under f32's resolution near 1).
+#[inline]
+#[must_use]
+pub fn cos_sin_turn(v: f32) -> (f32, f32) {
+    let f = v * 4.0;
+    let q = f.floor();
+    let x = (f - q) * std::f32::consts::FRAC_PI_2;
+    let x2 = x * x;
+    let s = x
+        * (1.0
+            + x2 * (-1.0 / 6.0
+                + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 + x2 * (1.0 / 362_880.0 + x2 * (-1.0 / 39_916_800.0))))));
+    let c = 1.0
+        + x2 * (-0.5
+            + x2 * (1.0 / 24.0
+                + x2 * (-1.0 / 720.0 + x2 * (1.0 / 40_320.0 + x2 * (-1.0 / 3_628_800.0 + x2 / 479_001_600.0)))));
+    match (q as i32) & 3 {
+        0 => (c, s),
+        1 => (-s, c),
+        2 => (-c, -s),
+        _ => (s, -c),
+    }
+}
+
+/// [`cosine_direction`] in f32 with [`cos_sin_turn`] (no `sincos` call):
+/// a cosine-distributed unit direction around unit `n` (Malley's method).
+#[inline]
+#[must_use]
+pub fn cosine_direction32(n: Vec3A, u: f32, v: f32) -> Vec3A {
+    let r = u.sqrt();
+    let (c, s) = cos_sin_turn(v);
+    let z = (1.0 - u).max(0.0).sqrt();
+    let (t, b) = n.any_orthonormal_pair();
+    (t * (r * c) + b * (r * s) + n * z).normalize()
+}
+
+/// Element `i` of a pseudo-random permutation of `0..len` chosen by `key`
+/// (Kensler, "Correlated Multi-Jittered Sampling", 2013: a hash invertible
+/// on the next power of two, cycle-walked into `0..len`). `i < len`.
+#[inline]
+#[must_use]
+pub fn permute(mut i: u32, len: u32, key: u32) -> u32 {
+    if len <= 1 {
+        return 0;
+    }
+    let mut w = len - 1;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    let p = key;
+    loop {
+        i ^= p;
+        i = i.wrapping_mul(0xe170_893d);
+        i ^= p >> 16;
+        i ^= (i & w) >> 4;
+        i ^= p >> 8;
+        i = i.wrapping_mul(0x0929_eb3f);
+        i ^= p >> 23;
+        i ^= (i & w) >> 1;
+        i = i.wrapping_mul(1 | p >> 27);
+        i = i.wrapping_mul(0x6935_fa69);
+        i ^= (i & w) >> 11;
+        i = i.wrapping_mul(0x74dc_b303);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0x9e50_1cc3);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0xc860_a3df);
+        i &= w;
+        i ^= i >> 5;
+        if i < len {
+            break;
+        }
+    }
+    (i.wrapping_add(p)) % len
+}
+
 /// Index of the first element of the cumulative sums `cdf` exceeding `x`.
 #[must_use]
 pub fn sample_cdf(cdf: &[f64], x: f64) -> usize {
@@ -187,6 +276,70 @@ mod tests {
         let v = xs.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / n as f64;
         assert!((m - 0.5).abs() < 5.0 * (1.0f64 / 12.0 / n as f64).sqrt());
         assert!((v - 1.0 / 12.0).abs() < 5e-3);
+    }
+
+    #[test]
+    fn uniform32_stays_inside_the_open_interval() {
+        let r = LineRng::new(0, 0);
+        // The extreme words, through the same arithmetic.
+        for m in [0u32, 1, (1 << 23) - 1] {
+            let x = (m as f32 + 0.5) * (1.0 / 8_388_608.0);
+            assert!(x > 0.0 && x < 1.0, "{m}: {x}");
+        }
+        assert!((0..10_000).map(|k| r.uniform32(k)).all(|x| x > 0.0 && x < 1.0));
+    }
+
+    #[test]
+    fn cos_sin_turn_matches_the_library() {
+        let mut worst = 0.0f64;
+        for i in 0..100_000u32 {
+            let v = (i as f32 + 0.5) / 100_000.0;
+            let (c, s) = cos_sin_turn(v);
+            let (ls, lc) = (std::f64::consts::TAU * f64::from(v)).sin_cos();
+            worst = worst.max((f64::from(c) - lc).abs()).max((f64::from(s) - ls).abs());
+        }
+        assert!(worst < 3e-7, "worst error {worst}");
+    }
+
+    #[test]
+    fn permute_is_a_permutation() {
+        for len in [1u32, 2, 7, 8, 60, 64, 256, 1000] {
+            for key in [0u32, 1, 0xdead_beef, 12345] {
+                let mut seen = vec![false; len as usize];
+                for i in 0..len {
+                    let j = permute(i, len, key) as usize;
+                    assert!(!seen[j], "len {len} key {key}: {j} twice");
+                    seen[j] = true;
+                }
+            }
+        }
+        // Different keys give different orders.
+        let a: Vec<u32> = (0..64).map(|i| permute(i, 64, 1)).collect();
+        let b: Vec<u32> = (0..64).map(|i| permute(i, 64, 2)).collect();
+        assert_ne!(a, b);
+    }
+
+    #[test]
+    fn cosine_direction32_is_cosine_distributed() {
+        // E[cos θ] = 2/3 and E[cos² θ] = 1/2 under p = cos θ / π; the
+        // tangential components average 0.
+        let n = Vec3A::new(0.3, -0.5, 0.8).normalize();
+        let m = 200_000;
+        let (mut c1, mut c2, mut t) = (0.0f64, 0.0f64, Vec3A::ZERO);
+        for i in 0..m {
+            let r = LineRng::new(11, i);
+            let d = cosine_direction32(n, r.uniform32(0), r.uniform32(1));
+            assert!((d.length() - 1.0).abs() < 1e-5);
+            let c = f64::from(d.dot(n));
+            assert!(c >= -1e-6);
+            c1 += c;
+            c2 += c * c;
+            t += d - n * d.dot(n);
+        }
+        let m = m as f64;
+        assert!((c1 / m - 2.0 / 3.0).abs() < 5.0 * (1.0f64 / 18.0 / m).sqrt(), "{}", c1 / m);
+        assert!((c2 / m - 0.5).abs() < 5e-3, "{}", c2 / m);
+        assert!((t / m as f32).length() < 5e-3);
     }
 
     #[test]

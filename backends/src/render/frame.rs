@@ -13,9 +13,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::path::{PathTracer, Start};
+use super::path::{PathTracer, Start, Stratum};
 use crate::camera::Camera;
-use crate::lines::LineRng;
+use crate::lines::{LineRng, SeedHash};
 use crate::tracer::BackendError;
 
 /// Most samples one pixel may take (the sample index has 23 bits; the 24th
@@ -25,6 +25,9 @@ pub const MAX_PIXEL_SAMPLES: u32 = 1 << 23;
 pub const PILOT: u32 = 1 << 23;
 /// Paths traced per call of the seam.
 const CHUNK: usize = 8192;
+/// Draw of a batch's first sample that keys the batch's stratum
+/// permutations (paths use draws `0..2 + 6 · 256`).
+const STRATUM_KEY_DRAW: u32 = 0x7fff_ffff;
 
 /// Where and how an image is taken.
 #[derive(Clone, Copy, Debug)]
@@ -145,39 +148,48 @@ fn trace(pt: &PathTracer, view: &View, batches: &[Batch]) -> Result<Vec<[f64; 3]
 }
 
 /// As [`trace`]; with `geometry`, also each sample's first-hit geometry
-/// factor (Part IV eq. (12)), in order.
+/// factor (Part IV eq. (12)), in order. Each sample carries its place in
+/// its batch ([`Stratum`]): the path tracer stratifies its first diffuse
+/// vertex over the batch as the batch is stratified over the pixel.
 pub(crate) fn trace_geometry(
     pt: &PathTracer,
     view: &View,
     batches: &[Batch],
     mut geometry: Option<&mut Vec<f64>>,
 ) -> Result<Vec<[f64; 3]>, BackendError> {
-    let mut starts = Vec::new();
+    let mut starts = Vec::with_capacity(CHUNK);
+    let mut strata = Vec::with_capacity(CHUNK);
     let mut out = Vec::new();
     let mut g = Vec::new();
-    let mut flush = |starts: &mut Vec<Start>, out: &mut Vec<[f64; 3]>| -> Result<(), BackendError> {
-        let want = geometry.is_some();
-        out.extend(pt.radiance_geometry(starts, want.then_some(&mut g))?);
-        if let Some(all) = geometry.as_deref_mut() {
-            all.extend_from_slice(&g);
-        }
-        starts.clear();
-        Ok(())
-    };
+    let mut flush =
+        |starts: &mut Vec<Start>, strata: &mut Vec<Stratum>, out: &mut Vec<[f64; 3]>| -> Result<(), BackendError> {
+            let want = geometry.is_some();
+            out.extend(pt.radiance_strata(starts, Some(strata), want.then_some(&mut g))?);
+            if let Some(all) = geometry.as_deref_mut() {
+                all.extend_from_slice(&g);
+            }
+            starts.clear();
+            strata.clear();
+            Ok(())
+        };
+    let seed = SeedHash::new(view.seed);
     for b in batches {
         let (x, y) = (b.pixel % view.width, b.pixel / view.width);
+        let pilot = if b.pilot { PILOT } else { 0 };
+        // The batch's permutation key: a draw no path uses, of its first sample.
+        let key = LineRng::of(seed, (u64::from(b.pixel) << 24) | u64::from(b.first | pilot)).u32(STRATUM_KEY_DRAW);
         for i in b.first..b.first + b.n {
-            let index = if b.pilot { i | PILOT } else { i };
-            let rng = LineRng::new(view.seed, (u64::from(b.pixel) << 24) | u64::from(index));
+            let rng = LineRng::of(seed, (u64::from(b.pixel) << 24) | u64::from(i | pilot));
             let (sx, sy) = position(x, y, i, b.first, b.n, &rng, b.odd);
             let direction = view.camera.direction(sx, sy, view.width, view.height);
             starts.push(Start { origin: view.camera.eye, direction, rng });
+            strata.push(Stratum { index: i - b.first, count: b.n, key });
             if starts.len() >= CHUNK {
-                flush(&mut starts, &mut out)?;
+                flush(&mut starts, &mut strata, &mut out)?;
             }
         }
     }
-    flush(&mut starts, &mut out)?;
+    flush(&mut starts, &mut strata, &mut out)?;
     Ok(out)
 }
 

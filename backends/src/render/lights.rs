@@ -7,7 +7,7 @@
 //! Lights are chosen for next-event estimation with probability proportional
 //! to `area × Y(L_e)` (power), then a point uniformly on the triangle.
 
-use glam::DVec3;
+use glam::{DVec3, Vec3A};
 use itgfx_core::pixel::luminance;
 
 use crate::scene::{Material, Scene};
@@ -37,6 +37,22 @@ pub struct Lights {
     pub probability: Vec<f64>,
     /// Light index of each scene triangle (`u32::MAX`: not a light).
     pub of_triangle: Vec<u32>,
+    /// The same lights in f32 for the path tracer's shading.
+    pub(crate) fast: Vec<FastLight>,
+    /// [`Lights::cdf`] in f32.
+    pub(crate) cdf32: Vec<f32>,
+}
+
+/// A light triangle as the f32 shading reads it: a vertex and two edges,
+/// the unit front normal, the radiance, and `P(light) / area`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct FastLight {
+    pub(crate) v0: Vec3A,
+    pub(crate) e1: Vec3A,
+    pub(crate) e2: Vec3A,
+    pub(crate) normal: Vec3A,
+    pub(crate) radiance: Vec3A,
+    pub(crate) density: f32,
 }
 
 impl Lights {
@@ -79,7 +95,39 @@ impl Lights {
         if let Some(last) = cdf.last_mut() {
             *last = 1.0;
         }
-        Some(Self { triangles, cdf, probability, of_triangle })
+        let fast = triangles
+            .iter()
+            .zip(&probability)
+            .map(|(l, p)| {
+                let v = l.vertices.map(|x| x.as_vec3a());
+                FastLight {
+                    v0: v[0],
+                    e1: v[1] - v[0],
+                    e2: v[2] - v[0],
+                    normal: l.normal.as_vec3a(),
+                    radiance: DVec3::from(l.radiance).as_vec3a(),
+                    density: (p / l.area) as f32,
+                }
+            })
+            .collect();
+        let cdf32 = cdf.iter().map(|&c| c as f32).collect();
+        Some(Self { triangles, cdf, probability, of_triangle, fast, cdf32 })
+    }
+
+    /// [`Lights::sample`] in f32: `(light, point)`, the point
+    /// `v0 + √a (1 − b) e1 + √a b e2` (uniform on the triangle).
+    #[inline]
+    pub(crate) fn sample32(&self, u: f32, a: f32, b: f32) -> (usize, Vec3A) {
+        let i = self.cdf32.partition_point(|&c| c <= u).min(self.cdf32.len() - 1);
+        let l = &self.fast[i];
+        let s = a.sqrt();
+        (i, l.v0 + l.e1 * (s * (1.0 - b)) + l.e2 * (s * b))
+    }
+
+    /// [`Lights::pdf`] in f32.
+    #[inline]
+    pub(crate) fn pdf32(&self, i: usize, distance: f32, cos_light: f32) -> f32 {
+        self.fast[i].density * distance * distance / cos_light
     }
 
     /// Picks a light with `u` and a point on it with `(a, b)`: `(light, point)`.
@@ -107,6 +155,16 @@ pub struct Surfaces {
     pub material: Vec<u32>,
     /// The scene's materials.
     pub materials: Vec<Material>,
+    /// The scene's materials in f32, as the path tracer's shading reads them.
+    pub(crate) fast: Vec<FastMaterial>,
+}
+
+/// A material in f32: reflectance, emitted radiance, whether a mirror.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct FastMaterial {
+    pub(crate) reflectance: Vec3A,
+    pub(crate) emittance: Vec3A,
+    pub(crate) mirror: bool,
 }
 
 impl Surfaces {
@@ -114,7 +172,22 @@ impl Surfaces {
     #[must_use]
     pub fn new(scene: &Scene) -> Self {
         let material = scene.triangle_patch.iter().map(|&p| scene.patches[p as usize].material as u32).collect();
-        Self { material, materials: scene.materials.clone() }
+        let fast = scene
+            .materials
+            .iter()
+            .map(|m| FastMaterial {
+                reflectance: DVec3::from(m.reflectance).as_vec3a(),
+                emittance: DVec3::from(m.emittance).as_vec3a(),
+                mirror: m.mirror,
+            })
+            .collect();
+        Self { material, materials: scene.materials.clone(), fast }
+    }
+
+    /// [`Surfaces::of`] in f32.
+    #[inline]
+    pub(crate) fn fast_of(&self, t: u32) -> &FastMaterial {
+        &self.fast[self.material[t as usize] as usize]
     }
 
     /// Material of triangle `t`.

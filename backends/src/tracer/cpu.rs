@@ -97,7 +97,9 @@ impl CpuTracer {
     }
 
     /// The first crossing of one line: the walk shrinks the interval as hits
-    /// are found, and ties in `t` go to the smaller triangle.
+    /// are found, and ties in `t` go to the smaller triangle. The barycentrics
+    /// are taken when a candidate becomes the best (the same arithmetic as
+    /// [`triangle_hit`]'s, with the same shear: the same [`Hit`] to the bit).
     pub(crate) fn closest(&self, l: &Line) -> Option<Hit> {
         if let Some(s) = &self.scene.sphere {
             return sphere_hit(s, l);
@@ -105,6 +107,7 @@ impl CpuTracer {
         let bvh = self.bvh.as_ref()?;
         let (shear, dir) = Shear::of(l);
         let mut best: Option<(f32, u32)> = None;
+        let mut barycentric = [0.0f32; 2];
         let ray = Ray::new(Vec3A::from(l.origin), dir, l.tmin, l.tmax);
         node8::traverse(bvh, &ray, self.avx2, |k, tmax| {
             if let Some(t) = shear.hit(&self.ordered[k as usize])
@@ -112,8 +115,11 @@ impl CpuTracer {
                 && t <= l.tmax
             {
                 let tri = bvh.primitive_indices[k as usize];
-                if before(t, tri, best) {
+                if before(t, tri, best)
+                    && let Some((_, b)) = shear.hit_barycentric(&self.ordered[k as usize])
+                {
                     best = Some((t, tri));
+                    barycentric = b;
                 }
                 if t < *tmax {
                     *tmax = t;
@@ -121,7 +127,17 @@ impl CpuTracer {
             }
             false
         });
-        best.and_then(|(_, tri)| triangle_hit(&self.scene, l, tri))
+        best.map(|(t, tri)| {
+            let n = self.scene.normals[tri as usize];
+            Hit {
+                t,
+                patch: self.scene.triangle_patch[tri as usize],
+                primitive: tri,
+                cos: n.dot(dir),
+                barycentric,
+                normal: n.into(),
+            }
+        })
     }
 
     fn any(&self, l: &Line) -> bool {

@@ -161,6 +161,14 @@ impl Line {
             tmax: (tmax + f64::from(NEAR)) as f32,
         }
     }
+
+    /// [`Line::ray`] in f32 (the path tracer's rays): the same backing off.
+    #[inline]
+    #[must_use]
+    pub fn ray32(origin: Vec3A, direction: Vec3A, tmin: f32, tmax: f32) -> Line {
+        let o = origin - direction * NEAR;
+        Line { origin: o.to_array(), tmin: tmin + NEAR, direction: direction.to_array(), tmax: tmax + NEAR }
+    }
 }
 
 /// A scene ready to trace: triangles in normalised coordinates with unit

@@ -4,11 +4,14 @@
 //!
 //! * [`scene`]: patches of triangles; built-in scenes ([`scene::built_in`])
 //!   and Wavefront OBJ ([`obj::load_obj`]), subdivision.
+//! * [`formats`]: scene files by extension or magic ([`formats::load`]):
+//!   OBJ, PLY, glTF 2.0 / GLB and Mitsuba 3 XML (read and written).
 //! * [`tracer`]: the [`tracer::Tracer`] seam (every crossing, closest hit,
 //!   occlusion), the CPU backend (rayon + obvhs) and the brute-force
 //!   reference backend.
 //! * [`backend`]: choosing and opening a backend ([`BackendChoice`],
 //!   [`open`], [`BackendError`]).
+//! * [`files`]: opening inputs (regular files only: a FIFO would hang).
 //! * [`camera`]: the pinhole camera; [`preview`]: patch-colour previews.
 //! * [`lines`]: seeded counter-based global and local lines.
 //! * [`meshes`]: built-in objects seen from outside (geodesic sphere, torus,
@@ -26,6 +29,8 @@
 
 pub mod backend;
 pub mod camera;
+pub mod files;
+pub mod formats;
 pub mod imaging;
 pub mod lines;
 pub mod memory;

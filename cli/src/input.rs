@@ -4,7 +4,8 @@
 //! words) or a file path; a matrix is a file with one row per line, or
 //! inline rows separated by `;` (`0.9,0.1;0.1,0.9`). In files, fields are
 //! separated by commas, semicolons, tabs or spaces; blank lines and lines
-//! starting with `#` are skipped. Errors name the file, line and field.
+//! starting with `#` are skipped, as is a UTF-8 byte-order mark. Errors name
+//! the file, line and field.
 
 use std::fmt;
 use std::path::Path;
@@ -158,8 +159,24 @@ pub fn parse_vector_text(source: &str, text: &str) -> Result<Vec<f64>, InputErro
     Ok(out)
 }
 
+/// A file's text, without the UTF-8 byte-order mark some editors write first.
 fn read(path: &str) -> Result<String, InputError> {
-    std::fs::read_to_string(path).map_err(|e| InputError::Io { path: path.to_string(), message: e.to_string() })
+    let text = itgfx_backends::files::read_regular_to_string(Path::new(path))
+        .map_err(|e| InputError::Io { path: path.to_string(), message: e.to_string() })?;
+    Ok(match text.strip_prefix('\u{feff}') {
+        Some(rest) => rest.to_string(),
+        None => text,
+    })
+}
+
+/// Refuses, before anything opens it, an input `path` that is not a
+/// regular file: `open()` on a FIFO with no writer waits for ever
+/// ([`itgfx_backends::files::check_regular`]). One line, `flag path: why`.
+///
+/// # Errors
+/// Missing, a directory, a FIFO, a device.
+pub fn regular(flag: &str, path: &Path) -> Result<(), crate::CliError> {
+    itgfx_backends::files::check_regular(path).map_err(|e| crate::CliError::usage(format!("{flag} {path:?}: {e}")))
 }
 
 fn looks_like_file(arg: &str) -> bool {

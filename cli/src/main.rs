@@ -67,6 +67,21 @@ fn one_line(s: &str) -> String {
     s.trim_end().chars().flat_map(|c| if c.is_control() { c.escape_default().collect() } else { vec![c] }).collect()
 }
 
+/// Writes `text` and a newline to stdout. A closed pipe (`| head`) is not
+/// an error: the reader wanted no more (as ripgrep does, exit quietly).
+fn print(text: &str) -> Result<(), CliError> {
+    let mut stdout = std::io::stdout().lock();
+    match writeln!(stdout, "{text}").and_then(|()| stdout.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(CliError::runtime(format!("standard output: {e}"))),
+        _ => Ok(()),
+    }
+}
+
+fn fail(e: &CliError) -> ExitCode {
+    eprintln!("itgfx: {}", one_line(&e.to_string()));
+    ExitCode::from(e.exit_code())
+}
+
 fn main() -> ExitCode {
     let words: Vec<std::ffi::OsString> = std::env::args_os().collect();
     let cli = match Cli::parse_words(&words) {
@@ -77,8 +92,10 @@ fn main() -> ExitCode {
                 | ErrorKind::DisplayVersion
                 | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
                     // Help and version go to stdout with exit 0.
-                    let _ = writeln!(std::io::stdout().lock(), "{}", e.render().to_string().trim_end());
-                    ExitCode::SUCCESS
+                    match print(e.render().to_string().trim_end()) {
+                        Ok(()) => ExitCode::SUCCESS,
+                        Err(e) => fail(&e),
+                    }
                 }
                 _ => {
                     let measure = words.get(1).is_some_and(|w| w == "measure");
@@ -88,16 +105,16 @@ fn main() -> ExitCode {
             };
         }
     };
+    // Every output file of the run lands at the end, all or none.
+    itgfx_cli::output::begin();
     match run(cli) {
-        Ok(out) => {
-            let mut stdout = std::io::stdout().lock();
-            // A closed pipe (e.g. `| head`) is not an error worth a panic.
-            let _ = writeln!(stdout, "{out}");
-            ExitCode::SUCCESS
-        }
+        Ok(out) => match itgfx_cli::output::commit(|| print(&out)) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => fail(&e),
+        },
         Err(e) => {
-            eprintln!("itgfx: {}", one_line(&e.to_string()));
-            ExitCode::from(2)
+            itgfx_cli::output::abort();
+            fail(&e)
         }
     }
 }

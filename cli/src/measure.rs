@@ -32,6 +32,15 @@ pub const MEASURES: &[(&str, &str)] = &[
     ("bottleneck", "--joint M                      agglomerative information bottleneck merges (Slonim-Tishby)"),
 ];
 
+/// Merge-loss terms per CPU second of the agglomerative bottleneck (a few
+/// logarithms each) and comparisons per CPU second of its search, measured
+/// on the 2-core development machine under load (400 x 64: 1.5 s; 2,000 x 2:
+/// 42 s; 1,000 x 256: 35 s); its estimate is `terms / TERMS + comparisons /
+/// COMPARES` ([`core_::bottleneck_work`]), CPU seconds.
+const BOTTLENECK_TERMS_PER_S: f64 = 8e6;
+/// See [`BOTTLENECK_TERMS_PER_S`].
+const BOTTLENECK_COMPARES_PER_S: f64 = 3e7;
+
 fn probabilities(normalize: bool, name: &str, v: Vec<f64>) -> Result<Vec<f64>, CliError> {
     if normalize {
         let s: f64 = v.iter().sum();
@@ -103,6 +112,11 @@ pub fn run(m: &Measure) -> Result<Report, CliError> {
             r.real("normalized_entropy", if max > 0.0 { h / max } else { 0.0 }, None);
         }
         Measure::Binary(v) => {
+            if v.normalize {
+                return Err(CliError::usage(
+                    "--normalize: binary takes one probability p, there is no sum to divide by",
+                ));
+            }
             let v = positional_vector(&v.values)?;
             if v.len() != 1 {
                 return Err(CliError::usage("binary takes one probability p"));
@@ -226,6 +240,15 @@ pub fn run(m: &Measure) -> Result<Report, CliError> {
         }
         Measure::Huffman { block, values } => {
             let p = probabilities(values.normalize, "p", positional_vector(&values.values)?)?;
+            let n = p.len() as u64;
+            if let Some(k) = *block
+                && n.checked_pow(k).is_none_or(|m| m > core_::HUFFMAN_MAX_BLOCKS)
+            {
+                let most = (1..=k).take_while(|&j| n.pow(j) <= core_::HUFFMAN_MAX_BLOCKS).last().unwrap_or(0);
+                return Err(CliError::usage(format!(
+                    "--block {k}: {n}^{k} blocks is more than 2^22; with {n} symbols give at most --block {most}"
+                )));
+            }
             let mut s = vec![0.0; p.len()];
             let l = core_::huffman_expected_length(&p, &mut s).map_err(|e| core_err("p", e))?;
             let h = core_::entropy(&p, Base::Bits).map_err(|e| core_err("p", e))?;
@@ -273,9 +296,23 @@ pub fn run(m: &Measure) -> Result<Report, CliError> {
             );
             r.reals("I_i", per).reals("I_ij", mi);
         }
-        Measure::Bottleneck { joint, .. } => {
+        Measure::Bottleneck { joint, max_seconds, .. } => {
             let m = given(joint, "--joint")?.0;
-            let b = core_::agglomerative_bottleneck(&m.data, m.rows, m.cols, base).map_err(|e| core_err("joint", e))?;
+            let (terms, compares) = core_::bottleneck_work(m.rows, m.cols);
+            let estimate = terms as f64 / BOTTLENECK_TERMS_PER_S + compares as f64 / BOTTLENECK_COMPARES_PER_S;
+            if estimate > *max_seconds {
+                return Err(CliError::usage(format!(
+                    "bottleneck: {} rows x {} columns take about {} CPU seconds (estimate), above --max-seconds {max_seconds}; raise it to run",
+                    m.rows,
+                    m.cols,
+                    estimate.ceil()
+                )));
+            }
+            let mut progress = crate::progress::Progress::with_unit("Mcomparisons/s");
+            let b = core_::agglomerative_bottleneck_with_progress(&m.data, m.rows, m.cols, base, |d, t| {
+                progress.update(d, t);
+            })
+            .map_err(|e| core_err("joint", e))?;
             r.real("initial_information", b.initial_information, unit);
             let steps = b
                 .merges

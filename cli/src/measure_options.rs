@@ -29,6 +29,13 @@ fn vector(s: &str) -> Result<Vector, String> {
     crate::input::vector_arg("value", s).map(Vector).map_err(|e| e.to_string())
 }
 
+fn max_seconds(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v > 0.0 && v.is_finite() => Ok(v),
+        _ => Err("must be a positive number of seconds".into()),
+    }
+}
+
 fn matrix(s: &str) -> Result<MatrixArg, String> {
     crate::input::matrix_arg("value", s).map(MatrixArg).map_err(|e| e.to_string())
 }
@@ -149,7 +156,7 @@ pub enum Measure {
     },
     /// Huffman expected length vs entropy (Part II eqs. 24-25)
     Huffman {
-        /// Code blocks of K symbols too (1..=64)
+        /// Code blocks of K symbols too: 1..=64, and at most 2^22 blocks (n^K <= 4194304 for n symbols)
         #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=64))]
         block: Option<u32>,
         #[command(flatten)]
@@ -188,6 +195,9 @@ pub enum Measure {
         /// The joint distribution p(x,y)
         #[arg(long, value_name = "M", required = true, value_parser = matrix)]
         joint: Option<MatrixArg>,
+        /// Refuse a run estimated (from its rows and columns) to take more than S CPU seconds
+        #[arg(long, value_name = "S", default_value = "60", value_parser = max_seconds)]
+        max_seconds: f64,
         #[command(flatten)]
         #[allow(missing_docs)]
         common: Common,

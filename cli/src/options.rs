@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use clap::{Args, Parser, Subcommand};
+use clap::{ArgGroup, Args, Parser, Subcommand};
 use itgfx_backends::BackendChoice;
 use itgfx_core::Base;
 
@@ -20,7 +20,9 @@ use crate::values::{
     version,
     about = "itgfx — information theory for computer graphics",
     after_help = "Every command accepts --json (one JSON object on stdout); those that report information measures take --base 2|e|10.\n\
-                  Errors are one line on stderr and exit code 2.",
+                  Errors are one line on stderr: exit code 2 for a usage error (bad options or input, refused before any work), \
+                  1 for a failure on the way (an output or standard output that could not be written). \
+                  Output files are written all or none, at the end of the run.",
     arg_required_else_help = true
 )]
 pub struct Cli {
@@ -80,7 +82,7 @@ pub enum Command {
     #[command(arg_required_else_help = true, subcommand_value_name = "NAME", subcommand_help_heading = "Measures")]
     Measure(MeasureCommand),
     /// Vulkan devices found, and the one --backend vulkan uses
-    Devices(Common),
+    Devices(JsonOnly),
 }
 
 /// Options every command has.
@@ -92,6 +94,15 @@ pub struct Common {
     /// Logarithm base: 2 (bits), e (nats) or 10 (hartleys)
     #[arg(long, value_name = "2|e|10", default_value = "2", value_parser = base)]
     pub base: Base,
+}
+
+/// `--json` alone, for the commands that report no information measure
+/// (`--base` would be accepted and ignored there).
+#[derive(Debug, Clone, Copy, Args)]
+pub struct JsonOnly {
+    /// One JSON object on stdout
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Options of every command that traces: the backend and the worker threads.
@@ -132,7 +143,7 @@ pub fn scene_list() -> String {
 
 /// `itgfx complexity SCENE`.
 #[derive(Debug, Args)]
-#[command(after_help = scene_list())]
+#[command(after_help = scene_list(), group(ArgGroup::new("picture").multiple(true).args(["export_ply", "image"])))]
 pub struct ComplexityOptions {
     /// A built-in scene name (e.g. cube-enclosure:10) or an .obj file
     #[arg(value_name = "SCENE")]
@@ -161,7 +172,7 @@ pub struct ComplexityOptions {
     pub image: Option<PathBuf>,
     /// Colour by information per unit area, or by I_i^c - I_i (delta)
     #[arg(long, value_name = "information|delta", default_value = "information",
-          value_parser = ["information", "delta"])]
+          value_parser = ["information", "delta"], requires = "picture")]
     pub color_by: String,
     /// First line index (shards of one run: same seed, disjoint ranges)
     #[arg(long, value_name = "K", default_value = "0", value_parser = count)]
@@ -173,7 +184,7 @@ pub struct ComplexityOptions {
     #[arg(long, value_name = "F", value_parser = out_path)]
     pub save_counts: Option<PathBuf>,
     /// Evaluate saved shards together instead of tracing: F1,F2,... (with --lines N: they must cover 0..N)
-    #[arg(long, value_name = "F1,F2,...", value_delimiter = ',', conflicts_with_all = ["offset", "local", "shard"])]
+    #[arg(long, value_name = "F1,F2,...", value_delimiter = ',', conflicts_with_all = ["offset", "local", "shard", "seed", "blocks"])]
     pub merge: Vec<PathBuf>,
     #[command(flatten)]
     #[allow(missing_docs)]
@@ -187,7 +198,10 @@ pub struct ComplexityOptions {
 #[derive(Debug, Args)]
 #[command(after_help = "MESH is an .obj file or a built-in (see itgfx complexity --help). \
                         The first surface a ray meets is what it sees.\n\
-                        Pictures are PNG renders and PLY with vertex colours.")]
+                        Pictures are PNG renders and PLY with vertex colours.",
+          group(ArgGroup::new("smoothed").multiple(true).args([
+              "out", "importance_image", "ao_image", "saliency_image", "info_image", "export_ply", "saliency_ply",
+          ])))]
 pub struct ViewpointsOptions {
     /// An .obj file or a built-in scene name
     #[arg(value_name = "MESH")]
@@ -262,7 +276,8 @@ pub struct ViewpointsOptions {
     #[arg(long, value_name = "F", value_parser = out_path, help_heading = "Pictures")]
     pub saliency_ply: Option<PathBuf>,
     /// Pictures average each polygon with its neighbours K times; JSON values are never smoothed
-    #[arg(long, value_name = "K", default_value = "2", value_parser = smooth, help_heading = "Pictures")]
+    #[arg(long, value_name = "K", default_value = "2", value_parser = smooth, help_heading = "Pictures",
+          requires = "smoothed")]
     pub smooth: u32,
     /// I(o;V), saliency and p(o) per polygon in the output
     #[arg(long)]

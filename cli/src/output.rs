@@ -7,10 +7,17 @@
 //! the same way, so the link survives. A device or a FIFO is never replaced
 //! by a file: it is opened and written through, and a write error (`ENOSPC`
 //! from `/dev/full`) is reported.
+//!
+//! Between [`begin`] and [`commit`] (the binary brackets each run with them),
+//! writes are staged so that a run writes all its outputs or none: regular
+//! files go to their temporaries and are renamed only at [`commit`], device
+//! and FIFO bytes are kept until then; a failed run calls [`abort`], which
+//! removes the temporaries.
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use crate::CliError;
 
@@ -19,6 +26,104 @@ const MAX_LINKS: usize = 40;
 
 fn err(path: &Path, what: impl std::fmt::Display) -> CliError {
     CliError::usage(format!("{path:?}: {what}"))
+}
+
+/// A failed write: a runtime failure (exit 1), not a usage error.
+fn write_err(path: &Path, what: impl std::fmt::Display) -> CliError {
+    CliError::runtime(format!("{path:?}: {what}"))
+}
+
+/// A write held back until [`commit`].
+#[derive(Debug)]
+struct Staged {
+    /// The path as the user gave it (for messages).
+    path: PathBuf,
+    /// Where it lands (links followed).
+    target: PathBuf,
+    pending: Pending,
+}
+
+#[derive(Debug)]
+enum Pending {
+    /// A written temporary beside `target`, renamed at [`commit`].
+    Rename(PathBuf),
+    /// Bytes for a device or FIFO, written at [`commit`].
+    Through(Vec<u8>),
+}
+
+/// What a run has staged.
+#[derive(Debug, Default)]
+struct Stage {
+    files: Vec<Staged>,
+    /// `--out` directories this run created: removed again (when empty) if
+    /// the run fails.
+    dirs: Vec<PathBuf>,
+}
+
+impl Stage {
+    /// Removes the temporaries of `files` and the directories made for them.
+    fn undo(files: &[Staged], dirs: &[PathBuf]) {
+        for s in files {
+            if let Pending::Rename(tmp) = &s.pending {
+                let _ = fs::remove_file(tmp);
+            }
+        }
+        for d in dirs.iter().rev() {
+            let _ = fs::remove_dir(d);
+        }
+    }
+}
+
+/// The staged writes of the run, `None` outside [`begin`]…[`commit`].
+static STAGE: Mutex<Option<Stage>> = Mutex::new(None);
+
+fn stage() -> MutexGuard<'static, Option<Stage>> {
+    STAGE.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// Starts staging: until [`commit`] or [`abort`], [`write`] renames nothing
+/// into place and writes no device.
+pub fn begin() {
+    *stage() = Some(Stage::default());
+}
+
+/// Ends staging without writing: removes every temporary written so far.
+pub fn abort() {
+    let s = stage().take().unwrap_or_default();
+    Stage::undo(&s.files, &s.dirs);
+}
+
+/// Writes the staged device and FIFO outputs, then (`before_rename`, e.g.
+/// printing the report, returning `Ok`) renames the staged files into
+/// place. A failure before the renames removes every temporary, so no file
+/// output is left; one during them removes those not yet renamed.
+///
+/// # Errors
+/// The first failed write, `before_rename`'s error, or a failed rename, as a
+/// runtime error naming the path.
+pub fn commit(before_rename: impl FnOnce() -> Result<(), CliError>) -> Result<(), CliError> {
+    let Stage { files, dirs } = stage().take().unwrap_or_default();
+    for s in &files {
+        if let Pending::Through(bytes) = &s.pending
+            && let Err(e) = write_through(&s.path, &s.target, bytes)
+        {
+            Stage::undo(&files, &dirs);
+            return Err(e);
+        }
+    }
+    if let Err(e) = before_rename() {
+        Stage::undo(&files, &dirs);
+        return Err(e);
+    }
+    for (i, s) in files.iter().enumerate() {
+        if let Pending::Rename(tmp) = &s.pending
+            && let Err(e) = fs::rename(tmp, &s.target)
+        {
+            Stage::undo(&files[i..], &[]);
+            return Err(write_err(&s.path, e));
+        }
+    }
+    Ok(())
 }
 
 /// The final target of `path` after following symbolic links (the target
@@ -78,6 +183,9 @@ pub fn out_dir(dir: &Path) -> Result<Option<PathBuf>, CliError> {
         return Ok(None);
     }
     fs::create_dir_all(dir).map_err(|e| CliError::usage(format!("--out {dir:?}: {e}")))?;
+    if let Some(s) = stage().as_mut() {
+        s.dirs.push(dir.to_path_buf());
+    }
     Ok(Some(dir.to_path_buf()))
 }
 
@@ -152,33 +260,68 @@ fn temporary(target: &Path) -> PathBuf {
 }
 
 /// Writes `bytes` to `path`: atomically for regular files (through links),
-/// straight through for devices and FIFOs.
+/// straight through for devices and FIFOs; between [`begin`] and [`commit`],
+/// staged instead (see the module docs).
 ///
 /// # Errors
-/// A one-line error naming the quoted path.
+/// A one-line runtime error naming the quoted path.
 pub fn write(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
     let target = resolve(path)?;
-    match kind(&target)? {
-        Kind::Through => {
-            let mut f = OpenOptions::new().write(true).open(&target).map_err(|e| err(path, e))?;
-            f.write_all(bytes).and_then(|()| f.flush()).map_err(|e| err(path, e))
-        }
+    let how = kind(&target)?;
+    let mut guard = stage();
+    let Some(Stage { files: staged, .. }) = guard.as_mut() else {
+        drop(guard);
+        return match how {
+            Kind::Through => write_through(path, &target, bytes),
+            Kind::Replace => {
+                let tmp = temporary(&target);
+                write_temporary(path, &target, &tmp, bytes)?;
+                fs::rename(&tmp, &target).map_err(|e| {
+                    let _ = fs::remove_file(&tmp);
+                    write_err(path, e)
+                })
+            }
+        };
+    };
+    // The same output written twice in a run: the last bytes win for a
+    // file (one temporary), both go through to a device, as unstaged.
+    let earlier = staged.iter_mut().find(|s| s.target == target);
+    match how {
+        Kind::Through => match earlier {
+            Some(Staged { pending: Pending::Through(b), .. }) => b.extend_from_slice(bytes),
+            _ => staged.push(Staged { path: path.into(), target, pending: Pending::Through(bytes.to_vec()) }),
+        },
         Kind::Replace => {
             let tmp = temporary(&target);
-            let keep = fs::metadata(&target).ok().map(|m| m.permissions());
-            let res = (|| {
-                let mut f = File::create(&tmp)?;
-                f.write_all(bytes)?;
-                f.sync_all()?;
-                if let Some(p) = keep {
-                    fs::set_permissions(&tmp, p)?;
-                }
-                fs::rename(&tmp, &target)
-            })();
-            if res.is_err() {
-                let _ = fs::remove_file(&tmp);
+            write_temporary(path, &target, &tmp, bytes)?;
+            if earlier.is_none() {
+                staged.push(Staged { path: path.into(), target, pending: Pending::Rename(tmp) });
             }
-            res.map_err(|e| err(path, e))
         }
     }
+    Ok(())
+}
+
+fn write_through(path: &Path, target: &Path, bytes: &[u8]) -> Result<(), CliError> {
+    let mut f = OpenOptions::new().write(true).open(target).map_err(|e| write_err(path, e))?;
+    f.write_all(bytes).and_then(|()| f.flush()).map_err(|e| write_err(path, e))
+}
+
+/// Writes `tmp` whole (synced, with `target`'s permissions if it exists);
+/// removes it again on failure.
+fn write_temporary(path: &Path, target: &Path, tmp: &Path, bytes: &[u8]) -> Result<(), CliError> {
+    let keep = fs::metadata(target).ok().map(|m| m.permissions());
+    let res = (|| {
+        let mut f = File::create(tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        if let Some(p) = keep {
+            fs::set_permissions(tmp, p)?;
+        }
+        Ok::<(), io::Error>(())
+    })();
+    if res.is_err() {
+        let _ = fs::remove_file(tmp);
+    }
+    res.map_err(|e| write_err(path, e))
 }

@@ -9,6 +9,7 @@ pub struct Progress {
     start: Instant,
     last: f64,
     enabled: bool,
+    unit: &'static str,
 }
 
 impl Progress {
@@ -16,7 +17,13 @@ impl Progress {
     #[must_use]
     pub fn new() -> Self {
         let enabled = std::io::stderr().is_terminal() || std::env::var_os("ITGFX_PROGRESS").is_some_and(|v| v == "1");
-        Self { start: Instant::now(), last: 0.0, enabled }
+        Self { start: Instant::now(), last: 0.0, enabled, unit: "Mlines/s" }
+    }
+
+    /// A reporter whose rate (millions of units done per second) is named `unit`.
+    #[must_use]
+    pub fn with_unit(unit: &'static str) -> Self {
+        Self { unit, ..Self::new() }
     }
 
     /// Reports `done` of `total` lines.
@@ -34,11 +41,12 @@ impl Progress {
         let mut e = std::io::stderr().lock();
         let _ = write!(
             e,
-            "\r[{}{}] {:5.1}%  {:.2} Mlines/s  eta {:.0}s ",
+            "\r[{}{}] {:5.1}%  {:.2} {}  eta {:.0}s ",
             "#".repeat(fill),
             " ".repeat(width - fill),
             frac * 100.0,
             rate,
+            self.unit,
             eta
         );
         if done >= total {

@@ -80,11 +80,18 @@ pub struct RadiosityOptions {
     /// Picture width and height in pixels (8..=2048)
     #[arg(long, value_name = "W", default_value = "256", value_parser = size)]
     pub size: u32,
+    /// Camera of the pictures in scene units: eye, target, up (3 numbers each) and vertical field of
+    /// view in degrees (default: the scene file's camera, else the scene's default view)
+    #[arg(long, value_name = "EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV", value_parser = crate::render::camera)]
+    pub camera: Option<itgfx_backends::camera::Camera>,
     /// Score the solution against a path-traced reference (reference.exr or .pfm of --path-trace)
     #[arg(long, value_name = "R.exr", value_parser = out_path, conflicts_with = "path_trace")]
     pub reference: Option<PathBuf>,
     /// Make the reference instead: W random walks per pixel (no mesh, no oracle)
-    #[arg(long, value_name = "W", value_parser = walks, conflicts_with_all = ["elements", "epsilon"])]
+    #[arg(long, value_name = "W", value_parser = walks, conflicts_with_all = [
+        "elements", "epsilon", "shares", "oracle", "samples", "base_level", "transport_samples", "min_area",
+        "count_tolerance", "max_trials",
+    ])]
     pub path_trace: Option<u32>,
     /// Check the solution patch by patch: N paths of the renderer's path tracer per patch
     #[arg(long, value_name = "N", value_parser = walks, conflicts_with = "path_trace")]
@@ -229,7 +236,7 @@ fn exr(px: &[Rgb], width: u32, height: u32, path: &Path) -> Result<(), CliError>
 /// Reads `--reference`: OpenEXR (by its magic number) or the PFM of [`pfm`].
 fn read_reference(path: &Path) -> Result<(u32, u32, Vec<Rgb>), CliError> {
     let mut magic = [0u8; 4];
-    let is_exr = std::fs::File::open(path)
+    let is_exr = itgfx_backends::files::open_regular(path)
         .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut magic))
         .is_ok_and(|()| magic == [0x76, 0x2f, 0x31, 0x01]);
     if !is_exr {
@@ -245,7 +252,7 @@ fn read_reference(path: &Path) -> Result<(u32, u32, Vec<Rgb>), CliError> {
 /// Reads a PFM written by [`pfm`] (colour, little-endian).
 fn read_pfm(path: &Path) -> Result<(u32, u32, Vec<Rgb>), CliError> {
     let bad = |why: &str| CliError::usage(format!("--reference {path:?}: {why}"));
-    let bytes = std::fs::read(path).map_err(|e| bad(&e.to_string()))?;
+    let bytes = itgfx_backends::files::read_regular(path).map_err(|e| bad(&e.to_string()))?;
     let mut fields = Vec::new();
     let mut at = 0;
     while fields.len() < 4 && at < bytes.len().min(256) {
@@ -318,10 +325,8 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
     {
         return Err(CliError::usage(format!("--elements {n} is above --max-elements {}", o.max_elements)));
     }
-    if let Some(r) = &o.reference
-        && !r.is_file()
-    {
-        return Err(CliError::usage(format!("--reference {r:?}: not a regular file")));
+    if let Some(r) = &o.reference {
+        crate::input::regular("--reference", r)?;
     }
     let scene = load_scene(&spec, o.subdivide)?;
     check_scene(&scene).map_err(usage)?;
@@ -350,7 +355,7 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
     let t0 = Instant::now();
     let prepared = Prepared::new(&scene);
     let tracer = open(o.tracing.backend, &prepared).map_err(usage)?;
-    let camera = default_camera(&scene);
+    let camera = o.camera.unwrap_or_else(|| default_camera(&scene));
     let mut r = Report::new();
     r.text("scene", scene.name.clone()).text("backend", tracer.name());
     r.count("polygons", h0.roots.len() as u64).count("pixels", u64::from(o.size) * u64::from(o.size));

@@ -1,20 +1,23 @@
-//! Scene loading shared by the commands: an `.obj` file or a built-in name.
+//! Scene loading shared by the commands: a scene file (OBJ, PLY, glTF/GLB,
+//! Mitsuba XML; [`itgfx_backends::formats`]) or a built-in name.
 
 use std::path::Path;
 
-use itgfx_backends::obj::load_obj;
+use itgfx_backends::formats;
 use itgfx_backends::scene::{Scene, built_in};
 
 use crate::CliError;
 
-/// Loads a scene spec: an existing `.obj` path or a built-in name, then
+/// Loads a scene spec: an existing file, a path with a scene extension
+/// (`.obj`, `.ply`, `.gltf`, `.glb`, `.xml`) or a built-in name, then
 /// `--subdivide K`.
 ///
 /// # Errors
 /// Scene errors, one line.
 pub fn load_scene(spec: &str, subdivide: u32) -> Result<Scene, CliError> {
-    let scene = if Path::new(spec).is_file() || spec.ends_with(".obj") {
-        load_obj(Path::new(spec)).map_err(|e| CliError::usage(e.to_string()))?
+    let path = Path::new(spec);
+    let scene = if path.is_file() || formats::by_extension(path).is_some() {
+        formats::load(path).map_err(|e| CliError::usage(e.to_string()))?
     } else {
         built_in(spec).map_err(|e| CliError::usage(e.to_string()))?
     };

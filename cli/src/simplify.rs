@@ -40,7 +40,8 @@ pub struct SimplifyOptions {
     pub out: Option<PathBuf>,
     /// Collapse cost: vmi = mean |change of each viewpoint's I(v;O)|, ve = mean |change of viewpoint
     /// entropy|, ivo = |change of the channel's I(V;O)|
-    #[arg(long, value_name = "vmi|ve|ivo", default_value = "vmi", value_parser = ["vmi", "ve", "ivo"])]
+    #[arg(long, value_name = "vmi|ve|ivo", default_value = "vmi", value_parser = ["vmi", "ve", "ivo"],
+          conflicts_with = "evaluate")]
     pub metric: String,
     /// Viewpoints of the channel: 12, 42, 162, 642 or 2562 (a subdivided icosahedron)
     #[arg(long, value_name = "N", default_value = "42", value_parser = viewpoint_count)]

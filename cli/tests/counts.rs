@@ -84,7 +84,7 @@ fn saved_runs_and_shards_reproduce_the_run_bit_for_bit() {
     let p = path("whole.counts");
     let whole =
         json_of(&["complexity", "cube-enclosure:2", "--lines", "30000", "--seed", "4", "--save-counts", &p, "--json"]);
-    let again = json_of(&["complexity", "cube-enclosure:2", "--seed", "4", "--merge", &p, "--json"]);
+    let again = json_of(&["complexity", "cube-enclosure:2", "--merge", &p, "--json"]);
     assert_eq!(again, whole);
     let shard = |name: &str, off: &str, n: &str| {
         let p = path(name);
@@ -95,7 +95,7 @@ fn saved_runs_and_shards_reproduce_the_run_bit_for_bit() {
     let (a, b, c) = (shard("s1", "0", "7000"), shard("s2", "7000", "13001"), shard("s3", "20001", "9999"));
     for order in [[&a, &b, &c], [&c, &a, &b], [&b, &c, &a]] {
         let list = format!("{},{},{}", order[0], order[1], order[2]);
-        let m = json_of(&["complexity", "cube-enclosure:2", "--seed", "4", "--merge", &list, "--json"]);
+        let m = json_of(&["complexity", "cube-enclosure:2", "--merge", &list, "--json"]);
         assert_eq!(m, whole, "{list}");
     }
 }
@@ -252,7 +252,7 @@ fn binary_and_json_shards_merge_into_the_run() {
     let bin = std::fs::read(&a).unwrap();
     assert_eq!(&bin[..8], b"ITGFXCNT");
     let b_bin = path("b-converted.counts");
-    let convert = ["complexity", "cube-enclosure:3", "--seed", "5", "--merge", &b, "--save-counts", &b_bin];
+    let convert = ["complexity", "cube-enclosure:3", "--merge", &b, "--save-counts", &b_bin];
     assert!(itgfx(&convert).status.success());
     assert!(std::fs::metadata(&b_bin).unwrap().len() < std::fs::metadata(&b).unwrap().len());
     for list in [format!("{a},{b},{c}"), format!("{c},{b_bin},{a}")] {

@@ -22,7 +22,12 @@ fn s(p: &Path) -> &str {
 }
 
 fn one_line_exit_2(out: &Output) -> String {
-    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+    one_line_exit(out, 2)
+}
+
+/// Exit 1 is a failure on the way (a write), 2 a usage error.
+fn one_line_exit(out: &Output, code: i32) -> String {
+    assert_eq!(out.status.code(), Some(code), "{}", String::from_utf8_lossy(&out.stderr));
     let err = String::from_utf8_lossy(&out.stderr).into_owned();
     assert_eq!(err.lines().count(), 1, "{err}");
     err
@@ -32,7 +37,7 @@ fn one_line_exit_2(out: &Output) -> String {
 fn dev_full_is_written_through_and_its_error_reported() {
     for flag in ["--image", "--export-ply", "--save-counts"] {
         let out = itgfx(&["complexity", "cube", "--lines", "1000", flag, "/dev/full"]);
-        let err = one_line_exit_2(&out);
+        let err = one_line_exit(&out, 1);
         assert!(err.contains("/dev/full") && err.contains("No space left"), "{flag}: {err}");
         assert!(std::fs::metadata("/dev/full").unwrap().file_type().is_char_device(), "still a device");
     }

@@ -1,6 +1,8 @@
 //! `itgfx viewpoints` on meshes that broke it: importance-driven VMI infinite
 //! on views that see something, and degenerate-but-valid meshes refused.
 
+mod common;
+
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
@@ -50,22 +52,22 @@ fn importance_vmi_is_finite_on_every_view_that_sees() {
         "--json",
     ]);
     assert_eq!(finite_where_seen(&v), 12);
-    let bunny = std::path::Path::new("/work/shared/data/meshes/stanford-bunny.obj");
-    if bunny.is_file() {
-        // Before: 35 of 42 views "inf".
-        let v = json(&[
-            "viewpoints",
-            bunny.to_str().unwrap(),
-            "--viewpoints",
-            "42",
-            "--estimator",
-            "grid",
-            "--resolution",
-            "64",
-            "--json",
-        ]);
-        assert_eq!(finite_where_seen(&v), 42);
-    }
+    // From the shared data, found from the workspace root (a missing copy
+    // fails the test; it used to skip silently).
+    let bunny = common::shared_mesh("stanford-bunny.obj");
+    // Before: 35 of 42 views "inf".
+    let v = json(&[
+        "viewpoints",
+        bunny.to_str().unwrap(),
+        "--viewpoints",
+        "42",
+        "--estimator",
+        "grid",
+        "--resolution",
+        "64",
+        "--json",
+    ]);
+    assert_eq!(finite_where_seen(&v), 42);
 }
 
 #[test]

@@ -82,9 +82,12 @@ pub(crate) fn huffman_in_place(w: &mut [f64]) -> f64 {
 ///
 /// Builds the `n^k` block distribution.
 ///
+/// Most block symbols `n^k` [`huffman_block_length`] builds (2^22).
+pub const HUFFMAN_MAX_BLOCKS: u64 = 1 << 22;
+
 /// # Errors
 /// As [`crate::Pmf::new`]; [`Error::InvalidParameter`] if `k = 0` or `n^k`
-/// exceeds 2^22 symbols.
+/// exceeds [`HUFFMAN_MAX_BLOCKS`] symbols.
 #[cfg(feature = "alloc")]
 pub fn huffman_block_length<T: Real>(p: &[T], k: u32) -> Result<f64, Error> {
     use alloc::vec::Vec;
@@ -92,7 +95,7 @@ pub fn huffman_block_length<T: Real>(p: &[T], k: u32) -> Result<f64, Error> {
     let s = mass(p)?;
     check_normalized::<T>(s)?;
     let n = p.len();
-    let size = (n as u64).checked_pow(k).filter(|&m| k > 0 && m <= 1 << 22);
+    let size = (n as u64).checked_pow(k).filter(|&m| k > 0 && m <= HUFFMAN_MAX_BLOCKS);
     let Some(size) = size else {
         return Err(Error::InvalidParameter { name: "k", value: f64::from(k) });
     };

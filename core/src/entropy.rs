@@ -328,6 +328,20 @@ pub fn conditional_entropy<T: Real>(joint: &[T], rows: usize, cols: usize, base:
 /// support size (Hartley), `alpha = +∞` the min-entropy `−log max p`.
 /// `H_α` is non-increasing in `α`.
 ///
+/// Near `α = 1` the textbook form divides a cancelled logarithm by `1 − α`
+/// (at `α = 1 + 1e-14` it was off by 1%). With `ε = α − 1` and `ℓ_i = ln p_i`,
+/// `Σ p^α = Σ p_i e^{εℓ_i}` is the moment generating function of `ℓ` under
+/// `p`, so `ln Σ p^α = K(ε)`, its cumulant generating function, and
+///
+/// ```text
+/// H_α = −K(ε)/ε = H − κ₂ ε/2 − κ₃ ε²/6 − κ₄ ε³/24 − O(κ₅ ε⁴)
+/// ```
+/// with `H = −κ₁` Shannon's entropy and `κ_k` the cumulants of `ℓ`
+/// ([`renyi_series`]); it is used while `|ε|·max|ℓ| ≤ 10⁻⁴`, where the next
+/// term is below 10⁻¹⁷ of `H`. For `½ ≤ α ≤ 3/2` otherwise, the exact
+/// `H_α = −log1p(Σ p_i expm1(εℓ_i)) / ε`, whose sum has terms of one sign
+/// (no cancellation); further out, the form below with `p_max` factored out.
+///
 /// # Errors
 /// [`Error::InvalidParameter`] for `alpha` NaN or negative, then as [`entropy`].
 pub fn renyi_entropy<T: Real>(p: &[T], alpha: f64, base: Base) -> Result<T, Error> {
@@ -341,11 +355,16 @@ pub fn renyi_entropy<T: Real>(p: &[T], alpha: f64, base: Base) -> Result<T, Erro
         return entropy(p, base);
     }
     let max = p.iter().map(|x| x.to_f64()).fold(0.0, f64::max);
+    let eps = alpha - 1.0;
     let nats = if alpha == f64::INFINITY {
         -ln(max / s)
     } else if alpha == 0.0 {
         let support = p.iter().filter(|x| x.to_f64() > 0.0).count();
         ln(support as f64)
+    } else if let Some(h) = near_one(p, s, eps).map(|m| renyi_series(&m, eps)) {
+        h
+    } else if eps.abs() <= 0.5 {
+        -libm::log1p(sum_map(p, |x| expm1_term(x / s, eps))) / eps
     } else {
         // Factor out p_max: H_α = α/(1−α) ln p_max + 1/(1−α) ln Σ (p_i/p_max)^α.
         // The sum is ≥ 1 (the largest term is 1), so it never underflows to 0
@@ -360,6 +379,12 @@ pub fn renyi_entropy<T: Real>(p: &[T], alpha: f64, base: Base) -> Result<T, Erro
 /// Tsallis entropy of index `q`: `S_q(p) = (1 − Σ p_i^q) / (q − 1)`.
 ///
 /// Not logarithmic, so it takes no base; `q = 1` is Shannon's entropy in nats.
+/// With `ε = q − 1` and `ℓ_i = ln p_i`, `1 − Σ p^q = −Σ p_i expm1(εℓ_i)`, a
+/// sum of terms of one sign, so `S_q = −Σ p_i expm1(εℓ_i)/ε` has no
+/// cancellation (`1 − Σ p^q` lost every digit near `q = 1`). Expanding
+/// `expm1`, `S_q = −(m₁ + m₂ ε/2 + m₃ ε²/6 + m₄ ε³/24) − O(m₅ ε⁴)` with
+/// `m_k = Σ p_i ℓ_i^k` and `−m₁ = H`, the series used while
+/// `|ε|·max|ℓ| ≤ 10⁻⁴` ([`tsallis_series`]).
 ///
 /// # Errors
 /// [`Error::InvalidParameter`] for `q` NaN, infinite or negative, then as [`entropy`].
@@ -373,8 +398,68 @@ pub fn tsallis_entropy<T: Real>(p: &[T], q: f64) -> Result<T, Error> {
     if q == 1.0 {
         return entropy(p, Base::Nats);
     }
-    let sq = sum_map(p, |x| if x > 0.0 { libm::pow(x / s, q) } else { 0.0 });
-    Ok(T::from_f64((1.0 - sq) / (q - 1.0)))
+    let eps = q - 1.0;
+    let v = match near_one(p, s, eps) {
+        Some(m) => tsallis_series(&m, eps),
+        None => -sum_map(p, |x| expm1_term(x / s, eps)) / eps,
+    };
+    Ok(T::from_f64(v))
+}
+
+/// `p^(1+ε) − p = p·expm1(ε ln p)` for `0 ≤ p ≤ 1` without overflow (for
+/// `ε < 0` and tiny `p`, `expm1` alone overflows where `p^(1+ε)` does not).
+fn expm1_term(p: f64, eps: f64) -> f64 {
+    if p <= 0.0 {
+        return 0.0;
+    }
+    let t = eps * ln(p);
+    if t < 700.0 { p * libm::expm1(t) } else { libm::pow(p, 1.0 + eps) - p }
+}
+
+/// Moments of `ℓ = ln p` under `p` (of `p / s`): the raw `m₁…m₄` and the
+/// central `c₂…c₄`.
+#[derive(Debug, Clone, Copy)]
+struct LogMoments {
+    raw: [f64; 4],
+    central: [f64; 3],
+}
+
+/// The moments of [`LogMoments`] when `|ε|·max|ln p_i| ≤ 10⁻⁴`, where the
+/// series of [`renyi_series`] and [`tsallis_series`] are exact to rounding;
+/// `None` further from 1.
+fn near_one<T: Real>(p: &[T], s: f64, eps: f64) -> Option<LogMoments> {
+    let lmax = p.iter().map(|x| x.to_f64() / s).filter(|&x| x > 0.0).map(|x| -ln(x)).fold(0.0, f64::max);
+    if !(eps.abs() * lmax <= 1e-4) {
+        return None;
+    }
+    let moment = |f: &dyn Fn(f64) -> f64| sum_map(p, |x| if x > 0.0 { (x / s) * f(ln(x / s)) } else { 0.0 });
+    let raw = [moment(&|l| l), moment(&|l| l * l), moment(&|l| l * l * l), moment(&|l| (l * l) * (l * l))];
+    let mu = raw[0];
+    let central = [
+        moment(&|l| (l - mu) * (l - mu)),
+        moment(&|l| (l - mu) * (l - mu) * (l - mu)),
+        moment(&|l| {
+            let d = (l - mu) * (l - mu);
+            d * d
+        }),
+    ];
+    Some(LogMoments { raw, central })
+}
+
+/// `H_α` in nats near `α = 1 + ε` from the cumulants of `ln p`:
+/// `κ₁ = m₁ = −H`, `κ₂ = c₂`, `κ₃ = c₃`, `κ₄ = c₄ − 3c₂²`, and
+/// `H_α = −κ₁ − κ₂ε/2 − κ₃ε²/6 − κ₄ε³/24` (see [`renyi_entropy`]).
+fn renyi_series(m: &LogMoments, eps: f64) -> f64 {
+    let [c2, c3, c4] = m.central;
+    let k4 = c4 - 3.0 * c2 * c2;
+    -m.raw[0] - eps * (c2 / 2.0 + eps * (c3 / 6.0 + eps * k4 / 24.0))
+}
+
+/// `S_q` near `q = 1 + ε` from the raw moments of `ln p`:
+/// `S_q = −(m₁ + m₂ε/2 + m₃ε²/6 + m₄ε³/24)` (see [`tsallis_entropy`]).
+fn tsallis_series(m: &LogMoments, eps: f64) -> f64 {
+    let [m1, m2, m3, m4] = m.raw;
+    -(m1 + eps * (m2 / 2.0 + eps * (m3 / 6.0 + eps * m4 / 24.0)))
 }
 
 /// Estimate of the continuous (differential) entropy `H^c(X)` from a
@@ -507,5 +592,55 @@ mod tests {
         // Two tied maxima: H_α = 1 bit for every α.
         let h = renyi_entropy(&[0.5f64, 0.5], 5000.0, Base::Bits).unwrap();
         assert!((h - 1.0).abs() < 1e-15, "{h}");
+    }
+
+    /// Issue 24: `--alpha 1.00000000000001` on (½, ¼, ¼) gave 1.5103 bits,
+    /// 0.999999999999999 gave 1.623 > log₂ 3, and Tsallis near q = 1 gave
+    /// 1.37778 for ln 4 on the uniform four.
+    #[test]
+    fn renyi_tsallis_at_one_plus_rounding() {
+        let p = [0.5f64, 0.25, 0.25];
+        for a in [1.000_000_000_000_01, 0.999_999_999_999_999, 1.0 + f64::EPSILON, 1.0 - f64::EPSILON / 2.0] {
+            let h = renyi_entropy(&p, a, Base::Bits).unwrap();
+            assert!((h - 1.5).abs() < 1e-12, "alpha {a}: {h}");
+        }
+        let u = [0.25f64; 4];
+        for q in [1.000_000_000_000_01, 0.999_999_999_999_999] {
+            let s = tsallis_entropy(&u, q).unwrap();
+            assert!((s - 4f64.ln()).abs() < 1e-12, "q {q}: {s}");
+            let h = renyi_entropy(&u, q, Base::Bits).unwrap();
+            assert!((h - 2.0).abs() < 1e-12, "alpha {q}: {h}");
+        }
+    }
+
+    use alloc::vec::Vec;
+    use proptest::prelude::*;
+
+    fn pmf() -> impl Strategy<Value = Vec<f64>> {
+        prop::collection::vec(prop_oneof![1 => Just(0.0), 4 => 1e-9..1.0f64], 1..20).prop_map(|mut w| {
+            w[0] += 1e-3;
+            let s: f64 = w.iter().sum();
+            w.iter().map(|x| x / s).collect()
+        })
+    }
+
+    proptest! {
+        /// The series of [`renyi_series`] and [`tsallis_series`] against the
+        /// exact `expm1`/`log1p` forms (no cancellation, see
+        /// [`renyi_entropy`]) across the band where the series is used,
+        /// `|ε|·max|ln p| ≤ 10⁻⁴`, and a little beyond.
+        #[test]
+        fn series_match_exact_forms(p in pmf(), t in 1e-7..2e-4f64, neg in any::<bool>()) {
+            let lmax = p.iter().filter(|&&x| x > 0.0).map(|&x| -ln(x)).fold(0.0, f64::max);
+            prop_assume!(lmax > 0.0);
+            let eps = if neg { -t } else { t } / lmax;
+            let m = near_one(&p, 1.0, eps / 2.0).unwrap();
+            let sum = sum_map(&p, |x| expm1_term(x, eps));
+            let renyi = -libm::log1p(sum) / eps;
+            let tsallis = -sum / eps;
+            let h = entropy(&p, Base::Nats).unwrap();
+            prop_assert!((renyi_series(&m, eps) - renyi).abs() <= 1e-13 * h.max(1e-300) + 1e-300, "{} {}", renyi_series(&m, eps), renyi);
+            prop_assert!((tsallis_series(&m, eps) - tsallis).abs() <= 1e-13 * h.max(1e-300) + 1e-300);
+        }
     }
 }

@@ -66,10 +66,11 @@ pub enum Error {
         /// Iterations spent.
         iterations: usize,
     },
-    /// A Markov chain in which state `state` cannot reach state 0, so it is
-    /// reducible and has no unique stationary distribution this crate computes.
+    /// A Markov chain with more than one closed class: state `state` never
+    /// reaches the closed class found first, so the stationary distribution
+    /// is not unique.
     ReducibleChain {
-        /// A state that cannot reach state 0.
+        /// A state that never reaches the closed class found first.
         state: usize,
     },
     /// An owned helper (`alloc`) could not allocate `bytes` bytes.
@@ -106,7 +107,7 @@ impl fmt::Display for Error {
             }
             Error::ReducibleChain { state } => write!(
                 f,
-                "the Markov chain is reducible: state {state} cannot reach state 0, so no unique stationary distribution"
+                "the Markov chain has more than one closed class (state {state} never reaches the first found), so no unique stationary distribution"
             ),
             Error::OutOfMemory { bytes } => write!(f, "cannot allocate {bytes} bytes"),
         }

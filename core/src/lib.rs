@@ -75,11 +75,13 @@ pub mod sum;
 
 pub use base::Base;
 #[cfg(feature = "alloc")]
-pub use bottleneck::{Bottleneck, Merge, agglomerative_bottleneck};
+pub use bottleneck::{
+    Bottleneck, Merge, agglomerative_bottleneck, agglomerative_bottleneck_with_progress, bottleneck_work,
+};
 pub use channel::{Channel, ChannelMeasures, cascade_into, row_entropies_into};
-#[cfg(feature = "alloc")]
-pub use coding::huffman_block_length;
 pub use coding::huffman_expected_length;
+#[cfg(feature = "alloc")]
+pub use coding::{HUFFMAN_MAX_BLOCKS, huffman_block_length};
 pub use divergence::{
     ArithmeticGeometric, ChiSquare, ConvexFunction, Divergences, FGenerator, Hellinger, KullbackLeibler, Square,
     TotalVariation, ULogU, arithmetic_geometric, bregman, burbea_rao, chi_square, divergences, f_divergence, f_term,

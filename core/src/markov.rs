@@ -16,13 +16,15 @@ use crate::{Base, Error, Real};
 /// function allocates nothing. For a scene's form-factor matrix the answer is
 /// the relative areas (Part III eq. (35)).
 ///
-/// Which chains: the elimination needs every state to reach state 0 (then
-/// the chain has exactly one closed class, it contains state 0, and `w` is
-/// unique, with `w_i = 0` on transient states). Periodic chains are fine:
-/// `w` is their unique solution of `w = wP`, though `X_t` does not converge
-/// to it. A chain in which some state cannot reach state 0 (several closed
-/// classes, or state 0 transient) is refused with
-/// [`Error::ReducibleChain`], never iterated.
+/// Which chains: those with exactly one closed class, where `w` is unique,
+/// with `w_i = 0` on transient states. The elimination needs every state to
+/// reach the state it keeps last, so a state `r` of the closed class is
+/// found first (by reachability over the edges `P_ij > 0`, `O(n²)` per
+/// step, [`recurrent_state`]) and the chain is reduced with `r` and state 0
+/// swapped; `r = 0` whenever every state reaches state 0, the common case.
+/// Periodic chains are fine: `w` is their unique solution of `w = wP`,
+/// though `X_t` does not converge to it. A chain with several closed
+/// classes is refused with [`Error::ReducibleChain`], never iterated.
 ///
 /// # Errors
 /// [`Error::Empty`], [`Error::LengthMismatch`] (also for `scratch.len() ≠ n²`),
@@ -38,8 +40,21 @@ pub fn stationary_distribution_into<T: Real>(
     same_len(n, out.len())?;
     // n·n cannot overflow: MatrixRef checked transition.len() == n·n.
     same_len(n * n, scratch.len())?;
-    for (dst, src) in scratch.iter_mut().zip(transition) {
-        *dst = src.to_f64();
+    let r = recurrent_state(transition, n, out, scratch)?;
+    // π swaps 0 and r: the chain reduced is P'_ij = P_π(i)π(j).
+    let pi = |i: usize| {
+        if i == 0 {
+            r
+        } else if i == r {
+            0
+        } else {
+            i
+        }
+    };
+    for i in 0..n {
+        for j in 0..n {
+            scratch[i * n + j] = transition[pi(i) * n + pi(j)].to_f64();
+        }
     }
     let a = scratch;
     // Reduce states n−1, …, 1: censor the chain on {0, …, k−1}.
@@ -51,7 +66,9 @@ pub fn stationary_distribution_into<T: Real>(
         row_k[..k].iter().for_each(|&x| s.add(x));
         let s = s.value();
         if !(s > 0.0) {
-            return Err(Error::ReducibleChain { state: k });
+            // Not reached: every state reaches r (checked above); kept as
+            // a guard against an underflowed censored row.
+            return Err(Error::ReducibleChain { state: pi(k) });
         }
         for i in 0..k {
             let row_i = &mut upper[i * n..i * n + n];
@@ -81,7 +98,65 @@ pub fn stationary_distribution_into<T: Real>(
     out.iter().for_each(|&x| total.add(x));
     let total = total.value();
     out.iter_mut().for_each(|x| *x /= total);
+    out.swap(0, r);
     Ok(())
+}
+
+/// Marks in `marks` (1 reached, 0 not) the states reachable from `start`
+/// over the edges `P_ij > 0` (`forward`) or reaching it (`!forward`);
+/// `stack` holds at most `n` indices. Returns how many were reached.
+fn reach<T: Real>(t: &[T], n: usize, start: usize, forward: bool, marks: &mut [f64], stack: &mut [f64]) -> usize {
+    marks.iter_mut().for_each(|m| *m = 0.0);
+    marks[start] = 1.0;
+    stack[0] = start as f64;
+    let (mut top, mut count) = (1, 1);
+    while top > 0 {
+        top -= 1;
+        let i = stack[top] as usize;
+        for j in 0..n {
+            let edge = if forward { t[i * n + j] } else { t[j * n + i] };
+            if marks[j] == 0.0 && edge.to_f64() > 0.0 {
+                marks[j] = 1.0;
+                stack[top] = j as f64;
+                top += 1;
+                count += 1;
+            }
+        }
+    }
+    count
+}
+
+/// A state every state reaches (one of the closed class, when there is
+/// exactly one), 0 if state 0 is one. From `r = 0`: if some state reachable
+/// from `r` cannot return to it, that state becomes `r` (the states it
+/// reaches are strictly fewer, so this ends within `n` steps); once none
+/// can, `r`'s class is closed, and either every state reaches it or the
+/// chain has another closed class. `out` (`n`) and `scratch` (`n²`) are
+/// working space.
+///
+/// # Errors
+/// [`Error::ReducibleChain`] naming a state that never reaches `r`'s class.
+fn recurrent_state<T: Real>(t: &[T], n: usize, out: &mut [f64], scratch: &mut [f64]) -> Result<usize, Error> {
+    if n == 1 {
+        return Ok(0);
+    }
+    let back = out;
+    let (fwd, rest) = scratch.split_at_mut(n);
+    let stack = &mut rest[..n];
+    let mut r = 0;
+    loop {
+        if reach(t, n, r, false, back, stack) == n {
+            return Ok(r);
+        }
+        reach(t, n, r, true, fwd, stack);
+        match (0..n).find(|&j| fwd[j] == 1.0 && back[j] == 0.0) {
+            Some(j) => r = j,
+            None => {
+                let state = (0..n).find(|&j| back[j] == 0.0).unwrap_or(0);
+                return Err(Error::ReducibleChain { state });
+            }
+        }
+    }
 }
 
 /// [`stationary_distribution_into`] with its `n²` scratch allocated here

@@ -127,6 +127,10 @@ fn small_chains_by_hand() {
     assert_eq!(stationary(&[1.0], 1).unwrap(), [1.0]);
     // Transient state 1 that reaches state 0: w = (1, 0).
     assert_eq!(stationary(&[1.0, 0.0, 0.5, 0.5], 2).unwrap(), [1.0, 0.0]);
+    // Issue 24: the mirror image, state 0 transient, was refused as reducible.
+    assert_eq!(stationary(&[0.5, 0.5, 0.0, 1.0], 2).unwrap(), [0.0, 1.0]);
+    let w = stationary(&[0.0, 1.0, 0.0, 0.0, 0.5, 0.5, 0.0, 0.5, 0.5], 3).unwrap();
+    assert!(w[0] == 0.0 && close(w[1], 0.5, 1e-15) && close(w[2], 0.5, 1e-15), "{w:?}");
 }
 
 /// Reducible chains are a clear error, not an iteration that never ends.

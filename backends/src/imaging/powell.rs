@@ -51,11 +51,25 @@ impl<F> Counted<F> {
     }
 }
 
+/// Relative change of `f` below which two values are the same: rounding
+/// (a metric flat along a direction, such as an image constant along `y`
+/// shifted along `y`, differs by a few ulps from point to point).
+const FLAT: f64 = 1e-12;
+
+/// Whether `new` is lower than `old` by more than rounding ([`FLAT`]).
+fn lower(new: f64, old: f64) -> bool {
+    old - new > FLAT * (old.abs() + 1.0)
+}
+
 fn along<const N: usize>(x: &[f64; N], d: &[f64; N], t: f64) -> [f64; N] {
     core::array::from_fn(|i| x[i] + t * d[i])
 }
 
-/// Minimises along `d` from `x` (where `f(x) = fx`); returns the new point and value.
+/// Minimises along `d` from `x` (where `f(x) = fx`); returns the new point
+/// and value. The point moves only for a decrease beyond rounding
+/// ([`lower`]): along a flat direction it stays, where accepting ulp-sized
+/// "decreases" let the bracket run to `max_step` and the registration of an
+/// image constant along `y` with itself wander 47 pixels (issue 24).
 fn line_minimise<const N: usize, F: FnMut(&[f64; N]) -> f64>(
     f: &mut Counted<F>,
     x: &[f64; N],
@@ -71,15 +85,15 @@ fn line_minimise<const N: usize, F: FnMut(&[f64; N]) -> f64>(
     }
     let mut c = b + GOLD * (b - a);
     let mut fc = g(c);
-    while fc < fb && c.abs() < o.max_step {
+    while lower(fc, fb) && c.abs() < o.max_step {
         (a, fa, b, fb) = (b, fb, c, fc);
         c = b + GOLD * (b - a);
         fc = g(c);
     }
     let _ = fa;
-    if fc < fb {
+    if lower(fc, fb) {
         // Ran to the step limit still descending: take the farthest point.
-        return (along(x, d, c), fc);
+        return if lower(fc, fx) { (along(x, d, c), fc) } else { (*x, fx) };
     }
     // Brent on the bracket [a, c] around b.
     let (mut lo, mut hi) = if a < c { (a, c) } else { (c, a) };
@@ -140,7 +154,7 @@ fn line_minimise<const N: usize, F: FnMut(&[f64; N]) -> f64>(
             }
         }
     }
-    if fxb < fx { (along(x, d, xb), fxb) } else { (*x, fx) }
+    if lower(fxb, fx) { (along(x, d, xb), fxb) } else { (*x, fx) }
 }
 
 /// Minimises `f` from `x0`, starting with the directions `scales[i]·e_i`.
@@ -192,6 +206,23 @@ pub fn minimise<const N: usize, F: FnMut(&[f64; N]) -> f64>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A function flat in `p[1]` but for rounding noise: the minimiser
+    /// finds `p[0]` and leaves `p[1]` where it started.
+    #[test]
+    fn a_flat_direction_is_not_followed() {
+        let o = PowellOptions { ftol: 1e-7, xtol: 0.01, max_iterations: 50, max_step: 8.0 };
+        let r = minimise(
+            |p: &[f64; 2]| {
+                let noise = f64::EPSILON * (p[1] * 12.9898).sin();
+                (p[0] - 1.0).powi(2) + 3.5 * (1.0 + noise)
+            },
+            [0.0, 0.0],
+            [1.0, 1.0],
+            &o,
+        );
+        assert!((r.x[0] - 1.0).abs() < 0.01 && r.x[1] == 0.0, "{r:?}");
+    }
 
     #[test]
     fn finds_the_minimum_of_a_rotated_valley() {

@@ -2,8 +2,8 @@
 //! patch names, `usemtl` materials come from the `mtllib` files (see
 //! [`mtl`]).
 //!
-//! The file is read once into memory, with a size limit (a FIFO or a
-//! device is read once, `/dev/zero` is refused at the limit), then parsed
+//! The file is read once into memory, with a size limit (only regular
+//! files: a FIFO or a device is refused before it is opened), then parsed
 //! from the buffer in `f64`: coordinates are never cut to `f32` here (the
 //! tracer normalises the scene to the unit sphere before it converts).
 //! A UTF-8 byte-order mark is skipped. Errors name the file and the line.
@@ -72,25 +72,20 @@ impl Warnings {
 /// Reads a whole file once, refusing more than `limit` bytes.
 ///
 /// # Errors
-/// [`SceneError::Obj`] for unreadable files, directories, and files (or
-/// endless devices and pipes) larger than `limit`.
+/// [`SceneError::Obj`] for unreadable files, anything but a regular file
+/// ([`crate::files::open_regular`]: a FIFO would hang), and files larger
+/// than `limit` (or growing past it while read).
 pub fn read_limited(path: &Path, limit: u64) -> Result<Vec<u8>, SceneError> {
     let shown = path.display().to_string();
-    let file = std::fs::File::open(path).map_err(|e| err(&shown, e.to_string()))?;
+    let file = crate::files::open_regular(path).map_err(|e| err(&shown, e.to_string()))?;
     let meta = file.metadata().map_err(|e| err(&shown, e.to_string()))?;
-    if meta.is_dir() {
-        return Err(err(&shown, "is a directory".into()));
-    }
-    if meta.is_file() && meta.len() > limit {
+    if meta.len() > limit {
         return Err(err(&shown, format!("file is {} bytes, over the limit of {limit} bytes", meta.len())));
     }
     let mut buf = Vec::new();
     file.take(limit + 1).read_to_end(&mut buf).map_err(|e| err(&shown, e.to_string()))?;
     if buf.len() as u64 > limit {
-        return Err(err(
-            &shown,
-            format!("more than {limit} bytes (not a regular file, or still growing); refusing to read on"),
-        ));
+        return Err(err(&shown, format!("more than {limit} bytes (still growing); refusing to read on")));
     }
     Ok(buf)
 }
@@ -363,7 +358,7 @@ pub fn parse_obj(
 /// magnitude near 1 when it is above `2^RESCALE_EXPONENT`, or, for tiny
 /// scenes, their extent near 1 when it is below `2^-RESCALE_EXPONENT` (but
 /// never the magnitude above `2^RESCALE_EXPONENT`); else 0.
-fn rescale_exponent(used: impl Iterator<Item = DVec3>) -> i32 {
+pub(crate) fn rescale_exponent(used: impl Iterator<Item = DVec3>) -> i32 {
     let mut lo = DVec3::splat(f64::INFINITY);
     let mut hi = DVec3::splat(f64::NEG_INFINITY);
     for v in used {
@@ -383,7 +378,7 @@ fn rescale_exponent(used: impl Iterator<Item = DVec3>) -> i32 {
 }
 
 /// `v · 2^k` in two exact steps (`2^k` alone may not be a normal number).
-fn scale_by(v: DVec3, k: i32) -> DVec3 {
+pub(crate) fn scale_by(v: DVec3, k: i32) -> DVec3 {
     v * 2f64.powi(k / 2) * 2f64.powi(k - k / 2)
 }
 

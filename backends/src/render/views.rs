@@ -16,6 +16,9 @@ const PROBES: u32 = 64;
 /// else a view from outside framing the bounding box.
 #[must_use]
 pub fn default_camera(scene: &Scene) -> Camera {
+    if let Some(c) = scene.camera {
+        return c;
+    }
     let d = DVec3::new;
     // The registry entry of the scene before any --subdivide suffix.
     let (eye, target, fov) = match crate::scene::BuiltIn::of(scene.base_name()).and_then(|b| b.camera) {

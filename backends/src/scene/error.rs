@@ -43,7 +43,7 @@ pub enum SceneError {
         /// Estimated bytes (see [`Limits::estimate_bytes`]).
         bytes: u64,
     },
-    /// The OBJ or MTL file could not be read or parsed.
+    /// A scene file (OBJ, MTL, PLY, glTF, Mitsuba XML) could not be read or parsed.
     Obj {
         /// File path.
         path: String,
@@ -61,7 +61,7 @@ impl fmt::Display for SceneError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             SceneError::UnknownScene { name, known } => {
-                write!(f, "unknown scene {name:?}: not a built-in ({known}) and no such .obj file")
+                write!(f, "unknown scene {name:?}: not a built-in ({known}) and no such scene file")
             }
             SceneError::BadParameter { spec, name, expected, got } => {
                 write!(f, "{spec}: {name} must be {expected}, got {got:?}")

@@ -66,6 +66,9 @@ pub struct Scene {
     /// An analytic sphere of this radius at the origin, seen from inside
     /// (then `triangles` is empty and patches are its equal-area cells).
     pub sphere: Option<SphereCells>,
+    /// The camera the file states (glTF's first camera, Mitsuba's sensor),
+    /// in scene units; the default camera of the picture-writing commands.
+    pub camera: Option<crate::camera::Camera>,
     /// Named warnings about the input (`"name: file:line: what"`), e.g. a
     /// non-planar OBJ face or an MTL statement that is not used; callers
     /// print them. Empty for built-in scenes.
@@ -269,8 +272,12 @@ impl Scene {
             .fold(0, u64::saturating_add);
         let triangles = (self.triangles.len() as u64).saturating_mul(k2);
         Limits::check(&what(), triangles, patches)?;
-        let mut out =
-            Scene { name: format!("{}/{k}", self.name), materials: self.materials.clone(), ..Scene::default() };
+        let mut out = Scene {
+            name: format!("{}/{k}", self.name),
+            materials: self.materials.clone(),
+            camera: self.camera,
+            ..Scene::default()
+        };
         for (pi, tris) in by_patch.iter().enumerate() {
             let patch = &self.patches[pi];
             if let Some(q) = grids[pi] {

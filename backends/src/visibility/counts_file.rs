@@ -235,7 +235,7 @@ impl VisibilityCounts {
     pub fn read(path: &std::path::Path) -> Result<(String, Self), CountsError> {
         use std::io::Read;
         let io = |e: std::io::Error| CountsError::Format(format!("{}: {e}", path.display()));
-        let mut file = std::fs::File::open(path).map_err(io)?;
+        let mut file = crate::files::open_regular(path).map_err(io)?;
         let len = file.metadata().map_err(io)?.len();
         let mut head = Vec::with_capacity(MAGIC.len());
         (&mut file).take(MAGIC.len() as u64).read_to_end(&mut head).map_err(io)?;

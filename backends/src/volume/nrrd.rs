@@ -5,7 +5,10 @@
 //! Required: `dimension: 3`, `sizes: X Y Z`, `type:` one of
 //! `uchar`/`unsigned char`/`uint8`/`uint8_t`, `ushort`/`unsigned short`/
 //! `uint16`/`uint16_t`, `float`; `encoding: raw`; `endian: little` when values
-//! take more than one byte. Optional: `spacings: a b c`. Anything else that
+//! take more than one byte. Optional: `spacings: a b c`, or instead
+//! `space directions: (x,y,z) (x,y,z) (x,y,z)` with each axis along one
+//! coordinate axis (each voxel edge's length is the norm of its direction;
+//! a rotated or sheared grid is refused). Anything else that
 //! changes the meaning of the data (`data file`, `byte skip`, `line skip`,
 //! other encodings or types, `kinds` other than `domain`/`space`) is refused,
 //! never guessed. The header is read (at most 64 KiB) and the data size
@@ -27,7 +30,7 @@ const MAX_HEADER: u64 = 64 << 10;
 /// One line naming the file and the field at fault.
 pub fn read_nrrd(path: &Path) -> Result<Volume, VolumeError> {
     let q = |e: String| VolumeError::new(format!("{path:?}: {e}"));
-    let file = std::fs::File::open(path).map_err(|e| q(e.to_string()))?;
+    let file = crate::files::open_regular(path).map_err(|e| q(e.to_string()))?;
     let len = file.metadata().map_err(|e| q(e.to_string()))?.len();
     let mut reader = BufReader::new(file.take(MAX_HEADER));
     let mut header_bytes = 0u64;
@@ -50,6 +53,7 @@ pub fn read_nrrd(path: &Path) -> Result<Volume, VolumeError> {
         return Err(q(format!("not an NRRD file (magic {:?})", magic.chars().take(16).collect::<String>())));
     }
     let (mut dims, mut ty, mut encoding, mut endian, mut spacing, mut dimension) = (None, None, None, None, None, None);
+    let mut directions = None;
     loop {
         let Some(l) = next(&mut reader)? else {
             return Err(q("header without the blank line before the data".into()));
@@ -74,8 +78,9 @@ pub fn read_nrrd(path: &Path) -> Result<Volume, VolumeError> {
             "encoding" => encoding = Some(value.to_string()),
             "endian" => endian = Some(value.to_string()),
             "spacings" => spacing = Some(value.to_string()),
-            "content" | "space" | "space origin" | "space directions" | "centers" | "centerings" | "units"
-            | "space units" | "labels" | "min" | "max" | "old min" | "old max" | "measurement frame" => {}
+            "space directions" => directions = Some(value.to_string()),
+            "content" | "space" | "space origin" | "centers" | "centerings" | "units" | "space units" | "labels"
+            | "min" | "max" | "old min" | "old max" | "measurement frame" => {}
             "kinds" => {
                 if value.split_whitespace().any(|k| !matches!(k, "domain" | "space")) {
                     return Err(q(format!("kinds {value:?}: only a scalar volume (domain/space axes) is read")));
@@ -106,9 +111,11 @@ pub fn read_nrrd(path: &Path) -> Result<Volume, VolumeError> {
     if ty.bytes() > 1 && endian.as_deref() != Some("little") {
         return Err(q(format!("endian {:?}: only little-endian data are read", endian.unwrap_or_default())));
     }
-    let spacing = match spacing {
-        None => [1.0; 3],
-        Some(s) => {
+    let spacing = match (spacing, directions) {
+        (Some(_), Some(_)) => return Err(q("both spacings and space directions: NRRD allows one".into())),
+        (None, Some(d)) => direction_spacing(&d).map_err(q)?,
+        (None, None) => [1.0; 3],
+        (Some(s), None) => {
             let v: Vec<f64> = s
                 .split_whitespace()
                 .map(str::parse)
@@ -142,6 +149,56 @@ pub fn read_nrrd(path: &Path) -> Result<Volume, VolumeError> {
     Volume::new(name, d, spacing, data).map_err(|e| q(e.0))
 }
 
+/// Voxel edge lengths from `space directions` (one vector per axis, each
+/// along one coordinate axis, no two along the same one): their norms.
+fn direction_spacing(value: &str) -> Result<[f64; 3], String> {
+    let what = "space directions";
+    let mut vectors = Vec::new();
+    let mut rest = value.trim();
+    while !rest.is_empty() {
+        let inner = rest.strip_prefix('(').and_then(|r| r.split_once(')'));
+        let Some((inner, after)) = inner else {
+            return Err(format!("{what} {value:?}: want three vectors (x,y,z)"));
+        };
+        let v: Vec<f64> = inner
+            .split(',')
+            .map(|c| c.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
+            .collect::<Option<_>>()
+            .ok_or_else(|| format!("{what}: ({inner}) is not a number per component"))?;
+        vectors.push(v);
+        rest = after.trim_start();
+    }
+    if vectors.len() != 3 || vectors.iter().any(|v| v.len() != 3) {
+        return Err(format!("{what} {value:?}: want three vectors (x,y,z), one per axis"));
+    }
+    let mut out = [0.0; 3];
+    let mut used = [false; 3];
+    for (i, v) in vectors.iter().enumerate() {
+        let norm = v.iter().map(|c| c * c).sum::<f64>().sqrt();
+        if !(norm > 1e-12) {
+            return Err(format!("{what}: axis {i} has no length"));
+        }
+        // Along one coordinate axis, up to rounding in the writer's output.
+        let along: Vec<usize> = (0..3).filter(|&k| v[k].abs() > 1e-9 * norm).collect();
+        let &[k] = along.as_slice() else {
+            return Err(format!(
+                "{what}: axis {i} ({}) is not along a coordinate axis (a rotated grid is not read)",
+                value_list(v)
+            ));
+        };
+        if used[k] {
+            return Err(format!("{what}: two axes along the same coordinate axis"));
+        }
+        used[k] = true;
+        out[i] = norm;
+    }
+    Ok(out)
+}
+
+fn value_list(v: &[f64]) -> String {
+    v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(",")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -150,6 +207,30 @@ mod tests {
         let p = dir.join(name);
         std::fs::write(&p, [header.as_bytes(), data].concat()).unwrap();
         p
+    }
+
+    /// Issue 24: `space directions` was ignored (every voxel a unit cube).
+    #[test]
+    fn space_directions_give_the_spacing() {
+        assert_eq!(direction_spacing("(0.5,0,0) (0,2,0) (0,0,3)").unwrap(), [0.5, 2.0, 3.0]);
+        // Flipped and permuted axes: the edge lengths still.
+        assert_eq!(
+            direction_spacing(" ( 0, -2, 0 )(4,0,0) (0,0,1e-17)").unwrap_err(),
+            "space directions: axis 2 has no length"
+        );
+        assert_eq!(direction_spacing("(0,-2,0) (4,0,0) (0,0,1)").unwrap(), [2.0, 4.0, 1.0]);
+        for (bad, needle) in [
+            ("(1,1,0) (0,1,0) (0,0,1)", "not along a coordinate axis"),
+            ("(1,0,0) (1,0,0) (0,0,1)", "same coordinate axis"),
+            ("(1,0,0) (0,1,0)", "three"),
+            ("(1,0,0) (0,1,0) none", "three"),
+            ("(1,0) (0,1) (1,1)", "three"),
+            ("(1,0,0) (0,1,0) (0,0,x)", "not a number"),
+            ("(1,0,0) (0,inf,0) (0,0,1)", "not a number"),
+        ] {
+            let e = direction_spacing(bad).unwrap_err();
+            assert!(e.contains(needle), "{bad}: {e}");
+        }
     }
 
     #[test]

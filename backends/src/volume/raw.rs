@@ -52,10 +52,8 @@ impl RawType {
 pub fn read_raw(path: &Path, dims: [usize; 3], ty: RawType, spacing: [f64; 3]) -> Result<Volume, VolumeError> {
     let q = |e: String| VolumeError::new(format!("{path:?}: {e}"));
     let n = checked_voxels(dims).map_err(|e| q(e.0))?;
+    crate::files::check_regular(path).map_err(|e| q(e.to_string()))?;
     let meta = std::fs::metadata(path).map_err(|e| q(e.to_string()))?;
-    if !meta.is_file() {
-        return Err(q("not a regular file".into()));
-    }
     let want = (n as u64) * ty.bytes() as u64;
     if meta.len() != want {
         return Err(q(format!(

@@ -98,7 +98,7 @@ pub struct PhantomOptions {
     /// True rotation, degrees (counter-clockwise in image axes, about the centre)
     #[arg(long, value_name = "DEG", default_value = "5", value_parser = angle, allow_hyphen_values = true)]
     pub angle: f64,
-    /// True translation, pixels (fixed to moving)
+    /// True translation, pixels (fixed to moving), |X| and |Y| below the image's width and height
     #[arg(long, value_name = "X,Y", default_value = "4,-3", value_parser = pair, allow_hyphen_values = true)]
     pub shift: (f64, f64),
     /// Gaussian noise standard deviation (intensities in [0, 1])
@@ -169,7 +169,7 @@ pub struct SegmentOptions {
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=512))]
     pub regions: Option<u32>,
     /// Without --regions: keep the fewest clusters with I(T;X) >= ratio * I(R;X) of the split
-    #[arg(long, value_name = "R", default_value = "0.9", value_parser = unit)]
+    #[arg(long, value_name = "R", default_value = "0.9", value_parser = unit, conflicts_with = "regions")]
     pub ratio: f64,
     /// Stop splitting once I(R;X) >= split-ratio * H(X)
     #[arg(long, value_name = "R", default_value = "1", value_parser = unit)]

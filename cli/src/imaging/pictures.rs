@@ -25,8 +25,8 @@ pub fn read_gray(path: &Path) -> Result<Gray, CliError> {
         return Err(fail(&"is a directory, not a PNG image"));
     }
     let mut head = [0u8; 8];
-    let n =
-        std::io::Read::read(&mut std::fs::File::open(path).map_err(|e| fail(&e))?, &mut head).map_err(|e| fail(&e))?;
+    let mut file = itgfx_backends::files::open_regular(path).map_err(|e| fail(&e))?;
+    let n = std::io::Read::read(&mut file, &mut head).map_err(|e| fail(&e))?;
     if n < 8 || head != *b"\x89PNG\r\n\x1a\n" {
         return Err(fail(&"not a PNG image (no PNG signature)"));
     }

@@ -31,7 +31,7 @@ pub fn levels(s: &str) -> Result<Levels, String> {
             return Err(format!("shrink {shrink} must be in 1..=64"));
         }
         if !(0.0..=64.0).contains(&sigma) {
-            return Err(format!("sigma {sigma} must be in [0, 64]"));
+            return Err(format!("sigma {:?} must be in [0, 64]", b.trim()));
         }
         out.push(Level { shrink, sigma });
     }
@@ -63,7 +63,7 @@ pub fn start(s: &str) -> Result<Rigid2, String> {
 /// One line naming the file.
 pub fn read_truth(path: &Path) -> Result<Rigid2, CliError> {
     let fail = |e: &dyn std::fmt::Display| CliError::usage(format!("--truth {path:?}: {e}"));
-    let text = std::fs::read_to_string(path).map_err(|e| fail(&e))?;
+    let text = itgfx_backends::files::read_regular_to_string(path).map_err(|e| fail(&e))?;
     let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| fail(&e))?;
     let get = |k: &str| v.get(k).and_then(serde_json::Value::as_f64).filter(|x| x.is_finite());
     match (get("angle_deg"), get("tx"), get("ty")) {

@@ -14,8 +14,16 @@ use crate::report::Report;
 /// # Errors
 /// Output errors, one line.
 pub fn run_phantom(o: &PhantomOptions) -> Result<Report, CliError> {
-    let paths = crate::output::out_files(&o.out, &["fixed.png", "moving.png", "transform.json"])?;
     let (w, h) = o.size;
+    // A shift of the whole image or more leaves nothing of the fixed image in
+    // the moving one (and 1e300 was accepted and rendered as nothing).
+    if !(o.shift.0.abs() < w as f64 && o.shift.1.abs() < h as f64) {
+        return Err(CliError::usage(format!(
+            "--shift {:?},{:?}: must be within the image, |X| < {w} and |Y| < {h} (--size)",
+            o.shift.0, o.shift.1
+        )));
+    }
+    let paths = crate::output::out_files(&o.out, &["fixed.png", "moving.png", "transform.json"])?;
     let truth = Rigid2 { angle_deg: o.angle, tx: o.shift.0, ty: o.shift.1 };
     let (fixed, moving) = render(&Render { width: w, height: h, truth, noise: o.noise, bias: o.bias, seed: o.seed });
     write_gray(&fixed, &paths[0])?;

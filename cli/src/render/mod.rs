@@ -37,14 +37,16 @@ const MAX_SPP: u32 = 1 << 16;
 
 /// `itgfx render SCENE`.
 #[derive(Debug, Args)]
-#[command(after_help = "SCENE is an .obj file with its MTL (Kd diffuse, Ke emission, Ks with illum 3/5/8 a mirror) \
-                        or a built-in with materials: cornell-box, mirror-room, open-blocks, open-sphere.\n\
+#[command(after_help = "SCENE is an .obj file with its MTL (Kd diffuse, Ke emission, Ks with illum 3/5/8 a mirror), \
+                        a .ply, a .gltf/.glb (its first camera is the default camera), a Mitsuba 3 .xml, \
+                        or a built-in with materials: cornell-box, mirror-room, open-blocks, open-sphere (docs/SCENES.md).\n\
                         DIR receives image.exr (linear radiance), image.png (sRGB) and density.png \
                         (samples per pixel, log scale); with --variance also variance.exr.\n\
                         Recommended: --sampler adaptive (unbiased; pays on scenes with empty or flat regions, \
                         about uniform elsewhere).")]
 pub struct RenderOptions {
-    /// A built-in scene name (cornell-box, mirror-room, open-blocks, open-sphere) or an .obj file
+    /// A built-in scene name (cornell-box, mirror-room, open-blocks, open-sphere) or a scene file
+    /// (.obj, .ply, .gltf, .glb, Mitsuba .xml)
     #[arg(value_name = "SCENE")]
     pub scene: Option<String>,
     /// Directory for image.exr, image.png and density.png (made if missing)
@@ -115,8 +117,8 @@ pub struct RenderOptions {
     /// Add RMSE/PSNR/relMSE against this reference EXR to the output
     #[arg(long, value_name = "R.exr")]
     pub reference: Option<PathBuf>,
-    /// Also write the scene for other renderers: one OBJ per material and scene.json (materials,
-    /// camera, size) in DIR
+    /// Also write the scene for other renderers in DIR: one OBJ per material, scene.xml (Mitsuba 3:
+    /// `mitsuba scene.xml` renders it as is, and itgfx reads it back) and scene.json
     #[arg(long)]
     pub export_scene: bool,
     #[command(flatten)]
@@ -144,7 +146,7 @@ pub struct CompareOptions {
     pub exposure: f64,
     #[command(flatten)]
     #[allow(missing_docs)]
-    pub common: Common,
+    pub common: crate::options::JsonOnly,
 }
 
 fn spp(s: &str) -> Result<u32, String> {
@@ -207,7 +209,8 @@ fn size(s: &str) -> Result<(u32, u32), String> {
     Ok((side(w)?, side(h)?))
 }
 
-fn camera(s: &str) -> Result<Camera, String> {
+/// Parses `--camera EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV`.
+pub(crate) fn camera(s: &str) -> Result<Camera, String> {
     let v: Vec<f64> = s
         .split(',')
         .map(|x| x.trim().parse::<f64>().ok().filter(|v| v.is_finite()))
@@ -278,12 +281,10 @@ pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
         return shard::run_merge(o);
     }
     let spec = o.scene.clone().ok_or_else(|| {
-        CliError::usage("give a scene: cornell-box, mirror-room, open-blocks, open-sphere or an .obj file")
+        CliError::usage("give a scene: cornell-box, mirror-room, open-blocks, open-sphere or a scene file")
     })?;
-    if let Some(r) = &o.reference
-        && !r.is_file()
-    {
-        return Err(CliError::usage(format!("--reference {r:?}: not a regular file")));
+    if let Some(r) = &o.reference {
+        crate::input::regular("--reference", r)?;
     }
     let adaptive = o.sampler != "uniform";
     if !adaptive && (o.max_spp.is_some() || o.threshold.is_some() || o.tutorial_form) {
@@ -507,7 +508,7 @@ fn render_into(o: &RenderOptions, spec: &str, dir: Option<&Path>) -> Result<Repo
                 wrote.extend(maps::files(dir));
             }
             if o.export_scene {
-                wrote.extend(export_scene::export_scene(&scene, &camera, o.size, dir)?);
+                wrote.extend(export_scene::export_scene(&scene, &camera, o.size, o.spp, dir)?);
             }
             if o.variance {
                 wrote.push(write_variance(frame, dir)?);

@@ -35,7 +35,7 @@ pub struct RenderShardOptions {
     /// rendering; no SCENE or sampler options (the shards carry them)
     #[arg(long, value_name = "F1,F2,...", value_delimiter = ',', num_args = 1..,
           conflicts_with_all = ["shard", "scene", "sampler", "spp", "size", "seed", "camera", "threshold", "tutorial_form",
-                                "delta", "binary_contrast", "maps", "max_spp", "export_scene"],
+                                "delta", "binary_contrast", "maps", "max_spp", "export_scene", "backend", "save_shard"],
           help_heading = "Shards")]
     pub merge: Vec<PathBuf>,
 }
@@ -145,10 +145,8 @@ pub fn merged(files: &[PathBuf]) -> Result<(RenderShard, Frame, f64), CliError> 
 /// # Errors
 /// Shard errors, output errors, one line each.
 pub fn run_merge(o: &RenderOptions) -> Result<Report, CliError> {
-    if let Some(r) = &o.reference
-        && !r.is_file()
-    {
-        return Err(CliError::usage(format!("--reference {r:?}: not a regular file")));
+    if let Some(r) = &o.reference {
+        crate::input::regular("--reference", r)?;
     }
     let (dir, made) = super::out_dir(o)?;
     let result = merge_into(o, &dir);

@@ -131,7 +131,8 @@ pub(super) fn transfer(spec: &str) -> Result<TransferFunction, CliError> {
     if meta.len() > 1 << 20 {
         return Err(CliError::usage(format!("--tf {spec:?}: larger than 1 MiB")));
     }
-    let text = std::fs::read_to_string(spec).map_err(|e| CliError::usage(format!("--tf {spec:?}: {e}")))?;
+    let text = itgfx_backends::files::read_regular_to_string(Path::new(spec))
+        .map_err(|e| CliError::usage(format!("--tf {spec:?}: {e}")))?;
     // JSON by its extension or its first character; the text format has neither.
     let json = Path::new(spec).extension().is_some_and(|e| e.eq_ignore_ascii_case("json"))
         || text.trim_start().starts_with('{');

@@ -91,7 +91,7 @@ pub struct VolumeOptions {
     pub path_steps: Option<usize>,
     /// A time series instead of VOLUME: hydrogen-beat, hydrogen-beat:N or hydrogen-beat:N,T; a comma-separated list of
     /// volumes, or a pattern with * or ? in the file name (matches sorted by name)
-    #[arg(long, value_name = "SERIES", help_heading = "Time series")]
+    #[arg(long, value_name = "SERIES", help_heading = "Time series", conflicts_with_all = ["best_n", "explore", "capture"])]
     pub time: Option<String>,
     /// Most camera turn between two frames of the dynamic view path, in degrees (0..=180;
     /// default: one step to a neighbouring viewpoint)
@@ -104,7 +104,8 @@ pub struct VolumeOptions {
     #[arg(long, value_name = "DIR", value_parser = out_path, help_heading = "Pictures")]
     pub out: Option<PathBuf>,
     /// Side of the pictures in pixels (16..=2048)
-    #[arg(long, value_name = "N", default_value = "256", value_parser = image_side, help_heading = "Pictures")]
+    #[arg(long, value_name = "N", default_value = "256", value_parser = image_side, help_heading = "Pictures",
+          requires = "out")]
     pub image: u32,
     /// Worker threads (default: all cores)
     #[arg(long, value_name = "T", value_parser = threads)]

@@ -138,7 +138,8 @@ pub(super) fn merged(
     let (scene, settings) = identity(o, caster, dirs.len(), rays);
     let mut named = Vec::with_capacity(o.shards.merge.len());
     for f in &o.shards.merge {
-        let text = std::fs::read_to_string(f).map_err(|e| CliError::usage(format!("--merge {f:?}: {e}")))?;
+        let text = itgfx_backends::files::read_regular_to_string(f)
+            .map_err(|e| CliError::usage(format!("--merge {f:?}: {e}")))?;
         let s = ViewpointShard::from_json(&text).map_err(|e| CliError::usage(format!("--merge {f:?}: {e}")))?;
         named.push((format!("{f:?}"), s));
     }

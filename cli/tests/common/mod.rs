@@ -37,3 +37,21 @@ pub fn fails(args: &[&str], needle: &str) {
     assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: one line: {err}");
     assert!(err.contains(needle), "{args:?}: {err:?} lacks {needle:?}");
 }
+
+/// A mesh of the shared test data (`shared/data/meshes/NAME`, see its
+/// README for the origins), found from the workspace root: `ITGFX_SHARED`
+/// if set, else `shared/` in the checkout, else `../shared` beside it. A
+/// test that needs it fails, naming where it looked, rather than skip.
+pub fn shared_mesh(name: &str) -> PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut tried = Vec::new();
+    let env = std::env::var_os("ITGFX_SHARED").map(PathBuf::from);
+    for dir in env.into_iter().chain([root.join("shared"), root.join("..").join("shared")]) {
+        let p = dir.join("data").join("meshes").join(name);
+        if p.is_file() {
+            return p;
+        }
+        tried.push(p);
+    }
+    panic!("test mesh {name} not found (set ITGFX_SHARED to the shared folder); tried {tried:?}");
+}

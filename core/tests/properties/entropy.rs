@@ -69,4 +69,27 @@ proptest! {
         prop_assert!(close(tsallis_entropy(&p, 1.0).unwrap(), h, TOL));
         prop_assert!(close(renyi_entropy(&p, 1.0, Base::Nats).unwrap(), h, TOL));
     }
+
+    /// Near α = 1 Rényi's and Tsallis's entropies are Shannon's plus a term
+    /// of order ε = α − 1 (issue 24: `--alpha 1.00000000000001` gave 1.5103
+    /// bits for 1.5, from the cancellation in `ln Σ p^α / (1 − α)`). With
+    /// weights ≥ 1e-6/16, |ln p| < 17 and the ε term is below 300·|ε|.
+    #[test]
+    fn renyi_tsallis_near_one(p in pmf(16), e in prop_oneof![-1e-9..1e-9f64, Just(1e-14), Just(-1e-15)]) {
+        let h = entropy(&p, Base::Nats).unwrap();
+        let tol = 1e-13 + 300.0 * e.abs();
+        prop_assert!((renyi_entropy(&p, 1.0 + e, Base::Nats).unwrap() - h).abs() <= tol);
+        prop_assert!((tsallis_entropy(&p, 1.0 + e).unwrap() - h).abs() <= tol);
+    }
+
+    /// Away from 1 the textbook forms `ln Σ p^α / (1 − α)` and
+    /// `(1 − Σ p^q)/(q − 1)` lose at most a digit or two, and agree.
+    #[test]
+    fn renyi_tsallis_exact_form(p in pmf(16), a in prop_oneof![0.05..0.95f64, 1.05..3.0f64]) {
+        let sum: f64 = p.iter().filter(|&&x| x > 0.0).map(|x| x.powf(a)).sum();
+        let renyi = sum.ln() / (1.0 - a);
+        let tsallis = (1.0 - sum) / (a - 1.0);
+        prop_assert!(close(renyi_entropy(&p, a, Base::Nats).unwrap(), renyi, 1e-12));
+        prop_assert!(close(tsallis_entropy(&p, a).unwrap(), tsallis, 1e-12));
+    }
 }

@@ -30,6 +30,43 @@ proptest! {
         let (hn, en) = excess_entropy_from_blocks(&blocks).unwrap();
         prop_assert!(close(hn, h, 1e-9) && close(en, e, 1e-9));
     }
+
+    /// One closed class anywhere, transient states anywhere (state 0 among
+    /// them or not): the stationary distribution is the closed class's,
+    /// zero on the transient states, and w = wP (issue 24: refused when
+    /// state 0 was transient).
+    #[test]
+    fn transient_states_anywhere(
+        closed in 1usize..6,
+        transient in 1usize..5,
+        rows in prop::collection::vec(prop::collection::vec(0.05..1.0f64, 10), 10),
+        order in Just((0..10).collect::<Vec<usize>>()).prop_shuffle(),
+    ) {
+        let n = closed + transient;
+        // Positions: the first `closed` of the shuffled states are closed.
+        let place: Vec<usize> = order.iter().copied().filter(|&i| i < n).collect();
+        let mut p = vec![0.0; n * n];
+        for (a, &i) in place.iter().enumerate() {
+            // Closed states lead only among themselves, transient states anywhere.
+            let targets = if a < closed { closed } else { n };
+            let row = &rows[a][..targets];
+            let s: f64 = row.iter().sum();
+            for (b, &j) in place.iter().take(targets).enumerate() {
+                p[i * n + j] = row[b] / s;
+            }
+        }
+        let mut out = vec![0.0; n];
+        let mut scratch = vec![0.0; n * n];
+        stationary_distribution_into(&p, n, &mut out, &mut scratch).unwrap();
+        for &i in &place[closed..] {
+            prop_assert_eq!(out[i], 0.0);
+        }
+        for j in 0..n {
+            let wp: f64 = (0..n).map(|i| out[i] * p[i * n + j]).sum();
+            prop_assert!((wp - out[j]).abs() <= 1e-12, "{:?}", out);
+        }
+        prop_assert!((out.iter().sum::<f64>() - 1.0).abs() <= 1e-12);
+    }
 }
 
 /// An i.i.d. chain (every row equal to w) has h = H(w) and E = 0.

@@ -428,6 +428,29 @@ pub fn divergence_criterion(kernel: DivergenceKernel, luminances: &[f64], square
     Ok(s / n / n * d)
 }
 
+/// The sRGB transfer function (IEC 61966-2-1, [Com98] of Part III-IV §5.1)
+/// of a linear value clamped to `[0, 1]`: the display encoding on which the
+/// RMSE and PSNR of Part IV Table 2 / Part III-IV Table 3 are taken (times 255).
+#[must_use]
+pub fn srgb_encode(x: f64) -> f64 {
+    let x = x.clamp(0.0, 1.0);
+    if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * libm::pow(x, 1.0 / 2.4) - 0.055 }
+}
+
+/// Derivative of [`srgb_encode`] at `x`: how much a small change of a
+/// linear value moves its display value (0 at and above 1, where the
+/// display clamps; the linear segment's 12.92 at and below 0.0031308).
+#[must_use]
+pub fn srgb_slope(x: f64) -> f64 {
+    if x >= 1.0 {
+        0.0
+    } else if x <= 0.003_130_8 {
+        12.92
+    } else {
+        1.055 / 2.4 * libm::pow(x, 1.0 / 2.4 - 1.0)
+    }
+}
+
 /// Luminance `Y` of a linear sRGB colour (Part III-IV §5.1).
 #[must_use]
 pub fn luminance(rgb: [f64; 3]) -> f64 {

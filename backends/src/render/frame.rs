@@ -60,6 +60,11 @@ pub struct Frame {
     pub samples: Vec<u32>,
     /// Further samples traced to take decisions only (unbiased adaptive runs).
     pub pilot_samples: Vec<u32>,
+    /// Each pixel's sample variance per channel (denominator `n − 1`, 0 below
+    /// 2 samples) of the samples in its value; empty when the value is not a
+    /// sample mean (the refinement trees' eq. (29) reconstruction) or was not
+    /// kept (merged shards).
+    pub variance: Vec<[f64; 3]>,
 }
 
 impl Frame {
@@ -211,7 +216,7 @@ pub fn render(
     let (first, end) = view.rows;
     let h = end - first;
     let done = AtomicU64::new(0);
-    let rows: Vec<Vec<([f64; 3], u32, u32)>> = (first..end)
+    let rows: Vec<Vec<PixelValue>> = (first..end)
         .into_par_iter()
         .map(|y| {
             let pixels: Vec<u32> = (y * w..(y + 1) * w).collect();
@@ -226,11 +231,20 @@ pub fn render(
         rgb: Vec::with_capacity((w * h) as usize),
         samples: Vec::with_capacity((w * h) as usize),
         pilot_samples: Vec::with_capacity((w * h) as usize),
+        variance: Vec::with_capacity((w * h) as usize),
     };
-    for (rgb, n, pilot) in rows.into_iter().flatten() {
-        frame.rgb.push(rgb);
-        frame.samples.push(n);
-        frame.pilot_samples.push(pilot);
+    let mut all_means = true;
+    for p in rows.into_iter().flatten() {
+        frame.rgb.push(p.rgb);
+        frame.samples.push(p.samples);
+        frame.pilot_samples.push(p.pilot);
+        match p.variance {
+            Some(v) => frame.variance.push(v),
+            None => all_means = false,
+        }
+    }
+    if !all_means {
+        frame.variance.clear();
     }
     Ok(frame)
 }
@@ -249,9 +263,27 @@ pub fn sample_counts(
     policy: &dyn Policy,
     pixels: &[u32],
 ) -> Result<Vec<u32>, BackendError> {
-    let parts: Vec<Vec<([f64; 3], u32, u32)>> =
+    let parts: Vec<Vec<PixelValue>> =
         pixels.par_chunks(64).map(|c| render_pixels(pt, view, policy, c, false)).collect::<Result<_, _>>()?;
-    Ok(parts.into_iter().flatten().map(|(_, n, pilot)| n + pilot).collect())
+    Ok(parts.into_iter().flatten().map(|p| p.samples + p.pilot).collect())
+}
+
+/// One rendered pixel: its value, the variance of the samples averaged into
+/// it (`None` when the value is not their mean), and the samples spent.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PixelValue {
+    pub(crate) rgb: [f64; 3],
+    pub(crate) variance: Option<[f64; 3]>,
+    pub(crate) samples: u32,
+    pub(crate) pilot: u32,
+}
+
+impl PixelValue {
+    /// The mean and variance of `s`, with `pilot` decision samples besides.
+    fn of(s: &[[f64; 3]], pilot: u32) -> Self {
+        let (rgb, variance) = moments(s);
+        Self { rgb, variance: Some(variance), samples: s.len() as u32, pilot }
+    }
 }
 
 /// Renders the given pixels (indices `y · width + x`): (mean, image samples,
@@ -263,9 +295,13 @@ fn render_pixels(
     policy: &dyn Policy,
     ids: &[u32],
     estimate: bool,
-) -> Result<Vec<([f64; 3], u32, u32)>, BackendError> {
+) -> Result<Vec<PixelValue>, BackendError> {
     if let Some(t) = policy.tree() {
-        return super::tree::render_tree(pt, view, &t, ids, estimate);
+        let values = super::tree::render_tree(pt, view, &t, ids, estimate)?;
+        return Ok(values
+            .into_iter()
+            .map(|(rgb, samples, pilot)| PixelValue { rgb, variance: None, samples, pilot })
+            .collect());
     }
     let unbiased = policy.unbiased();
     let first = policy.first().clamp(1, MAX_PIXEL_SAMPLES);
@@ -301,14 +337,14 @@ fn render_pixels(
         }
     }
     if !unbiased {
-        return Ok(pixels.into_iter().map(|p| (mean(&p.samples.rgb), p.samples.rgb.len() as u32, 0)).collect());
+        return Ok(pixels.into_iter().map(|p| PixelValue::of(&p.samples.rgb, 0)).collect());
     }
     if !estimate {
         return Ok(pixels
             .into_iter()
             .map(|p| {
                 let n = p.samples.rgb.len() as u32;
-                (mean(&p.samples.rgb), n, n)
+                PixelValue { pilot: n, ..PixelValue::of(&p.samples.rgb, 0) }
             })
             .collect());
     }
@@ -327,11 +363,25 @@ fn render_pixels(
         .into_iter()
         .map(|p| {
             let n = p.image as usize;
-            let m = mean(&rgb[k..k + n]);
+            let v = PixelValue::of(&rgb[k..k + n], p.samples.rgb.len() as u32);
             k += n;
-            (m, p.image, p.samples.rgb.len() as u32)
+            v
         })
         .collect())
+}
+
+/// Mean and sample variance (denominator `n − 1`; 0 below 2 samples) of
+/// each channel of `s`.
+pub(crate) fn moments(s: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
+    let m = mean(s);
+    let mut ss = [0.0; 3];
+    for c in s {
+        for k in 0..3 {
+            ss[k] += (c[k] - m[k]) * (c[k] - m[k]);
+        }
+    }
+    let d = s.len().saturating_sub(1).max(1) as f64;
+    (m, if s.len() < 2 { [0.0; 3] } else { ss.map(|v| v / d) })
 }
 
 pub(crate) fn mean(s: &[[f64; 3]]) -> [f64; 3] {

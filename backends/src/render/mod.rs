@@ -10,14 +10,17 @@
 //! * [`frame`]: the image plane, stratified batches per pixel, rows in
 //!   parallel, the same image for any thread count.
 //! * [`lights`]: area lights and materials; [`views`]: default cameras and
-//!   the camera-inside-an-object check; [`room`]: the `mirror-room` scene.
+//!   the camera-inside-an-object check; [`room`]: the `mirror-room` scene;
+//!   [`open`]: the open scenes `open-blocks` and `open-sphere`.
 //!
 //! Radiance is linear RGB in f64; the criteria read the luminance `Y` of
 //! linear sRGB (Part III-IV §5.1) or the channels.
 
+pub mod adaptive;
 pub mod criteria;
 pub mod frame;
 pub mod lights;
+pub mod open;
 pub mod path;
 pub mod room;
 pub mod shard_file;
@@ -31,6 +34,7 @@ use std::fmt;
 use crate::camera::Camera;
 use crate::scene::Scene;
 use crate::tracer::{BackendError, Prepared, Tracer};
+pub use adaptive::AdaptiveSampling;
 pub use criteria::{Adaptive, Criterion};
 pub use frame::{Frame, Policy, Uniform, View};
 pub use lights::{Lights, Surfaces};
@@ -137,6 +141,9 @@ pub enum Sampling {
     },
     /// Entropy-based supersampling of Part IV §5.
     Supersample(Supersampling),
+    /// The recommended sampler: a pilot in every pixel, the rest shared by
+    /// the neighbours' display-space spread ([`adaptive`]).
+    Neighbours(AdaptiveSampling),
 }
 
 /// Entropy-based supersampling (Part IV §5): the contrast map of 8 spp
@@ -166,41 +173,142 @@ pub struct Rendered {
     /// The pixel quality and contrast maps of 8 spp (Part IV §3–§4): the
     /// supersampler's oracle, or a separate pass when asked for.
     pub map: Option<ContrastMap>,
+    /// Passes pooled in the frame (more than 1 only with a time budget).
+    pub passes: u64,
 }
 
-/// Renders `scene` seen by `camera` (scene units): checks the camera, tunes
-/// an adaptive sampler's threshold to its budget, then traces. With `maps`,
+/// What to render and how: the settings of one [`render`] call.
+#[derive(Clone, Copy)]
+pub struct Job<'a> {
+    /// The tracing backend.
+    pub tracer: &'a dyn Tracer,
+    /// The scene.
+    pub scene: &'a Scene,
+    /// Its prepared geometry.
+    pub prepared: &'a Prepared,
+    /// Its materials and lights.
+    pub shading: &'a Shading,
+    /// The camera, in scene units.
+    pub camera: &'a Camera,
+    /// Image width and height in pixels.
+    pub size: (u32, u32),
+    /// Seed of the first pass (every pass's with [`time_budget`](Self::time_budget)).
+    pub seed: u64,
+    /// How pixels are sampled.
+    pub sampling: &'a Sampling,
+    /// Also the quality and contrast maps of an 8-spp pass, with this oracle.
+    pub maps: Option<Oracle>,
+    /// Only the rows `[first, end)` (a shard).
+    pub rows: Option<(u32, u32)>,
+    /// Render passes of the sampler's budget until this many seconds have
+    /// passed (at least one pass); the image is the mean of all their samples.
+    pub time_budget: Option<f64>,
+}
+
+/// The seed of pass `k` of a progressive render: pass 0 is the run's seed,
+/// so a one-pass run is the plain render.
+#[must_use]
+pub fn pass_seed(seed: u64, k: u64) -> u64 {
+    seed.wrapping_add(k.wrapping_mul(0x9E37_79B9_7F4A_7C15))
+}
+
+/// Renders `job.scene` seen by `job.camera`: checks the camera, tunes an
+/// adaptive sampler's threshold to its budget, then traces. With `maps`,
 /// also the quality and contrast maps of an 8-spp pass (the supersampler's
 /// own oracle pass, so no extra rays for `Sampling::Supersample`). With
 /// `rows = (first, end)`, only those rows are traced (a shard: the frame
 /// holds them alone; thresholds are tuned on the whole image's pilot, and
-/// `es` traces the whole oracle, so every shard decides as the whole run).
-/// `progress` gets (rows done, rows).
+/// `es` and `adaptive` trace the whole pilot, so every shard decides as the
+/// whole run). With `time_budget`, passes of the sampler's budget (seeds
+/// [`pass_seed`], a tuned threshold reused) are rendered until the time is
+/// spent and their samples pooled: each pixel's value is the mean of all
+/// its samples, weighted by count, which stays unbiased since no pass's
+/// counts depend on the pixel's own samples in that pass. `progress` gets
+/// (rows done, rows) of the first pass.
 ///
 /// # Errors
 /// [`RenderError`].
-#[allow(clippy::too_many_arguments)]
-pub fn render(
-    tracer: &dyn Tracer,
-    scene: &Scene,
-    prepared: &Prepared,
-    shading: &Shading,
-    camera: &Camera,
-    size: (u32, u32),
-    seed: u64,
-    sampling: &Sampling,
-    maps: Option<Oracle>,
-    rows: Option<(u32, u32)>,
-    progress: &(dyn Fn(u64, u64) + Sync),
-) -> Result<Rendered, RenderError> {
-    let camera = views::check_camera(tracer, scene, prepared, camera)?;
-    let pt = PathTracer { tracer, prepared, surfaces: &shading.surfaces, lights: &shading.lights, max_depth: 256 };
-    let view = View { camera, width: size.0, height: size.1, seed, rows: rows.unwrap_or((0, size.1)) };
-    let mut rendered = trace(&pt, &view, sampling, progress)?;
-    if let (None, Some(oracle)) = (&rendered.map, maps) {
+pub fn render(job: &Job, progress: &(dyn Fn(u64, u64) + Sync)) -> Result<Rendered, RenderError> {
+    let camera = views::check_camera(job.tracer, job.scene, job.prepared, job.camera)?;
+    let sh = job.shading;
+    let pt = PathTracer {
+        tracer: job.tracer,
+        prepared: job.prepared,
+        surfaces: &sh.surfaces,
+        lights: &sh.lights,
+        max_depth: 256,
+    };
+    let (w, h) = job.size;
+    let view = View { camera, width: w, height: h, seed: job.seed, rows: job.rows.unwrap_or((0, h)) };
+    let start = std::time::Instant::now();
+    let mut rendered = trace(&pt, &view, job.sampling, progress)?;
+    if let Some(budget) = job.time_budget {
+        // Later passes reuse the first pass's threshold (tuning is not repeated).
+        let sampling = with_threshold(job.sampling, rendered.threshold);
+        // Another pass starts only if it is expected to end within the budget
+        // (as long as the last one took): the image is the complete passes'.
+        let mut last = start.elapsed().as_secs_f64();
+        let mut k = 1;
+        while start.elapsed().as_secs_f64() + last <= budget {
+            let t = std::time::Instant::now();
+            let v = View { seed: pass_seed(job.seed, k), ..view };
+            let next = trace(&pt, &v, &sampling, &|_, _| {})?;
+            pool(&mut rendered.frame, &next.frame);
+            last = t.elapsed().as_secs_f64();
+            k += 1;
+        }
+        rendered.passes = k;
+    }
+    if let (None, Some(oracle)) = (&rendered.map, job.maps) {
         rendered.map = Some(supersample::contrast_map(&pt, &view, oracle, &|_, _| {})?);
     }
     Ok(rendered)
+}
+
+/// `sampling` with its threshold fixed to `t` (samplers that tune one).
+fn with_threshold(sampling: &Sampling, t: Option<f64>) -> Sampling {
+    match *sampling {
+        Sampling::Adaptive { criterion, spp, max, unbiased, threshold } => {
+            Sampling::Adaptive { criterion, spp, max, unbiased, threshold: threshold.or(t) }
+        }
+        Sampling::Tree { contrast, delta, spp, unbiased, threshold } => {
+            Sampling::Tree { contrast, delta, spp, unbiased, threshold: threshold.or(t) }
+        }
+        other => other,
+    }
+}
+
+/// Pools the samples of pass `b` into `a` (same pixels): counts add, means
+/// are weighted by count, variances are those of the pooled samples (both
+/// kept only if both passes kept them).
+fn pool(a: &mut Frame, b: &Frame) {
+    let keep_var = a.variance.len() == a.rgb.len() && b.variance.len() == b.rgb.len();
+    for i in 0..a.rgb.len() {
+        let (na, nb) = (f64::from(a.samples[i]), f64::from(b.samples[i]));
+        let n = na + nb;
+        if n == 0.0 {
+            continue;
+        }
+        let (ma, mb) = (a.rgb[i], b.rgb[i]);
+        let m: [f64; 3] = std::array::from_fn(|k| (na * ma[k] + nb * mb[k]) / n);
+        if keep_var {
+            let (va, vb) = (a.variance[i], b.variance[i]);
+            a.variance[i] = std::array::from_fn(|k| {
+                // Sums of squared deviations about each pass's mean, then about the pooled mean.
+                let ss = (na - 1.0).max(0.0) * va[k]
+                    + (nb - 1.0).max(0.0) * vb[k]
+                    + na * (ma[k] - m[k]).powi(2)
+                    + nb * (mb[k] - m[k]).powi(2);
+                if n < 2.0 { 0.0 } else { ss / (n - 1.0) }
+            });
+        }
+        a.rgb[i] = m;
+        a.samples[i] += b.samples[i];
+        a.pilot_samples[i] += b.pilot_samples[i];
+    }
+    if !keep_var {
+        a.variance.clear();
+    }
 }
 
 fn trace(
@@ -216,6 +324,14 @@ fn trace(
             threshold: None,
             tuned: None,
             map: None,
+            passes: 1,
+        }),
+        Sampling::Neighbours(a) => Ok(Rendered {
+            frame: adaptive::render(pt, &view, &a, progress)?,
+            threshold: None,
+            tuned: None,
+            map: None,
+            passes: 1,
         }),
         Sampling::Adaptive { criterion, spp, max, unbiased, threshold } => {
             let tuned = match threshold {
@@ -229,6 +345,7 @@ fn trace(
                 threshold: Some(threshold),
                 tuned,
                 map: None,
+                passes: 1,
             })
         }
         Sampling::Tree { contrast, delta, spp, unbiased, threshold } => {
@@ -240,11 +357,11 @@ fn trace(
             };
             let threshold = threshold.or(tuned.map(|t| t.threshold)).unwrap_or(0.0);
             let frame = frame::render(pt, &view, &Tree { threshold, unbiased, contrast, delta }, progress)?;
-            Ok(Rendered { frame, threshold: Some(threshold), tuned, map: None })
+            Ok(Rendered { frame, threshold: Some(threshold), tuned, map: None, passes: 1 })
         }
         Sampling::Supersample(es) => {
             let (frame, map) = supersample::render(pt, &view, &es, progress)?;
-            Ok(Rendered { frame, threshold: None, tuned: None, map: Some(map) })
+            Ok(Rendered { frame, threshold: None, tuned: None, map: Some(map), passes: 1 })
         }
     }
 }

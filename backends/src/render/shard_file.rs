@@ -219,6 +219,7 @@ pub fn merge(named: Vec<(String, RenderShard)>) -> Result<(RenderShard, Frame), 
         rgb: Vec::new(),
         samples: Vec::new(),
         pilot_samples: Vec::new(),
+        variance: Vec::new(),
     };
     for s in shards {
         frame.rgb.extend_from_slice(&s.rgb);
@@ -255,6 +256,7 @@ mod tests {
             rgb: (0..px).map(|k| [f64::from(a) + 0.1 * k as f64, 0.3, 1.0 / 3.0]).collect(),
             samples: vec![4; px],
             pilot_samples: vec![0; px],
+            variance: Vec::new(),
         };
         let scene = MeshFingerprint { name: "s".into(), patches: 1, triangles: 1, hash: "0".into() };
         RenderShard::new(scene, settings, (i, n), None, &frame)

@@ -256,7 +256,7 @@ pub fn render(
     let w = view.width;
     let done = AtomicU64::new(0);
     let (first_row, end_row) = view.rows;
-    let rows: Vec<Vec<[f64; 3]>> = (first_row..end_row)
+    let rows: Vec<Vec<([f64; 3], [f64; 3])>> = (first_row..end_row)
         .into_par_iter()
         .map(|y| {
             let batches: Vec<Batch> = (0..w)
@@ -274,10 +274,13 @@ pub fn render(
             let rgb = trace_geometry(pt, view, &batches, None)?;
             let kept = |x: u32| if es.unbiased { [0.0; 3] } else { map.sums[(y * w + x) as usize] };
             let mut row: Vec<[f64; 3]> = (0..w).map(kept).collect();
+            let mut var = vec![[0.0; 3]; w as usize];
             let mut k = 0;
             for b in &batches {
                 let n = b.n as usize;
                 row[b.slot as usize] = sum(&rgb[k..k + n], row[b.slot as usize]);
+                // The unbiased form's value is the mean of these fresh samples alone.
+                var[b.slot as usize] = super::frame::moments(&rgb[k..k + n]).1;
                 k += n;
             }
             for (x, c) in row.iter_mut().enumerate() {
@@ -285,18 +288,21 @@ pub fn render(
                 *c = c.map(|v| v / n);
             }
             progress(h + (done.fetch_add(1, Ordering::Relaxed) + 1) * h / mine.max(1), 2 * h);
-            Ok(row)
+            Ok(row.into_iter().zip(var).collect())
         })
         .collect::<Result<_, BackendError>>()?;
     let range = (first_row * w) as usize..(end_row * w) as usize;
     let samples: Vec<u32> = extra[range].iter().map(|e| e + base).collect();
     let decided = if es.unbiased { ORACLE_SAMPLES } else { 0 };
+    let (rgb, variance): (Vec<[f64; 3]>, Vec<[f64; 3]>) = rows.into_iter().flatten().unzip();
     let frame = Frame {
         width: view.width,
         height: end_row - first_row,
-        rgb: rows.into_iter().flatten().collect(),
+        rgb,
         pilot_samples: vec![decided; samples.len()],
         samples,
+        // The tutorial form's value also holds the oracle's samples, whose squares are not kept.
+        variance: if es.unbiased { variance } else { Vec::new() },
     };
     Ok((frame, map))
 }

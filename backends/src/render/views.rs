@@ -11,19 +11,19 @@ use crate::tracer::{BackendError, Prepared, Tracer};
 /// Probe rays cast from the eye by [`eye_place`].
 const PROBES: u32 = 64;
 
-/// The default camera of a scene, in scene units: the built-ins' own views
-/// (`cornell-box` from just inside its closed front wall, `mirror-room` from
-/// its front wall), else a view from outside framing the bounding box.
+/// The default camera of a scene, in scene units: a built-in's own view from
+/// its registry entry ([`BuiltIn::camera`](crate::scene::BuiltIn::camera)),
+/// else a view from outside framing the bounding box.
 #[must_use]
 pub fn default_camera(scene: &Scene) -> Camera {
     if let Some(c) = scene.camera {
         return c;
     }
     let d = DVec3::new;
-    let (eye, target, fov) = match scene.base_name().split(':').next().unwrap_or_default() {
-        "cornell-box" => (d(278.0, 273.0, 15.0), d(278.0, 273.0, 559.2), 54.0),
-        "mirror-room" => (d(2.0, 1.45, 0.25), d(2.0, 1.05, 5.0), 62.0),
-        _ => {
+    // The registry entry of the scene before any --subdivide suffix.
+    let (eye, target, fov) = match crate::scene::BuiltIn::of(scene.base_name()).and_then(|b| b.camera) {
+        Some(c) => (DVec3::from_array(c.eye), DVec3::from_array(c.target), c.fov_deg),
+        None => {
             let (lo, hi) = scene.bounds();
             let (c, r) = ((lo + hi) * 0.5, ((hi - lo) * 0.5).length().max(f64::MIN_POSITIVE));
             (c + d(0.35, 0.45, 2.6).normalize() * (2.8 * r), c, 45.0)

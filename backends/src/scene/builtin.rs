@@ -16,7 +16,30 @@ pub struct BuiltIn {
     pub syntax: &'static str,
     /// One-line description with parameter ranges and defaults.
     pub description: &'static str,
+    /// The default camera for rendering (scene units), if the scene has its own view.
+    pub camera: Option<DefaultCamera>,
     build: fn(&Args) -> Result<Scene, SceneError>,
+}
+
+/// A built-in scene's default view: eye, target (up is +y) and the vertical field of view.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DefaultCamera {
+    /// Eye position.
+    pub eye: [f64; 3],
+    /// Point looked at.
+    pub target: [f64; 3],
+    /// Vertical field of view in degrees.
+    pub fov_deg: f64,
+}
+
+impl BuiltIn {
+    /// The registry entry of a scene spec (`"mirror-room:3"` → `mirror-room`), if it is a built-in
+    /// (give [`Scene::base_name`] for a subdivided scene).
+    #[must_use]
+    pub fn of(spec: &str) -> Option<&'static BuiltIn> {
+        let name = spec.split(':').next().unwrap_or_default();
+        BUILT_IN.iter().find(|b| b.name == name)
+    }
 }
 
 /// Every built-in scene, in help order.
@@ -25,84 +48,114 @@ pub const BUILT_IN: &[BuiltIn] = &[
         name: "cube-enclosure",
         syntax: "cube-enclosure[:N]",
         description: "inside of the unit cube, each face split into N x N squares, N in 1..=1000 (default 10; Part III Fig. 13)",
+        camera: None,
         build: cube_enclosure,
     },
     BuiltIn {
         name: "tetrahedron",
         syntax: "tetrahedron",
         description: "regular tetrahedron seen from inside, one patch per face (Table 4)",
+        camera: None,
         build: solid,
     },
     BuiltIn {
         name: "cube",
         syntax: "cube",
         description: "cube seen from inside, one patch per face (Table 4)",
+        camera: None,
         build: solid,
     },
     BuiltIn {
         name: "octahedron",
         syntax: "octahedron",
         description: "regular octahedron seen from inside, one patch per face (Table 4)",
+        camera: None,
         build: solid,
     },
     BuiltIn {
         name: "dodecahedron",
         syntax: "dodecahedron",
         description: "regular dodecahedron seen from inside, one patch per face (Table 4)",
+        camera: None,
         build: solid,
     },
     BuiltIn {
         name: "icosahedron",
         syntax: "icosahedron",
         description: "regular icosahedron seen from inside, one patch per face (Table 4)",
+        camera: None,
         build: solid,
     },
     BuiltIn {
         name: "sphere",
         syntax: "sphere[:B,S]",
         description: "exact sphere seen from inside, B z-bands x S sectors of equal area, B and S in 1..=4096 (default 8,16)",
+        camera: None,
         build: sphere,
     },
     BuiltIn {
         name: "cornell-box",
         syntax: "cornell-box",
         description: "closed Cornell box from the published measurements: 5 walls, front closed, light, two blocks (after Fig. 20a)",
+        // Just inside the closed front wall.
+        camera: Some(DefaultCamera { eye: [278.0, 273.0, 15.0], target: [278.0, 273.0, 559.2], fov_deg: 54.0 }),
         build: cornell_box,
     },
     BuiltIn {
         name: "geosphere",
         syntax: "geosphere[:L]",
         description: "unit geodesic sphere seen from outside, 20*4^(L-1) triangles, L in 1..=9 (default 2: 80)",
+        camera: None,
         build: geosphere,
     },
     BuiltIn {
         name: "torus",
         syntax: "torus[:U,V]",
         description: "ring torus (radii 1 and 0.4) seen from outside, U x V quads, U and V in 3..=4096 (default 48,24)",
+        camera: None,
         build: torus,
     },
     BuiltIn {
         name: "table-chairs",
         syntax: "table-chairs[:N]",
         description: "a table with four chairs, 29 boxes seen from outside, faces split N x N, N in 1..=256 (default 2)",
+        camera: None,
         build: table_chairs,
     },
     BuiltIn {
         name: "cubes-room",
         syntax: "cubes-room[:K][:clustered|random][:SEED]",
         description: "cube enclosure 10x10 per face with K cubes of side 0.05, random (K in 1..=1000, default) or clustered (K in 1..=2197); default K = 27, SEED = 1 (Figs. 11, 15, 16)",
+        camera: None,
         build: cubes_room,
     },
     BuiltIn {
         name: "mirror-room",
         syntax: "mirror-room[:L]",
         description: "closed 4x3x5 room with a ceiling area light, a mirrored pyramid, a mirrored sphere (geodesic, level L in 1..=6, default 5: 5,120 triangles) and two diffuse blocks (after Part IV Figs. 7, 11)",
+        // From the front wall.
+        camera: Some(DefaultCamera { eye: [2.0, 1.45, 0.25], target: [2.0, 1.05, 5.0], fov_deg: 62.0 }),
         build: mirror_room,
+    },
+    BuiltIn {
+        name: "open-blocks",
+        syntax: "open-blocks",
+        description: "three diffuse blocks on a 4 x 4 floor under a small 0.5 x 0.5 area light, open to a black background (adaptive sampling's open scene)",
+        camera: Some(DefaultCamera { eye: [0.0, 2.3, 4.2], target: [0.0, 0.3, 0.0], fov_deg: 40.0 }),
+        build: open_blocks,
+    },
+    BuiltIn {
+        name: "open-sphere",
+        syntax: "open-sphere[:L]",
+        description: "a diffuse geodesic sphere (level L in 1..=6, default 4: 1,280 triangles) and a cube on a 4 x 4 floor under a small area light, open to a black background",
+        camera: Some(DefaultCamera { eye: [0.0, 2.3, 4.2], target: [0.0, 0.3, 0.0], fov_deg: 40.0 }),
+        build: open_sphere,
     },
     BuiltIn {
         name: "chairs-room",
         syntax: "chairs-room",
         description: "the table with four chairs (wood) in a 5 x 2.6 x 5 m white room lit by a 1 x 1 m ceiling light (after Part III Fig. 18a; radiosity test scene)",
+        camera: None,
         build: chairs_room,
     },
 ];
@@ -279,6 +332,17 @@ fn mirror_room(a: &Args) -> Result<Scene, SceneError> {
     a.at_most(1)?;
     let l = a.one(0, "L", 1..=6, 5)?;
     Ok(crate::render::room::mirror_room(a.spec, l - 1))
+}
+
+fn open_blocks(a: &Args) -> Result<Scene, SceneError> {
+    a.at_most(0)?;
+    Ok(crate::render::open::open_blocks(a.spec))
+}
+
+fn open_sphere(a: &Args) -> Result<Scene, SceneError> {
+    a.at_most(1)?;
+    let l = a.one(0, "L", 1..=6, 4)?;
+    Ok(crate::render::open::open_sphere(a.spec, l - 1))
 }
 
 fn chairs_room(a: &Args) -> Result<Scene, SceneError> {

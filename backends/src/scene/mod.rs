@@ -99,7 +99,7 @@ impl SphereCells {
     }
 }
 
-pub use builtin::{BUILT_IN, BuiltIn, built_in};
+pub use builtin::{BUILT_IN, BuiltIn, DefaultCamera, built_in};
 pub use error::{Limits, SceneError};
 
 mod builtin;

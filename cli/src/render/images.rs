@@ -80,12 +80,7 @@ pub fn read_exr(path: &Path) -> Result<Radiance, CliError> {
     Ok(Radiance { width: size.width(), height: size.height(), rgb })
 }
 
-/// sRGB transfer function of a linear value in `[0, 1]`.
-#[must_use]
-pub fn srgb_encode(x: f64) -> f64 {
-    let x = x.clamp(0.0, 1.0);
-    if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 }
-}
+pub use itgfx_core::pixel::srgb_encode;
 
 /// The displayed image, `255 · sRGB(clamp(2^exposure · L))` per channel, as reals.
 #[must_use]

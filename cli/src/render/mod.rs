@@ -16,7 +16,8 @@ use glam::DVec3;
 use itgfx_backends::camera::Camera;
 use itgfx_backends::open;
 use itgfx_backends::render::{
-    self, Criterion, Frame, Oracle, Sampling, Shading, Supersampling, TreeContrast, criteria, supersample, tree, views,
+    self, AdaptiveSampling, Criterion, Frame, Oracle, Sampling, Shading, Supersampling, TreeContrast, adaptive,
+    criteria, supersample, tree, views,
 };
 use itgfx_backends::tracer::Prepared;
 
@@ -38,12 +39,14 @@ const MAX_SPP: u32 = 1 << 16;
 #[derive(Debug, Args)]
 #[command(after_help = "SCENE is an .obj file with its MTL (Kd diffuse, Ke emission, Ks with illum 3/5/8 a mirror), \
                         a .ply, a .gltf/.glb (its first camera is the default camera), a Mitsuba 3 .xml, \
-                        or a built-in with materials: cornell-box, mirror-room (docs/SCENES.md).\n\
+                        or a built-in with materials: cornell-box, mirror-room, open-blocks, open-sphere (docs/SCENES.md).\n\
                         DIR receives image.exr (linear radiance), image.png (sRGB) and density.png \
-                        (samples per pixel, log scale).")]
+                        (samples per pixel, log scale); with --variance also variance.exr.\n\
+                        Recommended: --sampler adaptive (unbiased; pays on scenes with empty or flat regions, \
+                        about uniform elsewhere).")]
 pub struct RenderOptions {
-    /// A built-in scene name (cornell-box, mirror-room) or a scene file (.obj, .ply, .gltf, .glb,
-    /// Mitsuba .xml)
+    /// A built-in scene name (cornell-box, mirror-room, open-blocks, open-sphere) or a scene file
+    /// (.obj, .ply, .gltf, .glb, Mitsuba .xml)
     #[arg(value_name = "SCENE")]
     pub scene: Option<String>,
     /// Directory for image.exr, image.png and density.png (made if missing)
@@ -53,7 +56,9 @@ pub struct RenderOptions {
     /// (the samples it decides on included)
     #[arg(long, value_name = "N", default_value = "16", value_parser = spp)]
     pub spp: u32,
-    /// Pixel sampler: uniform (stratified), or an adaptive criterion: cc (classic contrast), ct
+    /// Pixel sampler: uniform (stratified); adaptive (RECOMMENDED: unbiased, every ray in the image, an
+    /// 8-spp pilot in each pixel and the rest shared by its neighbours' display-space noise); or an
+    /// adaptive criterion of the tutorial: cc (classic contrast), ct
     /// (confidence test), kl cs hl (f-divergences), kl-sqrt cs-sqrt hl-sqrt (their square roots), ec
     /// (entropy refinement tree, Part IV §6), ic (importance-weighted classic contrast tree), cc-tree
     /// (classic contrast tree), ec-batch (entropy contrast in batches), rel (relative confidence
@@ -74,6 +79,15 @@ pub struct RenderOptions {
     /// geometry-contrast.png, quality.exr, contrast.exr
     #[arg(long)]
     pub maps: bool,
+    /// Also write variance.exr: each pixel's sample variance per channel (of the samples averaged
+    /// into its value; not for the trees ec ic cc-tree nor es --tutorial-form). Needs --out
+    #[arg(long)]
+    pub variance: bool,
+    /// Render passes of the sampler's budget (--spp) until S seconds have passed, then write the mean
+    /// of the complete passes' samples, to compare renderers at equal time. Each pass's seed derives
+    /// from --seed, but how many passes fit depends on the machine: the image depends on timing
+    #[arg(long, value_name = "S", value_parser = time_budget)]
+    pub time_budget: Option<f64>,
     /// Adaptive: most samples one pixel may take (default 16 x --spp)
     #[arg(long, value_name = "N", value_parser = spp)]
     pub max_spp: Option<u32>,
@@ -143,10 +157,31 @@ fn spp(s: &str) -> Result<u32, String> {
 }
 
 fn sampler_name(s: &str) -> Result<String, String> {
-    if s == "uniform" || s == "es" || TreeContrast::from_name(s).is_some() || Criterion::from_name(s).is_some() {
+    if s == "uniform"
+        || s == "es"
+        || s == "adaptive"
+        || TreeContrast::from_name(s).is_some()
+        || Criterion::from_name(s).is_some()
+    {
         Ok(s.to_string())
     } else {
-        Err(format!("unknown sampler {s:?}: uniform, es, {}, {}", tree::NAMES.join(", "), criteria::NAMES.join(", ")))
+        Err(format!(
+            "unknown sampler {s:?}: uniform, adaptive, es, {}, {}",
+            tree::NAMES.join(", "),
+            criteria::NAMES.join(", ")
+        ))
+    }
+}
+
+/// Longest time budget: a week.
+const MAX_TIME_BUDGET: f64 = 7.0 * 86_400.0;
+
+fn time_budget(s: &str) -> Result<f64, String> {
+    let x = finite(s)?;
+    if x > 0.0 && x <= MAX_TIME_BUDGET {
+        Ok(x)
+    } else {
+        Err(format!("must be seconds in (0, {MAX_TIME_BUDGET}] (a week)"))
     }
 }
 
@@ -193,7 +228,7 @@ const MEMORY_LIMIT: u64 = 4 << 30;
 
 /// Refuses a run whose image or per-row sample buffers would pass
 /// [`MEMORY_LIMIT`]: about 120 bytes a pixel (radiance, counts, display
-/// values, PNG), and 48 bytes a sample of the row each worker holds.
+/// values, PNG; 200 for `adaptive`), and 48 bytes a sample of the row each worker holds.
 fn memory_check(o: &RenderOptions) -> Result<(), CliError> {
     let (w, h) = (u64::from(o.size.0), u64::from(o.size.1));
     let per_pixel = match o.sampler.as_str() {
@@ -202,7 +237,9 @@ fn memory_check(o: &RenderOptions) -> Result<(), CliError> {
         _ => u64::from(o.max_spp.unwrap_or(o.spp.saturating_mul(16).min(MAX_SPP))),
     };
     let workers = o.tracing.threads.unwrap_or_else(rayon::current_num_threads) as u64;
-    let bytes = w * h * 120 + workers * w * per_pixel * 48;
+    // adaptive also keeps every pixel's pilot sums, weight and share (about 80 bytes).
+    let image = if o.sampler == "adaptive" { 200 } else { 120 };
+    let bytes = w * h * image + workers * w * per_pixel * 48;
     if bytes > MEMORY_LIMIT {
         return Err(CliError::usage(format!(
             "{w} x {h} at up to {per_pixel} samples a pixel needs about {:.1} GiB (limit {} GiB): lower --size, --spp or --max-spp",
@@ -232,11 +269,20 @@ pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
             "--unbiased is gone: the unbiased form is the default now, and --spp counts its decision samples too (an old --spp N --unbiased run is --spp 2N); --tutorial-form gives the tutorial's biased form",
         ));
     }
+    if o.variance && (o.out.is_none() || o.shards.shard.is_some() || !o.shards.merge.is_empty()) {
+        return Err(CliError::usage(
+            "--variance writes variance.exr beside image.exr: give --out DIR (and no --shard or --merge)",
+        ));
+    }
+    if o.time_budget.is_some() && (o.shards.shard.is_some() || !o.shards.merge.is_empty()) {
+        return Err(CliError::usage("--time-budget is for a single run, not --shard or --merge"));
+    }
     if !o.shards.merge.is_empty() {
         return shard::run_merge(o);
     }
-    let spec =
-        o.scene.clone().ok_or_else(|| CliError::usage("give a scene: cornell-box, mirror-room or an .obj file"))?;
+    let spec = o.scene.clone().ok_or_else(|| {
+        CliError::usage("give a scene: cornell-box, mirror-room, open-blocks, open-sphere or a scene file")
+    })?;
     if let Some(r) = &o.reference {
         crate::input::regular("--reference", r)?;
     }
@@ -247,6 +293,18 @@ pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
         ));
     }
     let is_tree = TreeContrast::from_name(&o.sampler).is_some();
+    if o.variance && (is_tree || (o.sampler == "es" && o.tutorial_form)) {
+        return Err(CliError::usage(format!(
+            "--variance: --sampler {}{} gives pixels that are not the mean of the samples it keeps (eq. (29) or the oracle's samples); use another sampler",
+            o.sampler,
+            if o.tutorial_form { " --tutorial-form" } else { "" }
+        )));
+    }
+    if o.sampler == "adaptive" && (o.threshold.is_some() || o.tutorial_form) {
+        return Err(CliError::usage(
+            "--sampler adaptive has no threshold and one (unbiased) form: it spends exactly --spp on average",
+        ));
+    }
     if is_tree && o.max_spp.is_some() {
         return Err(CliError::usage(format!(
             "--sampler {}: the refinement tree is capped by its depth (4 levels), not --max-spp",
@@ -268,7 +326,15 @@ pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
     {
         return Err(CliError::usage(format!("--max-spp {m} is below --spp {}", o.spp)));
     }
-    if adaptive && o.spp < criteria::BATCH {
+    if o.sampler == "adaptive" && o.spp < adaptive::PILOT {
+        return Err(CliError::usage(format!(
+            "--spp {}: --sampler adaptive takes a pilot of {} a pixel; give --spp {} or more",
+            o.spp,
+            adaptive::PILOT,
+            adaptive::PILOT
+        )));
+    }
+    if adaptive && o.sampler != "adaptive" && o.spp < criteria::BATCH {
         return Err(CliError::usage(format!(
             "--spp {}: adaptive samplers take at least {} per pixel",
             o.spp,
@@ -277,7 +343,12 @@ pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
     }
     // The unbiased form traces at least 8 samples to decide and 8 to estimate.
     let floor = 2 * criteria::BATCH;
-    if adaptive && !o.tutorial_form && o.spp < floor && (o.threshold.is_none() || o.sampler == "es") {
+    if adaptive
+        && o.sampler != "adaptive"
+        && !o.tutorial_form
+        && o.spp < floor
+        && (o.threshold.is_none() || o.sampler == "es")
+    {
         return Err(CliError::usage(format!(
             "--spp {}: the unbiased form traces at least {floor} a pixel (8 to decide, 8 for the image): give --spp {floor} or more, or --tutorial-form",
             o.spp
@@ -329,6 +400,17 @@ fn write_frame(frame: &Frame, exposure: f64, dir: &Path) -> Result<(Radiance, Ve
     Ok((image, files.to_vec()))
 }
 
+/// Writes `frame`'s per-pixel sample variance as `variance.exr` in `dir`.
+fn write_variance(frame: &Frame, dir: &Path) -> Result<PathBuf, CliError> {
+    if frame.variance.len() != frame.rgb.len() {
+        return Err(CliError::usage("--variance: this run kept no per-pixel variance"));
+    }
+    let path = dir.join("variance.exr");
+    let image = Radiance { width: frame.width as usize, height: frame.height as usize, rgb: frame.variance.clone() };
+    images::write_exr(&image, &path)?;
+    Ok(path)
+}
+
 /// The samples spent, the image's mean and the metrics against `reference`.
 fn frame_stats(
     r: &mut Report,
@@ -351,7 +433,9 @@ fn frame_stats(
 
 fn render_into(o: &RenderOptions, spec: &str, dir: Option<&Path>) -> Result<Report, CliError> {
     if let Some(dir) = dir {
-        for f in image_files(dir).iter().chain(&if o.maps { maps::files(dir) } else { Vec::new() }) {
+        let variance = if o.variance { vec![dir.join("variance.exr")] } else { Vec::new() };
+        let maps = if o.maps { maps::files(dir) } else { Vec::new() };
+        for f in image_files(dir).iter().chain(&maps).chain(&variance) {
             crate::output::check("--out", f)?;
         }
     }
@@ -372,6 +456,10 @@ fn render_into(o: &RenderOptions, spec: &str, dir: Option<&Path>) -> Result<Repo
             max: o.max_spp.unwrap_or(o.spp.saturating_mul(16).min(MAX_SPP)),
             unbiased: !o.tutorial_form,
         }),
+        (None, None) if o.sampler == "adaptive" => Sampling::Neighbours(AdaptiveSampling {
+            spp: o.spp,
+            max: o.max_spp.unwrap_or(o.spp.saturating_mul(16).min(MAX_SPP)),
+        }),
         (None, None) => Sampling::Uniform(o.spp),
         (Some(criterion), _) => Sampling::Adaptive {
             criterion,
@@ -388,20 +476,20 @@ fn render_into(o: &RenderOptions, spec: &str, dir: Option<&Path>) -> Result<Repo
             p.update(d, t);
         }
     };
-    let rendered = render::render(
-        tracer.as_ref(),
-        &scene,
-        &prepared,
-        &shading,
-        &camera,
-        o.size,
-        o.seed,
-        &sampling,
-        o.maps.then_some(Oracle { delta, binary: o.binary_contrast }),
-        o.shards.shard.map(|s| shard::rows(s, o.size.1)),
-        &tick,
-    )
-    .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
+    let job = render::Job {
+        tracer: tracer.as_ref(),
+        scene: &scene,
+        prepared: &prepared,
+        shading: &shading,
+        camera: &camera,
+        size: o.size,
+        seed: o.seed,
+        sampling: &sampling,
+        maps: o.maps.then_some(Oracle { delta, binary: o.binary_contrast }),
+        rows: o.shards.shard.map(|s| shard::rows(s, o.size.1)),
+        time_budget: o.time_budget,
+    };
+    let rendered = render::render(&job, &tick).map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
     let frame = &rendered.frame;
     let seconds = t0.elapsed().as_secs_f64();
     let mut r = Report::new();
@@ -422,6 +510,9 @@ fn render_into(o: &RenderOptions, spec: &str, dir: Option<&Path>) -> Result<Repo
             if o.export_scene {
                 wrote.extend(export_scene::export_scene(&scene, &camera, o.size, o.spp, dir)?);
             }
+            if o.variance {
+                wrote.push(write_variance(frame, dir)?);
+            }
             (Some(image), wrote)
         }
         _ => return Err(CliError::usage("give --out DIR for the images")),
@@ -433,8 +524,14 @@ fn render_into(o: &RenderOptions, spec: &str, dir: Option<&Path>) -> Result<Repo
     r.reals("camera_eye", camera.eye.to_array().to_vec())
         .reals("camera_forward", camera.forward.to_array().to_vec())
         .real("camera_fov_y", camera.fov_y.to_degrees(), Some("deg"));
-    if let Sampling::Adaptive { max, .. } = sampling {
+    if let Sampling::Adaptive { max, .. } | Sampling::Neighbours(AdaptiveSampling { max, .. }) = sampling {
         r.count("max_spp", u64::from(max));
+    }
+    if let Sampling::Neighbours(_) = sampling {
+        r.count("pilot_spp", u64::from(adaptive::PILOT));
+    }
+    if let Some(b) = o.time_budget {
+        r.real("time_budget", b, Some("s")).count("passes", rendered.passes);
     }
     if adaptive {
         // Which form ran: decisions kept out of the image, or the tutorial's shared samples.

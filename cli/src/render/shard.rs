@@ -70,6 +70,7 @@ pub fn settings(o: &RenderOptions, sampling: &Sampling, delta: f64, camera: &Cam
     let max_spp = match sampling {
         Sampling::Adaptive { max, .. } => *max,
         Sampling::Supersample(es) => es.max,
+        Sampling::Neighbours(a) => a.max,
         _ => 0,
     };
     let (e, f, u) = (camera.eye, camera.forward, camera.up);

@@ -76,15 +76,16 @@ pub(crate) fn huffman_in_place(w: &mut [f64]) -> f64 {
     total
 }
 
+/// Most block symbols `n^k` [`huffman_block_length`] builds (2^22).
+#[cfg(feature = "alloc")]
+pub const HUFFMAN_MAX_BLOCKS: u64 = 1 << 22;
+
 /// Expected code length per symbol `ℓ̄_k / k` of a Huffman code over blocks
 /// of `k` independent symbols from `p` (Part II eq. (25)):
 /// `H(p) ≤ ℓ̄_k / k < H(p) + 1/k`.
 ///
 /// Builds the `n^k` block distribution.
 ///
-/// Most block symbols `n^k` [`huffman_block_length`] builds (2^22).
-pub const HUFFMAN_MAX_BLOCKS: u64 = 1 << 22;
-
 /// # Errors
 /// As [`crate::Pmf::new`]; [`Error::InvalidParameter`] if `k = 0` or `n^k`
 /// exceeds [`HUFFMAN_MAX_BLOCKS`] symbols.

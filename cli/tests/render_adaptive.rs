@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{fails, itgfx, json, s};
+use common::{fails, itgfx, json, s, z_score};
 use itgfx_cli::render::images::read_exr;
 use itgfx_core::pixel::luminance;
 
@@ -13,20 +13,7 @@ fn temp(name: &str) -> PathBuf {
 
 /// Renders `scene` at 48² into `out`; returns the JSON and each pixel's luminance.
 fn render(scene: &str, out: &Path, extra: &[&str]) -> (serde_json::Value, Vec<f64>) {
-    let mut args = vec!["render", scene, "--size", "48x48", "--spp", "32", "--out", s(out), "--json"];
-    args.extend(extra);
-    let v = json(&itgfx(&args));
-    let image = read_exr(&out.join("image.exr")).unwrap();
-    (v, image.rgb.iter().map(|&c| luminance(c)).collect())
-}
-
-/// The z-score of the mean of `a − b` over pixels (independent seeds: see render_bias.rs).
-fn z_score(a: &[f64], b: &[f64]) -> f64 {
-    let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
-    let n = d.len() as f64;
-    let mean = d.iter().sum::<f64>() / n;
-    let var = d.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (n - 1.0);
-    mean / (var / n).sqrt()
+    common::render_luminance(scene, out, extra)
 }
 
 #[test]

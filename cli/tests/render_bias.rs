@@ -13,7 +13,7 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{itgfx, json, s};
+use common::{itgfx, json, s, z_score};
 use itgfx_cli::render::images::read_exr;
 use itgfx_core::pixel::luminance;
 
@@ -24,25 +24,10 @@ fn temp(name: &str) -> PathBuf {
 /// Every adaptive sampler: the batch criteria, the trees, the supersampler.
 const SAMPLERS: [&str; 14] =
     ["cc", "ct", "kl", "cs", "hl", "kl-sqrt", "cs-sqrt", "hl-sqrt", "ec-batch", "rel", "ec", "ic", "cc-tree", "es"];
-const BASE: [&str; 6] = ["render", "mirror-room:1", "--size", "48x48", "--spp", "32"];
 
-/// Renders into `out` with `extra` arguments; returns the JSON and each pixel's luminance.
+/// Renders `mirror-room:1` into `out` with `extra` arguments; returns the JSON and each pixel's luminance.
 fn render(out: &Path, extra: &[&str]) -> (serde_json::Value, Vec<f64>) {
-    let mut args = BASE.to_vec();
-    args.extend(["--out", s(out), "--json"]);
-    args.extend(extra);
-    let v = json(&itgfx(&args));
-    let image = read_exr(&out.join("image.exr")).unwrap();
-    (v, image.rgb.iter().map(|&c| luminance(c)).collect())
-}
-
-/// The z-score of the mean of `a − b` over pixels (standard error from their scatter).
-fn z_score(a: &[f64], b: &[f64]) -> f64 {
-    let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
-    let n = d.len() as f64;
-    let mean = d.iter().sum::<f64>() / n;
-    let var = d.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (n - 1.0);
-    mean / (var / n).sqrt()
+    common::render_luminance("mirror-room:1", out, extra)
 }
 
 #[test]

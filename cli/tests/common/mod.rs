@@ -55,3 +55,23 @@ pub fn shared_mesh(name: &str) -> PathBuf {
     }
     panic!("test mesh {name} not found (set ITGFX_SHARED to the shared folder); tried {tried:?}");
 }
+
+/// `itgfx render SCENE --size 48x48 --spp 32 --out OUT --json EXTRA…`: the
+/// JSON and each pixel's luminance (the size the sampler tests share).
+pub fn render_luminance(scene: &str, out: &Path, extra: &[&str]) -> (serde_json::Value, Vec<f64>) {
+    let mut args = vec!["render", scene, "--size", "48x48", "--spp", "32", "--out", s(out), "--json"];
+    args.extend(extra);
+    let v = json(&itgfx(&args));
+    let image = itgfx_cli::render::images::read_exr(&out.join("image.exr")).unwrap();
+    (v, image.rgb.iter().map(|&c| itgfx_core::pixel::luminance(c)).collect())
+}
+
+/// The z-score of the mean of `a − b` over pixels, its standard error from
+/// their scatter (two images of independent seeds: see render_bias.rs).
+pub fn z_score(a: &[f64], b: &[f64]) -> f64 {
+    let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
+    let n = d.len() as f64;
+    let mean = d.iter().sum::<f64>() / n;
+    let var = d.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (n - 1.0);
+    mean / (var / n).sqrt()
+}

@@ -81,7 +81,7 @@ fn stage() -> MutexGuard<'static, Option<Stage>> {
     STAGE.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
-/// Starts staging: until [`commit`] or [`abort`], [`write`] renames nothing
+/// Starts staging: until [`commit`] or [`abort`], [`write()`] renames nothing
 /// into place and writes no device.
 pub fn begin() {
     *stage() = Some(Stage::default());

@@ -337,7 +337,7 @@ pub fn conditional_entropy<T: Real>(joint: &[T], rows: usize, cols: usize, base:
 /// H_α = −K(ε)/ε = H − κ₂ ε/2 − κ₃ ε²/6 − κ₄ ε³/24 − O(κ₅ ε⁴)
 /// ```
 /// with `H = −κ₁` Shannon's entropy and `κ_k` the cumulants of `ℓ`
-/// ([`renyi_series`]); it is used while `|ε|·max|ℓ| ≤ 10⁻⁴`, where the next
+/// (`renyi_series`); it is used while `|ε|·max|ℓ| ≤ 10⁻⁴`, where the next
 /// term is below 10⁻¹⁷ of `H`. For `½ ≤ α ≤ 3/2` otherwise, the exact
 /// `H_α = −log1p(Σ p_i expm1(εℓ_i)) / ε`, whose sum has terms of one sign
 /// (no cancellation); further out, the form below with `p_max` factored out.
@@ -384,7 +384,7 @@ pub fn renyi_entropy<T: Real>(p: &[T], alpha: f64, base: Base) -> Result<T, Erro
 /// cancellation (`1 − Σ p^q` lost every digit near `q = 1`). Expanding
 /// `expm1`, `S_q = −(m₁ + m₂ ε/2 + m₃ ε²/6 + m₄ ε³/24) − O(m₅ ε⁴)` with
 /// `m_k = Σ p_i ℓ_i^k` and `−m₁ = H`, the series used while
-/// `|ε|·max|ℓ| ≤ 10⁻⁴` ([`tsallis_series`]).
+/// `|ε|·max|ℓ| ≤ 10⁻⁴` (`tsallis_series`).
 ///
 /// # Errors
 /// [`Error::InvalidParameter`] for `q` NaN, infinite or negative, then as [`entropy`].

@@ -20,7 +20,7 @@ use crate::{Base, Error, Real};
 /// with `w_i = 0` on transient states. The elimination needs every state to
 /// reach the state it keeps last, so a state `r` of the closed class is
 /// found first (by reachability over the edges `P_ij > 0`, `O(n²)` per
-/// step, [`recurrent_state`]) and the chain is reduced with `r` and state 0
+/// step, `recurrent_state`) and the chain is reduced with `r` and state 0
 /// swapped; `r = 0` whenever every state reaches state 0, the common case.
 /// Periodic chains are fine: `w` is their unique solution of `w = wP`,
 /// though `X_t` does not converge to it. A chain with several closed

@@ -428,7 +428,7 @@ pub fn divergence_criterion(kernel: DivergenceKernel, luminances: &[f64], square
     Ok(s / n / n * d)
 }
 
-/// The sRGB transfer function (IEC 61966-2-1, [Com98] of Part III-IV §5.1)
+/// The sRGB transfer function (IEC 61966-2-1, \[Com98\] of Part III-IV §5.1)
 /// of a linear value clamped to `[0, 1]`: the display encoding on which the
 /// RMSE and PSNR of Part IV Table 2 / Part III-IV Table 3 are taken (times 255).
 #[must_use]

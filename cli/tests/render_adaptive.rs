@@ -5,7 +5,6 @@ use std::path::{Path, PathBuf};
 mod common;
 use common::{fails, itgfx, json, s, z_score};
 use itgfx_cli::render::images::read_exr;
-use itgfx_core::pixel::luminance;
 
 fn temp(name: &str) -> PathBuf {
     common::temp("render-adaptive", name)

@@ -13,9 +13,7 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{itgfx, json, s, z_score};
-use itgfx_cli::render::images::read_exr;
-use itgfx_core::pixel::luminance;
+use common::z_score;
 
 fn temp(name: &str) -> PathBuf {
     common::temp("render-bias", name)

@@ -362,7 +362,7 @@ impl VisibilityCounts {
     /// [`CountsError::Invalid`] for a bad block count or width.
     pub fn peek(path: &std::path::Path) -> Result<Option<CountsHeader>, CountsError> {
         let io = |e: std::io::Error| CountsError::Format(format!("{}: {e}", path.display()));
-        let file = std::fs::File::open(path).map_err(io)?;
+        let file = crate::files::open_regular(path).map_err(io)?;
         let len = file.metadata().map_err(io)?.len();
         let mut f = Peek { file: std::io::BufReader::new(file), at: 0, len };
         if len < 8 || f.bytes(8, "the magic")? != MAGIC {

@@ -90,29 +90,6 @@ fn outputs_are_all_or_none() {
     assert!(good.is_file() && d.join("i.png").is_file());
 }
 
-/// Runs `args`, killing it after 30 s: a hang fails the test instead of
-/// stalling the suite.
-fn no_hang(args: &[&str]) -> std::process::Output {
-    use std::process::{Command, Stdio};
-    use std::time::{Duration, Instant};
-    let mut child = Command::new(env!("CARGO_BIN_EXE_itgfx"))
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > Duration::from_secs(30) {
-            child.kill().unwrap();
-            let _ = child.wait();
-            panic!("{args:?} hangs");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    child.wait_with_output().unwrap()
-}
-
 /// A FIFO with no writer given as an input hung in `open()`: OBJ, MTL,
 /// counts, shard, EXR, PNG and CSV inputs are refused at once, one line.
 #[test]

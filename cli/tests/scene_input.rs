@@ -2,12 +2,10 @@
 //! spec is one line on stderr and exit 2, or loads with the right numbers.
 
 use std::path::PathBuf;
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
 
-fn itgfx(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_itgfx")).args(args).output().expect("run itgfx")
-}
+mod common;
+use common::itgfx;
 
 fn tmp(name: &str, text: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("itgfx-scene-input-cli-{}", std::process::id()));
@@ -131,21 +129,7 @@ fn obj_from_a_fifo_does_not_hang() {
     let p = std::env::temp_dir().join(format!("itgfx-scene-input-fifo-{}.obj", std::process::id()));
     let _ = std::fs::remove_file(&p);
     assert!(Command::new("mkfifo").arg(&p).status().unwrap().success());
-    let mut child = Command::new(env!("CARGO_BIN_EXE_itgfx"))
-        .args(["complexity", path(&p), "--lines", "1000", "--json"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > Duration::from_secs(30) {
-            child.kill().unwrap();
-            panic!("itgfx hangs on a FIFO");
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    let out = child.wait_with_output().unwrap();
+    let out = common::no_hang(&["complexity", path(&p), "--lines", "1000", "--json"]);
     let _ = std::fs::remove_file(&p);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");

@@ -28,16 +28,11 @@ Time: itgfx's in-process registration seconds (its JSON `seconds`, NRRD I/O excl
 the whole process; SimpleITK's Execute() only, limited to --threads threads (itgfx's
 registration is single-threaded).
 """
-import argparse, json, math, random, statistics, subprocess, sys, tempfile, time
+import argparse, json, math, random, statistics, sys, tempfile, time
 
 import SimpleITK as sitk
 
-
-def run(cmd):
-    p = subprocess.run(cmd, capture_output=True, text=True)
-    if p.returncode != 0:
-        sys.exit(f"{cmd}: {p.stderr.strip()}")
-    return p.stdout
+from imaging_vs_simpleitk import run, sitk_method
 
 
 def zyx(angles_deg):
@@ -71,16 +66,7 @@ def sitk_register(d, bins, sigmas):
     e = sitk.Euler3DTransform()
     e.SetComputeZYX(True)
     tx = sitk.CenteredTransformInitializer(fixed, moving, e, sitk.CenteredTransformInitializerFilter.GEOMETRY)
-    r = sitk.ImageRegistrationMethod()
-    r.SetMetricAsMattesMutualInformation(numberOfHistogramBins=bins)
-    r.SetMetricSamplingStrategy(r.NONE)
-    r.SetInterpolator(sitk.sitkLinear)
-    r.SetOptimizerAsRegularStepGradientDescent(learningRate=2.0, minStep=1e-3, numberOfIterations=200,
-                                               relaxationFactor=0.8)
-    r.SetOptimizerScalesFromPhysicalShift()
-    r.SetShrinkFactorsPerLevel([4, 2, 1])
-    r.SetSmoothingSigmasPerLevel(sigmas)
-    r.SmoothingSigmasAreSpecifiedInPhysicalUnitsOff()
+    r = sitk_method(bins, sigmas)
     r.SetInitialTransform(tx, inPlace=False)
     t = time.perf_counter()
     out = r.Execute(fixed, moving)

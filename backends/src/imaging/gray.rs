@@ -28,9 +28,7 @@ impl Gray {
     /// Smallest and largest sample (`(0, 0)` when empty).
     #[must_use]
     pub fn range(&self) -> (f32, f32) {
-        let mut it = self.data.iter().copied();
-        let first = it.next().unwrap_or(0.0);
-        it.fold((first, first), |(lo, hi), v| (lo.min(v), hi.max(v)))
+        range_of(&self.data)
     }
 
     /// Bilinear sample at continuous pixel coordinates (pixel centres at
@@ -99,6 +97,13 @@ impl Gray {
         }
         out
     }
+}
+
+/// Smallest and largest of `data` (`(0, 0)` when empty).
+pub(super) fn range_of(data: &[f32]) -> (f32, f32) {
+    let mut it = data.iter().copied();
+    let first = it.next().unwrap_or(0.0);
+    it.fold((first, first), |(lo, hi), v| (lo.min(v), hi.max(v)))
 }
 
 /// The normalised Gaussian taps `exp(−i²/2σ²)`, `i ∈ [−⌈3σ⌉, ⌈3σ⌉]`.

@@ -1,7 +1,7 @@
 //! Scalar volumes for 3D registration: storage, Gaussian smoothing (the
 //! same separable passes as [`super::Gray`]), shrinking and trilinear samples.
 
-use super::gray::smooth_grid;
+use super::gray::{range_of, smooth_grid};
 
 /// A scalar volume, `x` fastest: `data[(z·ny + y)·nx + x]`.
 #[derive(Clone, Debug, PartialEq)]
@@ -31,9 +31,7 @@ impl Gray3 {
     /// Smallest and largest sample (`(0, 0)` when empty).
     #[must_use]
     pub fn range(&self) -> (f32, f32) {
-        let mut it = self.data.iter().copied();
-        let first = it.next().unwrap_or(0.0);
-        it.fold((first, first), |(lo, hi), v| (lo.min(v), hi.max(v)))
+        range_of(&self.data)
     }
 
     /// The volume's centre in physical coordinates (voxel `i` at `i·spacing`).

@@ -138,6 +138,30 @@ pub fn in_base(metric: Metric, v: f64, k: f64) -> f64 {
     if metric == Metric::Mi { v * k } else { v }
 }
 
+/// One level of `result.json`: its pyramid step, size, Powell's iterations
+/// and evaluations, the parameters it ended at and the metric after each
+/// iteration (in `--base` for MI, `k` converting from bits).
+#[must_use]
+pub fn level_report(
+    level: Level,
+    size: &[usize],
+    counts: (usize, usize),
+    params: &[f64],
+    trace: &[f64],
+    metric: Metric,
+    k: f64,
+) -> Report {
+    let mut x = Report::new();
+    x.count("shrink", level.shrink as u64)
+        .real("sigma", level.sigma, None)
+        .counts("size", size.iter().map(|&n| n as u64).collect())
+        .count("iterations", counts.0 as u64)
+        .count("evaluations", counts.1 as u64)
+        .reals("transform", params.to_vec())
+        .reals("trace", trace.iter().map(|v| in_base(metric, *v, k)).collect());
+    x
+}
+
 /// `--initial` of an image: `DEG,X,Y`.
 ///
 /// # Errors
@@ -257,15 +281,8 @@ pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
         .levels
         .iter()
         .map(|l| {
-            let mut x = Report::new();
-            x.count("shrink", l.level.shrink as u64)
-                .real("sigma", l.level.sigma, None)
-                .counts("size", vec![l.size.0 as u64, l.size.1 as u64])
-                .count("iterations", l.iterations as u64)
-                .count("evaluations", l.evaluations as u64)
-                .reals("transform", l.transform.params().to_vec())
-                .reals("trace", l.trace.iter().map(|v| in_base(metric, *v, k)).collect());
-            x
+            let size = [l.size.0, l.size.1];
+            level_report(l.level, &size, (l.iterations, l.evaluations), &l.transform.params(), &l.trace, metric, k)
         })
         .collect();
     rep.records("levels", levels);

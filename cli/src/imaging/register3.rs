@@ -11,7 +11,7 @@ use itgfx_backends::volume::nrrd::read_nrrd;
 
 use super::RegisterOptions;
 use super::pictures::{checkerboard, histogram_image, middle_slices, side_by_side, write_nrrd, write_rgb};
-use super::register::{choices, in_base, measures, trace_picture};
+use super::register::{choices, level_report, measures, trace_picture};
 use super::synth::CONVENTION_3D;
 use crate::CliError;
 use crate::report::Report;
@@ -170,15 +170,8 @@ pub fn run_register3(o: &RegisterOptions) -> Result<Report, CliError> {
         .levels
         .iter()
         .map(|l| {
-            let mut x = Report::new();
-            x.count("shrink", l.level.shrink as u64)
-                .real("sigma", l.level.sigma, None)
-                .counts("size", l.size.iter().map(|&n| n as u64).collect())
-                .count("iterations", l.iterations as u64)
-                .count("evaluations", l.evaluations as u64)
-                .reals("transform", l.transform.params().to_vec())
-                .reals("trace", l.trace.iter().map(|v| in_base(metric, *v, k)).collect());
-            x
+            let counts = (l.iterations, l.evaluations);
+            level_report(l.level, &l.size, counts, &l.transform.params(), &l.trace, metric, k)
         })
         .collect();
     rep.records("levels", levels);

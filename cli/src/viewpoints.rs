@@ -271,7 +271,7 @@ const BYTES_PER_ENTRY: u64 = 72;
 /// viewpoint and polygon is over what the process may use. A bound: at 42
 /// viewpoints `torus:512,256` peaks at 320 MiB against 602 MiB estimated,
 /// `torus:1024,256` at 560 MiB against 1.11 GiB (`/usr/bin/time -v`).
-fn memory_check(scene: &itgfx_backends::scene::Scene, views: usize) -> Result<(), CliError> {
+pub fn memory_check(scene: &itgfx_backends::scene::Scene, views: usize) -> Result<(), CliError> {
     use itgfx_backends::scene::Limits;
     let (t, p) = (scene.triangles.len() as u64, scene.patches.len() as u64);
     let need =

@@ -248,7 +248,8 @@ pub fn mesh_copy(base: &Scene, r: &LineRng) -> (Scene, String) {
 #[must_use]
 pub fn retrieval_set(meshes: &[(String, Scene)], families: &[&str], per_class: usize, seed: u64) -> Vec<Item> {
     let mut out = Vec::new();
-    let classes = meshes.iter().map(|(c, s)| (c.clone(), Some(s))).chain(families.iter().map(|f| (f.to_string(), None)));
+    let classes =
+        meshes.iter().map(|(c, s)| (c.clone(), Some(s))).chain(families.iter().map(|f| (f.to_string(), None)));
     for (ci, (class, base)) in classes.enumerate() {
         for i in 0..per_class {
             let r = LineRng::new(seed, ((ci as u64) << 32) | i as u64);

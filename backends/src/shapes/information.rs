@@ -108,11 +108,7 @@ const JS_MAX: f64 = 1.0;
 #[must_use]
 pub fn prepared_in(scene: &Scene, frame: &Frame) -> Prepared {
     let mut p = Prepared::new(scene);
-    p.triangles = scene
-        .triangles
-        .iter()
-        .map(|t| [0, 1, 2].map(|k| Vec3A::from(frame.map(t[k]).as_vec3())))
-        .collect();
+    p.triangles = scene.triangles.iter().map(|t| [0, 1, 2].map(|k| Vec3A::from(frame.map(t[k]).as_vec3()))).collect();
     p.centre = frame.centre;
     p.scale = frame.radius;
     p
@@ -122,12 +118,7 @@ pub fn prepared_in(scene: &Scene, frame: &Frame) -> Prepared {
 ///
 /// # Errors
 /// [`ShapeError::Channel`] when tracing fails or nothing is seen.
-pub fn blocks(
-    scene: &Scene,
-    frame: &Frame,
-    s: &Settings,
-    backend: BackendChoice,
-) -> Result<Vec<Block>, ShapeError> {
+pub fn blocks(scene: &Scene, frame: &Frame, s: &Settings, backend: BackendChoice) -> Result<Vec<Block>, ShapeError> {
     let err = |e: &dyn std::fmt::Display| ShapeError::Channel(e.to_string());
     let prepared = prepared_in(scene, frame);
     let tracer = crate::open(backend, &prepared).map_err(|e| err(&e))?;

@@ -17,7 +17,6 @@ use crate::report::Report;
 use crate::scene::load_scene;
 use crate::values::viewpoint_level;
 
-
 /// Most D2/A3 samples per mesh (8 bytes each while the histogram is made).
 const MAX_SAMPLES: u64 = 1 << 26;
 
@@ -45,8 +44,7 @@ fn labels(path: &Path, files: &[String]) -> Result<Vec<String>, CliError> {
     let fail = |m: String| CliError::usage(format!("--labels {path:?}: {m}"));
     let f = itgfx_backends::files::open_regular(path).map_err(|e| fail(e.to_string()))?;
     let mut text = String::new();
-    std::io::Read::read_to_string(&mut std::io::Read::take(f, 64 << 20), &mut text)
-        .map_err(|e| fail(e.to_string()))?;
+    std::io::Read::read_to_string(&mut std::io::Read::take(f, 64 << 20), &mut text).map_err(|e| fail(e.to_string()))?;
     let canon = |s: &str| std::fs::canonicalize(s).ok();
     let keys: Vec<Option<PathBuf>> = files.iter().map(|f| canon(f)).collect();
     let mut class: Vec<Option<String>> = vec![None; files.len()];
@@ -70,11 +68,7 @@ fn labels(path: &Path, files: &[String]) -> Result<Vec<String>, CliError> {
             return Err(fail(format!("line {}: {file:?} is labelled twice", n + 1)));
         }
     }
-    class
-        .into_iter()
-        .zip(files)
-        .map(|(c, f)| c.ok_or_else(|| fail(format!("{f:?} has no class"))))
-        .collect()
+    class.into_iter().zip(files).map(|(c, f)| c.ok_or_else(|| fail(format!("{f:?} has no class")))).collect()
 }
 
 /// The memory the largest mesh needs: its viewpoint channel, and the samples.
@@ -169,8 +163,11 @@ pub fn run(o: &ShapesOptions) -> Result<Report, CliError> {
         x.matrix("distance", rows(m));
         each.push(x);
         if let Some(s) = sc {
-            r.real(&format!("{}_accuracy", kind.name()), s.nearest_neighbour, None)
-                .real(&format!("{}_mAP", kind.name()), s.mean_average_precision, None);
+            r.real(&format!("{}_accuracy", kind.name()), s.nearest_neighbour, None).real(
+                &format!("{}_mAP", kind.name()),
+                s.mean_average_precision,
+                None,
+            );
         }
         r.real(&format!("{}_seconds", kind.name()), *seconds, Some("s"));
     }

@@ -63,11 +63,12 @@ fn every_descriptor_is_invariant_and_its_matrix_symmetric() {
     for d in j["descriptors"].as_array().unwrap() {
         let name = d["descriptor"].as_str().unwrap();
         let m = matrix(&d["distance"]);
-        let n = files.len();
-        for i in 0..n {
-            assert_eq!(m[i][i], 0.0, "{name}: zero diagonal");
-            for k in 0..n {
-                assert_eq!(m[i][k], m[k][i], "{name}: symmetric");
+        assert_eq!(m.len(), files.len());
+        for (i, row) in m.iter().enumerate() {
+            assert_eq!(row.len(), files.len());
+            assert_eq!(row[i], 0.0, "{name}: zero diagonal");
+            for (k, &x) in row.iter().enumerate() {
+                assert_eq!(x, m[k][i], "{name}: symmetric");
             }
         }
         // Every copy of Suzanne is nearer to it than any other class is, by

@@ -8,7 +8,7 @@
 use glam::{DQuat, DVec3};
 
 use crate::lines::LineRng;
-use crate::scene::{Patch, Scene};
+use crate::scene::Scene;
 
 /// Which part of the set a shape belongs to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -64,15 +64,7 @@ pub fn mapped(scene: &Scene, f: impl Fn(DVec3) -> DVec3) -> Scene {
 fn from_triangles(name: &str, triangles: &[[DVec3; 3]]) -> Scene {
     let mut s = Scene::named(name);
     for (i, t) in triangles.iter().enumerate() {
-        let n = (t[1] - t[0]).cross(t[2] - t[0]);
-        s.triangles.push(*t);
-        s.triangle_patch.push(i as u32);
-        s.patches.push(Patch {
-            name: format!("t{i}"),
-            area: 0.5 * n.length(),
-            normal: n.normalize_or_zero(),
-            material: 0,
-        });
+        s.add_triangles(format!("t{i}"), std::slice::from_ref(t), 0);
     }
     s
 }

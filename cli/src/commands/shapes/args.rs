@@ -21,7 +21,7 @@ pub struct ShapesOptions {
     /// CSV of `file,class` rows naming every FILE: adds nearest-neighbour accuracy, mAP, precision-recall
     #[arg(long, value_name = "CSV")]
     pub labels: Option<PathBuf>,
-    /// Writes descriptors.csv, descriptors.json, distance-<descriptor>.csv and, with --labels, pr.png
+    /// Writes descriptors.csv, descriptors.json, distance-DESCRIPTOR.csv and, with --labels, pr.png
     #[arg(long, value_name = "DIR", value_parser = out_path)]
     pub out: Option<PathBuf>,
     /// Seed of the D2/A3 surface samples

@@ -19,6 +19,7 @@ use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
 use itgfx_core::PairCount;
+use rayon::slice::ParallelSliceMut;
 
 use super::CountsError;
 
@@ -145,7 +146,9 @@ impl Accumulator {
                 };
                 let mut v: Vec<PairCount> = Vec::new();
                 if let Some(mut t) = touched.take() {
-                    t.sort_unstable();
+                    // Distinct cells: any sort gives the same order; this
+                    // one runs on every thread (the rest wait for it).
+                    t.par_sort_unstable();
                     v = t.iter().map(|&idx| pair(idx as usize, std::mem::take(&mut counts[idx as usize]))).collect();
                 } else {
                     for (c, chunk) in counts.chunks_mut(16).enumerate() {

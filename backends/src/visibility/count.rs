@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use super::counts_valid::SceneFingerprint;
 use super::pairs::{Accumulator, key, sym_key};
 use super::{BlockCounts, ContinuousSums, CountsError, FixedSum, LineOptions, MAX_BLOCKS, VisibilityCounts};
-use crate::lines::{Line, LineRng, SeedHash, cosine_direction, global_line_of, sample_cdf};
+use crate::lines::{Line, LineRng, SeedHash, cosine_direction, global_lines_of, sample_cdf};
 use crate::scene::Scene;
 use crate::tracer::{Crossing, CrossingBuffer, Prepared, Tracer};
 
@@ -208,14 +208,15 @@ fn process_chunk(
     for b0 in (0..count).step_by(batch as usize) {
         lines.clear();
         origins.clear();
-        for i in (b0..count.min(b0 + batch)).map(|k| first + k * stride) {
-            if let Some(s) = sampler {
+        let end = count.min(b0 + batch);
+        if let Some(s) = sampler {
+            for i in (b0..end).map(|k| first + k * stride) {
                 let (patch, x, n, l) = s.line(p, opts.seed, i);
                 origins.push((patch, x, n));
                 lines.push(l);
-            } else {
-                lines.push(global_line_of(seed, i, radius));
             }
+        } else {
+            global_lines_of(seed, first + b0 * stride, stride, end - b0, radius, &mut lines);
         }
         if sampler.is_some() {
             nearest = first_past_origin(tracer, &lines, &origins)?;

@@ -396,8 +396,8 @@ pub fn count_visibility(
     let sampler = opts.local.then(|| Sampler::new(prepared));
     let radius = SPHERE_SCALE;
     // Chunks per wave: a wave ends at a join (the merge of the last one, its
-    // own tracing), where a thread may wait up to a chunk; 16 chunks a thread
-    // keep that below 2% of the run (4 a thread lost ~6% on 2 threads).
+    // own tracing), where a thread may wait up to a chunk: 16 chunks a thread
+    // make a quarter as many joins as 4 did (an estimated ~6% of a 2-thread run).
     let wave = (rayon::current_num_threads() as u64 * 16).max(16);
     let overflow = |what: &str| CountsError::Overflow(what.into());
     let mut out = Vec::new();

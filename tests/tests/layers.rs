@@ -157,25 +157,30 @@ fn tokens(s: &str) -> Vec<Tok> {
     out
 }
 
-/// Drops `#[cfg(test)]` items: the attribute, then everything up to the end
-/// of the item (a `;` or a balanced `{…}`).
+/// Drops test-only items (`#[cfg(test)]`, `#[cfg(all(test, …))]`): the
+/// attribute, then everything up to the end of the item (a `;` at depth 0 or
+/// a balanced `{…}`).
 fn drop_test_items(t: Vec<Tok>) -> Vec<Tok> {
     let mut out = Vec::with_capacity(t.len());
     let mut i = 0;
     let id = |x: &Tok, w: &str| matches!(x, Tok::Ident(s) if s == w);
     while i < t.len() {
-        let is_cfg_test = t[i] == Tok::Punct('#')
+        let cfg = t[i] == Tok::Punct('#')
             && t.get(i + 1) == Some(&Tok::Punct('['))
             && t.get(i + 2).is_some_and(|x| id(x, "cfg"))
-            && t.get(i + 3) == Some(&Tok::Punct('('))
-            && t.get(i + 4).is_some_and(|x| id(x, "test"))
-            && t.get(i + 5) == Some(&Tok::Punct(')'));
-        if !is_cfg_test {
+            && t.get(i + 3) == Some(&Tok::Punct('('));
+        // the attribute's tokens, up to its closing `]`
+        let end = if cfg { (i..t.len()).find(|&j| t[j] == Tok::Punct(']')) } else { None };
+        let test_only = end.is_some_and(|e| {
+            let attr = &t[i + 4..e];
+            attr.iter().any(|x| id(x, "test")) && !attr.iter().any(|x| id(x, "not") || id(x, "any"))
+        });
+        if !test_only {
             out.push(t[i].clone());
             i += 1;
             continue;
         }
-        i += 7; // past `]`
+        i = end.unwrap_or(i) + 1;
         let mut depth = 0;
         while i < t.len() {
             match t[i] {
@@ -571,7 +576,7 @@ fn checker_sees_cycles_through_reexports_and_skips_tests() {
     fs::write(dir.join("b.rs"), "use crate::c; pub fn g() { c::h(); }").unwrap();
     fs::write(
         dir.join("c.rs"),
-        "pub fn h() {}\n#[cfg(test)]\nmod tests { use crate::a::X; }\n",
+        "pub fn h() {}\n#[cfg(all(test, unix))]\nmod tests { use crate::a::X; }\n#[cfg(test)]\nuse crate::a::X;\n",
     )
     .unwrap();
     let (_, edges) = graph(&dir);

@@ -95,8 +95,14 @@ impl Policy for Tree {
     fn more(&self, _: &PixelSamples) -> u32 {
         0
     }
-    fn tree(&self) -> Option<Tree> {
-        Some(*self)
+    fn render_own(
+        &self,
+        pt: &PathTracer,
+        view: &View,
+        ids: &[u32],
+        estimate: bool,
+    ) -> Option<Result<Vec<([f64; 3], u32, u32)>, BackendError>> {
+        Some(render_tree(pt, view, self, ids, estimate))
     }
     fn unbiased(&self) -> bool {
         self.unbiased

@@ -415,12 +415,15 @@ fn resolve(mods: &BTreeMap<Vec<String>, Module>, path: &[String], depth: usize) 
     Some(m.to_vec())
 }
 
-fn graph(src: &Path) -> (BTreeMap<Vec<String>, Module>, BTreeMap<Vec<String>, BTreeSet<Vec<String>>>) {
+/// Each file's module path and the files it uses.
+type Graph = BTreeMap<Vec<String>, BTreeSet<Vec<String>>>;
+
+fn graph(src: &Path) -> (BTreeMap<Vec<String>, Module>, Graph) {
     let mut files = Vec::new();
     rs_files(src, &mut files);
     let modules: BTreeSet<_> = files.iter().map(|f| module_path(src, f)).collect();
     let mods: BTreeMap<_, _> = files.iter().map(|f| parse(src, f, &modules)).collect();
-    let mut edges: BTreeMap<Vec<String>, BTreeSet<Vec<String>>> = BTreeMap::new();
+    let mut edges: Graph = BTreeMap::new();
     for (name, m) in &mods {
         let out = edges.entry(name.clone()).or_default();
         for r in &m.refs {
@@ -437,9 +440,9 @@ fn graph(src: &Path) -> (BTreeMap<Vec<String>, Module>, BTreeMap<Vec<String>, BT
 }
 
 /// Every strongly connected component with more than one file (Tarjan).
-fn cycles(edges: &BTreeMap<Vec<String>, BTreeSet<Vec<String>>>) -> Vec<Vec<Vec<String>>> {
+fn cycles(edges: &Graph) -> Vec<Vec<Vec<String>>> {
     struct State<'a> {
-        edges: &'a BTreeMap<Vec<String>, BTreeSet<Vec<String>>>,
+        edges: &'a Graph,
         index: BTreeMap<&'a Vec<String>, usize>,
         low: BTreeMap<&'a Vec<String>, usize>,
         stack: Vec<&'a Vec<String>>,
@@ -500,11 +503,7 @@ fn cycles(edges: &BTreeMap<Vec<String>, BTreeSet<Vec<String>>>) -> Vec<Vec<Vec<S
 }
 
 /// One shortest cycle through `start` inside `comp`, for the message.
-fn one_cycle(
-    edges: &BTreeMap<Vec<String>, BTreeSet<Vec<String>>>,
-    comp: &[Vec<String>],
-    start: &Vec<String>,
-) -> Vec<Vec<String>> {
+fn one_cycle(edges: &Graph, comp: &[Vec<String>], start: &Vec<String>) -> Vec<Vec<String>> {
     let inside: BTreeSet<_> = comp.iter().collect();
     let mut prev: BTreeMap<&Vec<String>, &Vec<String>> = BTreeMap::new();
     let mut queue = std::collections::VecDeque::from([start]);

@@ -89,6 +89,10 @@ pub struct PixelSamples {
     pub rgb: Vec<[f64; 3]>,
 }
 
+/// A pixel a policy rendered its own way ([`Policy::render_own`]): mean
+/// RGB, image samples, pilot samples.
+pub type OwnPixel = ([f64; 3], u32, u32);
+
 /// How many samples a pixel takes: a first batch, then more while the
 /// policy asks for them.
 pub trait Policy: Sync {
@@ -111,7 +115,7 @@ pub trait Policy: Sync {
         _view: &View,
         _ids: &[u32],
         _estimate: bool,
-    ) -> Option<Result<Vec<([f64; 3], u32, u32)>, BackendError>> {
+    ) -> Option<Result<Vec<OwnPixel>, BackendError>> {
         None
     }
 }

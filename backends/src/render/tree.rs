@@ -35,7 +35,7 @@ use itgfx_core::pixel::{
     pixel_contrast, priority_colour,
 };
 
-use super::frame::{PILOT, PixelSamples, Policy, View};
+use super::frame::{OwnPixel, PILOT, PixelSamples, Policy, View};
 use super::path::{PathTracer, Start};
 use crate::lines::LineRng;
 use crate::tracer::BackendError;
@@ -101,7 +101,7 @@ impl Policy for Tree {
         view: &View,
         ids: &[u32],
         estimate: bool,
-    ) -> Option<Result<Vec<([f64; 3], u32, u32)>, BackendError>> {
+    ) -> Option<Result<Vec<OwnPixel>, BackendError>> {
         Some(render_tree(pt, view, self, ids, estimate))
     }
     fn unbiased(&self) -> bool {

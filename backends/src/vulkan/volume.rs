@@ -249,8 +249,9 @@ impl<'a> VulkanVolumeCaster<'a> {
             .map(|(i, &w)| if (2..5).contains(&i) { c.volume.dims[i - 2] as u32 } else { w })
             .flat_map(u32::to_le_bytes)
             .collect();
-        let buffers = [&self.consts, &self.data, &self.active, &st.rays, &st.samples, &st.state, &st.counts];
-        self.gpu.dispatch(&self.kernel, &buffers, &push, n.div_ceil(64))?;
+        let read = [&self.consts, &self.data, &self.active, &st.rays];
+        let write = &mut [&mut st.samples, &mut st.state, &mut st.counts];
+        self.gpu.dispatch(&self.kernel, &read, write, &push, n.div_ceil(64))?;
         let (samples, state) = (st.samples.bytes(), st.state.bytes());
         for (j, &(d, t1)) in dirs.iter().enumerate() {
             let word = st.counts.word(j);

@@ -43,7 +43,7 @@ pub struct DeviceInfo {
     pub heap_bytes: u64,
 }
 
-const FIX: &str = "install Mesa's Vulkan drivers (apt-get install mesa-vulkan-drivers libvulkan1) or a GPU driver, or use --backend cpu";
+const FIX: &str = "install Mesa's Vulkan drivers (apt-get install mesa-vulkan-drivers libvulkan1) or a GPU driver, or use the cpu backend";
 
 fn unavailable(reason: impl Into<String>) -> BackendError {
     BackendError::Unavailable { backend: "vulkan", reason: reason.into() }
@@ -269,7 +269,7 @@ impl Gpu {
             return Err(BackendError::TooLarge {
                 backend: "vulkan",
                 reason: format!(
-                    "a {bytes}-byte buffer exceeds this device's storage-buffer limit of {} bytes (at 48 bytes a triangle, about 2.8 million triangles on lavapipe); use --backend cpu",
+                    "a {bytes}-byte buffer exceeds this device's storage-buffer limit of {} bytes (at 48 bytes a triangle, about 2.8 million triangles on lavapipe); the cpu backend has no such limit",
                     self.info.max_storage_buffer_range
                 ),
             });

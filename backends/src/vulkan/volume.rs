@@ -134,7 +134,7 @@ impl<'a> VulkanVolumeCaster<'a> {
             return Err(BackendError::TooLarge {
                 backend: "vulkan",
                 reason: format!(
-                    "the volume caster needs {} MiB of device memory, the device has {} MiB; use --backend cpu",
+                    "the volume caster needs {} MiB of device memory, the device has {} MiB; the cpu backend has no such limit",
                     need >> 20,
                     gpu.info.heap_bytes >> 20
                 ),
@@ -145,7 +145,7 @@ impl<'a> VulkanVolumeCaster<'a> {
             return Err(BackendError::TooLarge {
                 backend: "vulkan",
                 reason: format!(
-                    "{} voxels take {} MiB as f32, over this device's storage-buffer limit of {} MiB; use --backend cpu",
+                    "{} voxels take {} MiB as f32, over this device's storage-buffer limit of {} MiB; the cpu backend has no such limit",
                     caster.volume.voxels(),
                     data_bytes >> 20,
                     gpu.info.max_storage_buffer_range >> 20

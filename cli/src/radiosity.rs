@@ -23,7 +23,7 @@ use crate::progress::Progress;
 use crate::render::images::{Radiance, read_exr, write_exr};
 use crate::report::Report;
 use crate::scene::load_scene;
-use crate::values::{count, out_path};
+use crate::values::{count, out_path, ranged, real};
 
 /// `itgfx radiosity SCENE`.
 #[derive(Debug, Args)]
@@ -105,15 +105,6 @@ pub struct RadiosityOptions {
     #[command(flatten)]
     #[allow(missing_docs)]
     pub common: Common,
-}
-
-fn real(s: &str) -> Result<f64, String> {
-    s.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| "is not a finite number".to_string())
-}
-
-fn ranged(s: &str, lo: u64, hi: u64) -> Result<u64, String> {
-    let v = count(s)?;
-    if (lo..=hi).contains(&v) { Ok(v) } else { Err(format!("must be in {lo}..={hi}")) }
 }
 
 fn oracle(s: &str) -> Result<Oracle, String> {

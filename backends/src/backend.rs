@@ -70,8 +70,20 @@ impl FromStr for BackendChoice {
 /// Opens a backend on a prepared scene.
 ///
 /// # Errors
-/// [`BackendError::Unavailable`] when Vulkan has no loader, driver or device.
+/// [`BackendError::Unavailable`] when Vulkan has no loader, driver or device;
+/// [`BackendError::TooLarge`] when the address space for the BVH build
+/// cannot be reserved ([`crate::memory::probe`]).
 pub fn open(choice: BackendChoice, scene: &Prepared) -> Result<Box<dyn Tracer>, BackendError> {
+    if choice != BackendChoice::Reference {
+        // Both build an obvhs BVH, which panics if an allocation fails: its
+        // peak address space is claimed (and given back) first.
+        let n = scene.triangles.len() as u64;
+        crate::memory::probe(
+            || format!("the BVH over {n} triangles"),
+            n.saturating_mul(crate::memory::BVH_BUILD_BYTES_PER_TRIANGLE),
+        )
+        .map_err(|e| BackendError::TooLarge { backend: choice.name(), reason: e.to_string() })?;
+    }
     match choice {
         BackendChoice::Cpu => Ok(Box::new(CpuTracer::new(scene))),
         BackendChoice::Reference => Ok(Box::new(ReferenceTracer::new(scene))),

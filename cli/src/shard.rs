@@ -51,41 +51,6 @@ pub fn parse(s: &str) -> Result<Shard, String> {
     Ok(Shard { index, count })
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn ranges_tile_the_run() {
-        for total in [1u64, 7, 100, 1_000_000_007, u64::MAX] {
-            for count in [1u64, 2, 3, 16, 97] {
-                if count > total {
-                    continue;
-                }
-                let mut next = 0;
-                let (mut lo, mut hi) = (u64::MAX, 0);
-                for index in 0..count {
-                    let r = Shard { index, count }.range(total);
-                    assert_eq!(r.start, next);
-                    next = r.end;
-                    lo = lo.min(r.end - r.start);
-                    hi = hi.max(r.end - r.start);
-                }
-                assert_eq!(next, total);
-                assert!(hi - lo <= 1 && lo >= 1);
-            }
-        }
-    }
-
-    #[test]
-    fn parse_refuses_what_is_not_a_shard() {
-        assert_eq!(parse("3/16"), Ok(Shard { index: 3, count: 16 }));
-        for bad in ["3", "16/16", "1/0", "-1/4", "a/4", "1/4/5", "0/4294967297"] {
-            assert!(parse(bad).is_err(), "{bad}");
-        }
-    }
-}
-
 /// A shard-file error in the CLI's words: each run setting named by the flag
 /// that sets it, and the merge's own refusals prefixed with `--merge`.
 #[must_use]
@@ -118,5 +83,40 @@ fn flag(s: itgfx_backends::shards::Setting) -> &'static str {
         Setting::Distance => "--distance",
         Setting::Levels => "subdivision levels",
         Setting::Resolution => "--resolution",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_tile_the_run() {
+        for total in [1u64, 7, 100, 1_000_000_007, u64::MAX] {
+            for count in [1u64, 2, 3, 16, 97] {
+                if count > total {
+                    continue;
+                }
+                let mut next = 0;
+                let (mut lo, mut hi) = (u64::MAX, 0);
+                for index in 0..count {
+                    let r = Shard { index, count }.range(total);
+                    assert_eq!(r.start, next);
+                    next = r.end;
+                    lo = lo.min(r.end - r.start);
+                    hi = hi.max(r.end - r.start);
+                }
+                assert_eq!(next, total);
+                assert!(hi - lo <= 1 && lo >= 1);
+            }
+        }
+    }
+
+    #[test]
+    fn parse_refuses_what_is_not_a_shard() {
+        assert_eq!(parse("3/16"), Ok(Shard { index: 3, count: 16 }));
+        for bad in ["3", "16/16", "1/0", "-1/4", "a/4", "1/4/5", "0/4294967297"] {
+            assert!(parse(bad).is_err(), "{bad}");
+        }
     }
 }

@@ -1,4 +1,11 @@
-//! The commands, one folder each (`<command>/args.rs`, `<command>/run.rs`).
-//! `radiosity` is the first moved here; the others follow the same layout.
+//! Commands laid out as `commands/<cmd>/{args,run}.rs`: the options clap
+//! parses, and the run. `radiosity` and `shapes` are here; the others follow
+//! the same layout.
 
 pub mod radiosity;
+
+/// `itgfx shapes`: shape descriptors and retrieval scores.
+pub mod shapes {
+    pub mod args;
+    pub mod run;
+}

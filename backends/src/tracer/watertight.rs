@@ -438,3 +438,64 @@ impl TriangleLanes {
         b
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lines::LineRng;
+    use crate::scene::built_in;
+    use crate::tracer::node8::has_avx2;
+
+    /// Every lane of a block, AVX2 or not, is the scalar test's answer to
+    /// the bit (`t`, crossed within `[tmin, tmax]`, barycentrics), for
+    /// random rays and for rays along the axes from grid points, which
+    /// meet vertices and edges exactly (the edge functions' exact zeros).
+    #[test]
+    fn blocks_match_the_scalar_test() {
+        let mut crossed = 0u64;
+        for spec in ["cornell-box", "cube-enclosure:4", "geosphere"] {
+            let p = Prepared::new(&built_in(spec).unwrap());
+            let tris = &p.triangles;
+            let lanes = TriangleLanes::new(tris);
+            for i in 0..3_000u64 {
+                let r = LineRng::new(17, i);
+                let grid = |k: u32| (r.uniform(k) * 8.0).floor() / 8.0 - 0.5;
+                let (o, d) = if i % 2 == 0 {
+                    let o = DVec3::new(grid(0), grid(1), grid(2));
+                    let mut d = DVec3::ZERO;
+                    d[(i / 2 % 3) as usize] = if i % 4 == 0 { 1.0 } else { -1.0 };
+                    (o, d)
+                } else {
+                    let o = DVec3::new(r.uniform(0), r.uniform(1), r.uniform(2)) - 0.5;
+                    (o, DVec3::new(r.uniform(3) - 0.5, r.uniform(4) - 0.5, r.uniform(5) - 0.5).normalize())
+                };
+                let l = Line::ray(o, d, 0.0, 0.2 + r.uniform(6));
+                let (shear, _) = Shear::of(&l);
+                for first in (0..tris.len()).step_by(BLOCK) {
+                    let n = (tris.len() - first).min(BLOCK);
+                    let all = (1u32 << n) - 1;
+                    // SAFETY: `true` only where the CPU has AVX2.
+                    let blocks = unsafe {
+                        [
+                            Some(lanes.block::<false>(tris, &shear, first, all, l.tmin, l.tmax)),
+                            has_avx2().then(|| lanes.block::<true>(tris, &shear, first, all, l.tmin, l.tmax)),
+                        ]
+                    };
+                    for b in blocks.iter().flatten() {
+                        for k in 0..n {
+                            let (t, within) = shear.hit_within(&tris[first + k], l.tmin, l.tmax);
+                            assert_eq!(b.hit >> k & 1 == 1, within, "{spec} ray {i} triangle {}", first + k);
+                            if within {
+                                crossed += 1;
+                                assert_eq!(b.t[k].to_bits(), t.to_bits());
+                                let (_, bary) = shear.hit_barycentric(&tris[first + k]).unwrap();
+                                assert_eq!(b.barycentric(k).map(f32::to_bits), bary.map(f32::to_bits));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(crossed > 1_000, "only {crossed} crossings compared");
+    }
+}

@@ -9,7 +9,8 @@ use obvhs::ray::Ray;
 
 use super::packet::{self, LANES};
 use super::watertight::{
-    Shear, before, finish, push_crossing, sphere_crossings, sphere_hit, triangle_hit, walk_direction,
+    BLOCK, Block, Shear, TriangleLanes, before, finish, push_crossing, sphere_crossings, sphere_hit, triangle_hit,
+    walk_direction,
 };
 use super::{BackendError, CrossingBuffer, Hit, Prepared, Tracer};
 use super::{interleave, node8};
@@ -41,6 +42,8 @@ pub struct CpuTracer {
     /// `bvh.primitive_indices[k]`): a leaf's candidates lie side by side in
     /// memory instead of behind an indirection each.
     ordered: Vec<[Vec3A; 3]>,
+    /// `ordered` as a structure of arrays for the 8-wide triangle test.
+    lanes: TriangleLanes,
     /// Whether the 8-lane AVX2 node test is used (`node8`).
     avx2: bool,
     /// Whether `trace_all` interleaves walks (`interleave.rs`): AVX2 and
@@ -93,14 +96,38 @@ impl CpuTracer {
         let bounds = ((lo + hi) * 0.5, (hi - lo) * 0.5 + BOUNDS_PAD);
         let avx2 = node8::has_avx2();
         let interleave = avx2 && scene.sphere.is_none();
-        Self { scene: scene.clone(), bvh, ordered, avx2, interleave, bounds }
+        let lanes = TriangleLanes::new(&ordered);
+        Self { scene: scene.clone(), bvh, ordered, lanes, avx2, interleave, bounds }
     }
 
     /// The first crossing of one line: the walk shrinks the interval as hits
-    /// are found, and ties in `t` go to the smaller triangle. The barycentrics
-    /// are taken when a candidate becomes the best (the same arithmetic as
-    /// [`triangle_hit`]'s, with the same shear: the same [`Hit`] to the bit).
+    /// are found, and ties in `t` go to the smaller triangle. Each node's
+    /// leaf triangles are tested eight at a time ([`TriangleLanes::block`],
+    /// [`Shear::hit`]'s arithmetic per lane), and the best one's
+    /// barycentrics are kept from its block, not recomputed (the same
+    /// [`Hit`] as [`triangle_hit`]'s, to the bit).
     pub(crate) fn closest(&self, l: &Line) -> Option<Hit> {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `self.avx2` came from `has_avx2()`.
+            return unsafe { self.closest_avx2(l) };
+        }
+        self.closest_with::<false>(l)
+    }
+
+    /// [`CpuTracer::closest`] compiled for AVX2, the walk, the triangle
+    /// blocks and the bookkeeping in one function.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn closest_avx2(&self, l: &Line) -> Option<Hit> {
+        self.closest_with::<true>(l)
+    }
+
+    #[inline(always)]
+    fn closest_with<const AVX2: bool>(&self, l: &Line) -> Option<Hit> {
         if let Some(s) = &self.scene.sphere {
             return sphere_hit(s, l);
         }
@@ -109,24 +136,27 @@ impl CpuTracer {
         let mut best: Option<(f32, u32)> = None;
         let mut barycentric = [0.0f32; 2];
         let ray = Ray::new(Vec3A::from(l.origin), dir, l.tmin, l.tmax);
-        node8::traverse(bvh, &ray, self.avx2, |k, tmax| {
-            if let Some(t) = shear.hit(&self.ordered[k as usize])
-                && t >= l.tmin
-                && t <= l.tmax
-            {
-                let tri = bvh.primitive_indices[k as usize];
-                if before(t, tri, best)
-                    && let Some((_, b)) = shear.hit_barycentric(&self.ordered[k as usize])
-                {
-                    best = Some((t, tri));
-                    barycentric = b;
+        let group = |first, mask, tmax: &mut f32| {
+            self.blocks::<AVX2>(&shear, l, first, mask, |block, base| {
+                let mut h = block.hit;
+                while h != 0 {
+                    let i = h.trailing_zeros() as usize;
+                    h &= h - 1;
+                    let t = block.t[i];
+                    let tri = bvh.primitive_indices[base + i];
+                    if before(t, tri, best) {
+                        best = Some((t, tri));
+                        barycentric = block.barycentric(i);
+                    }
+                    if t < *tmax {
+                        *tmax = t;
+                    }
                 }
-                if t < *tmax {
-                    *tmax = t;
-                }
-            }
-            false
-        });
+                false
+            })
+        };
+        // SAFETY: `AVX2` is true only in `closest_avx2`, entered after `has_avx2()`.
+        unsafe { node8::walk_groups::<AVX2, _>(bvh, &ray, group) };
         best.map(|(t, tri)| {
             let n = self.scene.normals[tri as usize];
             Hit {
@@ -140,7 +170,29 @@ impl CpuTracer {
         })
     }
 
+    /// Whether `l` crosses anything: the walk ends at the first block with
+    /// a crossing.
     fn any(&self, l: &Line) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `self.avx2` came from `has_avx2()`.
+            return unsafe { self.any_avx2(l) };
+        }
+        self.any_with::<false>(l)
+    }
+
+    /// [`CpuTracer::any`] compiled for AVX2.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn any_avx2(&self, l: &Line) -> bool {
+        self.any_with::<true>(l)
+    }
+
+    #[inline(always)]
+    fn any_with<const AVX2: bool>(&self, l: &Line) -> bool {
         if let Some(s) = &self.scene.sphere {
             return sphere_hit(s, l).is_some();
         }
@@ -148,11 +200,41 @@ impl CpuTracer {
         let (shear, dir) = Shear::of(l);
         let mut hit = false;
         let ray = Ray::new(Vec3A::from(l.origin), dir, l.tmin, l.tmax);
-        node8::traverse(bvh, &ray, self.avx2, |k, _| {
-            hit = matches!(shear.hit(&self.ordered[k as usize]), Some(t) if t >= l.tmin && t <= l.tmax);
+        let group = |first, mask, _: &mut f32| {
+            hit = self.blocks::<AVX2>(&shear, l, first, mask, |block, _| block.hit != 0);
             hit
-        });
+        };
+        // SAFETY: `AVX2` is true only in `any_avx2`, entered after `has_avx2()`.
+        unsafe { node8::walk_groups::<AVX2, _>(bvh, &ray, group) };
         hit
+    }
+
+    /// Tests a node's primitive group (primitive `first + i` for each bit
+    /// `i` of `mask`, below 24) against `l`, a [`Block`] of up to eight
+    /// triangles at a time, handing each to `each(block, first triangle)`;
+    /// stops, returning `true`, when `each` does.
+    #[inline(always)]
+    fn blocks<const AVX2: bool>(
+        &self,
+        shear: &Shear,
+        l: &Line,
+        first: u32,
+        mask: u32,
+        mut each: impl FnMut(&Block, usize) -> bool,
+    ) -> bool {
+        let mut m = mask;
+        while m != 0 {
+            let b = m.trailing_zeros() / BLOCK as u32;
+            let lanes = (m >> (b * BLOCK as u32)) & 0xff;
+            m &= !(0xff << (b * BLOCK as u32));
+            let base = first as usize + (b as usize) * BLOCK;
+            // SAFETY: `AVX2` is true only in the `*_avx2` callers, entered after `has_avx2()`.
+            let block = unsafe { self.lanes.block::<AVX2>(&self.ordered, shear, base, lanes, l.tmin, l.tmax) };
+            if each(&block, base) {
+                return true;
+            }
+        }
+        false
     }
 }
 

@@ -140,6 +140,65 @@ pub(crate) fn traverse<F: FnMut(u32, &mut f32) -> bool>(bvh: &CwBvh, ray: &Ray, 
     walk::<false, F>(bvh, ray, prim);
 }
 
+/// [`walk`] by primitive groups: `group(first, mask, &mut tmax)` gets all
+/// the candidates a node's leaf children hold at once (primitive
+/// `first + i` for each bit `i` of `mask`, below 24), in the order obvhs's
+/// `traverse!` reaches them; the same nodes as [`walk`] for the same
+/// `tmax` updates. Returns `true` from `group` to end the walk.
+///
+/// # Safety
+/// `AVX2` (the 8-lane node test) only where the CPU has AVX2 ([`has_avx2`]).
+#[inline(always)]
+pub(super) unsafe fn walk_groups<const AVX2: bool, F: FnMut(u32, u32, &mut f32) -> bool>(
+    bvh: &CwBvh,
+    ray: &Ray,
+    mut group: F,
+) {
+    use obvhs::faststack::FastStack;
+    let mut r = *ray;
+    let mut state = bvh.new_traversal(ray.direction);
+    // obvhs's `traverse!`, with its inner loop over one primitive group
+    // handed to `group` whole.
+    loop {
+        if state.primitive_group.y != 0 && group(state.primitive_group.x, state.primitive_group.y, &mut r.tmax) {
+            return;
+        }
+        state.primitive_group = UVec2::ZERO;
+        if state.current_group.y & 0xff00_0000 != 0 {
+            let hits_imask = state.current_group.y;
+            let child_index_offset = obvhs::cwbvh::firstbithigh(hits_imask);
+            let child_index_base = state.current_group.x;
+            state.current_group.y &= !(1u32 << child_index_offset);
+            if state.current_group.y & 0xff00_0000 != 0 {
+                state.stack.push(state.current_group);
+            }
+            let slot_index = (child_index_offset - 24) ^ (state.oct_inv4 & 0xff);
+            let relative_index = (hits_imask & !(0xffff_ffffu32 << slot_index)).count_ones();
+            let node = &bvh.nodes[(child_index_base + relative_index) as usize];
+            #[cfg(target_arch = "x86_64")]
+            let hitmask = if AVX2 {
+                // SAFETY: `AVX2` is true only where the CPU has AVX2
+                // (this function's contract).
+                unsafe { intersect8(node, &r, state.oct_inv4) }
+            } else {
+                node.intersect_ray(&r, state.oct_inv4)
+            };
+            #[cfg(not(target_arch = "x86_64"))]
+            let hitmask = node.intersect_ray(&r, state.oct_inv4);
+            state.current_group = UVec2::new(node.child_base_idx, (hitmask & 0xff00_0000) | u32::from(node.imask));
+            state.primitive_group = UVec2::new(node.primitive_base_idx, hitmask & 0x00ff_ffff);
+        } else {
+            state.current_group = UVec2::ZERO;
+        }
+        if state.primitive_group.y == 0 && (state.current_group.y & 0xff00_0000) == 0 {
+            if state.stack.is_empty() {
+                return;
+            }
+            state.current_group = state.stack.pop_fast();
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -246,3 +246,260 @@ pub(crate) fn sphere_crossings(s: &SphereCells, l: &Line, hits: &mut Vec<Crossin
         }
     }
 }
+
+/// Blocks of triangles laid out for the 8-wide watertight test: each
+/// vertex coordinate in its own array (structure of arrays), so one load
+/// fetches one coordinate of eight consecutive triangles. Indexed like the
+/// CPU backend's BVH-ordered triangles (`k`); padded with zeros so a block
+/// read at any `k < len` stays in bounds.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct TriangleLanes {
+    /// `coord[axis][vertex][k]`.
+    coord: [[Vec<f32>; 3]; 3],
+}
+
+/// Lanes of a [`TriangleLanes`] block.
+pub(crate) const BLOCK: usize = 8;
+
+/// One block's answers: `t` and the raw barycentric numerators and
+/// determinant of each lane, and the lanes crossed within `[tmin, tmax]`.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Block {
+    pub(crate) t: [f32; BLOCK],
+    w1: [f32; BLOCK],
+    w2: [f32; BLOCK],
+    det: [f32; BLOCK],
+    /// Bit `i`: lane `i` crosses within `[tmin, tmax]`.
+    pub(crate) hit: u32,
+}
+
+impl Block {
+    /// Barycentric weights of vertices 1 and 2 of lane `i`'s triangle:
+    /// [`Shear::hit_barycentric`]'s, to the bit.
+    #[inline]
+    pub(crate) fn barycentric(&self, i: usize) -> [f32; 2] {
+        [self.w1[i] / self.det[i], self.w2[i] / self.det[i]]
+    }
+
+    /// Lane `i` from the scalar test (its exact-zero re-evaluation included).
+    #[inline]
+    fn set_scalar(&mut self, i: usize, shear: &Shear, v: &[Vec3A; 3], tmin: f32, tmax: f32) {
+        let (r, crossed) = shear.raw_always(v);
+        let t = r.num / r.det;
+        self.t[i] = t;
+        self.w1[i] = r.w[1];
+        self.w2[i] = r.w[2];
+        self.det[i] = r.det;
+        let within = crossed & (t >= tmin) & (t <= tmax);
+        self.hit = (self.hit & !(1 << i)) | (u32::from(within) << i);
+    }
+}
+
+impl TriangleLanes {
+    /// The triangles `ordered` (in the order blocks will index them).
+    pub(crate) fn new(ordered: &[[Vec3A; 3]]) -> Self {
+        let mut coord: [[Vec<f32>; 3]; 3] = Default::default();
+        for (axis, per_vertex) in coord.iter_mut().enumerate() {
+            for (vertex, c) in per_vertex.iter_mut().enumerate() {
+                c.extend(ordered.iter().map(|t| t[vertex][axis]));
+                c.resize(ordered.len() + BLOCK, 0.0);
+            }
+        }
+        Self { coord }
+    }
+
+    /// [`Shear::hit_within`] for the triangles `first + i` with bit `i` of
+    /// `lanes` set (`first + i < len`), one lane each: the same `t` to the
+    /// bit, and the hits among `lanes`. `ordered` is the array `self` was
+    /// built from (its exact-zero lanes are finished by the scalar test).
+    ///
+    /// # Safety
+    /// `AVX2` only where the CPU has AVX2 (`node8::has_avx2`).
+    #[inline(always)]
+    pub(crate) unsafe fn block<const AVX2: bool>(
+        &self,
+        ordered: &[[Vec3A; 3]],
+        shear: &Shear,
+        first: usize,
+        lanes: u32,
+        tmin: f32,
+        tmax: f32,
+    ) -> Block {
+        #[cfg(target_arch = "x86_64")]
+        if AVX2 {
+            // SAFETY: `AVX2` is true only where the CPU has AVX2 (this
+            // function's contract).
+            return unsafe { self.block_avx2(ordered, shear, first, lanes, tmin, tmax) };
+        }
+        let mut b = Block::default();
+        let mut l = lanes;
+        while l != 0 {
+            let i = l.trailing_zeros() as usize;
+            l &= l - 1;
+            b.set_scalar(i, shear, &ordered[first + i], tmin, tmax);
+        }
+        b
+    }
+
+    /// [`TriangleLanes::block`] with AVX2: [`Shear::raw_always`]'s
+    /// operations lane by lane in the same order (no fused multiply-add).
+    ///
+    /// Always inlined, so that in the AVX2-compiled walks (`closest_avx2`,
+    /// `any_avx2`) its intrinsics become single instructions with no call
+    /// and no `Block` through memory (as a `target_feature` function it
+    /// stayed out of line at some call sites: 7% of a render).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2; `first < len`.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn block_avx2(
+        &self,
+        ordered: &[[Vec3A; 3]],
+        shear: &Shear,
+        first: usize,
+        lanes: u32,
+        tmin: f32,
+        tmax: f32,
+    ) -> Block {
+        use std::arch::x86_64::{
+            __m256, _CMP_EQ_OQ, _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_NEQ_UQ, _mm256_add_ps,
+            _mm256_and_ps, _mm256_andnot_ps, _mm256_cmp_ps, _mm256_div_ps, _mm256_loadu_ps, _mm256_movemask_ps,
+            _mm256_mul_ps, _mm256_or_ps, _mm256_set1_ps, _mm256_setzero_ps, _mm256_storeu_ps, _mm256_sub_ps,
+        };
+        // SAFETY: the CPU has AVX2 (this function's contract); the loads
+        // and stores stay in bounds (see each).
+        unsafe {
+            let [kx, ky, kz] = shear.k;
+            let [ox, oy, oz] = shear.org_k.map(|o| _mm256_set1_ps(o));
+            let [sx, sy, sz] = shear.s.map(|s| _mm256_set1_ps(s));
+            assert!(first + BLOCK <= self.coord[0][0].len(), "a block past the padding");
+            let (px, py, pz) = (&self.coord[kx], &self.coord[ky], &self.coord[kz]);
+            // `rel` then the shear, as `Shear::raw_always`.
+            let (mut x, mut y, mut z) = ([_mm256_setzero_ps(); 3], [_mm256_setzero_ps(); 3], [_mm256_setzero_ps(); 3]);
+            for j in 0..3 {
+                // `first + 8 <= len` (asserted above; every array has the same
+                // padded length); unaligned loads are allowed.
+                let (rx, ry, rz) = (
+                    _mm256_sub_ps(_mm256_loadu_ps(px[j].as_ptr().add(first)), ox),
+                    _mm256_sub_ps(_mm256_loadu_ps(py[j].as_ptr().add(first)), oy),
+                    _mm256_sub_ps(_mm256_loadu_ps(pz[j].as_ptr().add(first)), oz),
+                );
+                x[j] = _mm256_sub_ps(rx, _mm256_mul_ps(sx, rz));
+                y[j] = _mm256_sub_ps(ry, _mm256_mul_ps(sy, rz));
+                z[j] = rz;
+            }
+            let ([ax, bx, cx], [ay, by, cy], [az, bz, cz]) = (x, y, z);
+            let u = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
+            let w = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
+            let vv = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
+            let zero = _mm256_setzero_ps();
+            let or3 = |a: __m256, b: __m256, c: __m256| _mm256_or_ps(_mm256_or_ps(a, b), c);
+            let exact = or3(
+                _mm256_cmp_ps::<_CMP_EQ_OQ>(u, zero),
+                _mm256_cmp_ps::<_CMP_EQ_OQ>(vv, zero),
+                _mm256_cmp_ps::<_CMP_EQ_OQ>(w, zero),
+            );
+            let exact = _mm256_movemask_ps(exact) as u32 & lanes;
+            let neg = or3(
+                _mm256_cmp_ps::<_CMP_LT_OQ>(u, zero),
+                _mm256_cmp_ps::<_CMP_LT_OQ>(vv, zero),
+                _mm256_cmp_ps::<_CMP_LT_OQ>(w, zero),
+            );
+            let pos = or3(
+                _mm256_cmp_ps::<_CMP_GT_OQ>(u, zero),
+                _mm256_cmp_ps::<_CMP_GT_OQ>(vv, zero),
+                _mm256_cmp_ps::<_CMP_GT_OQ>(w, zero),
+            );
+            let det = _mm256_add_ps(_mm256_add_ps(u, vv), w);
+            let num = _mm256_add_ps(
+                _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(u, sz), az), _mm256_mul_ps(_mm256_mul_ps(vv, sz), bz)),
+                _mm256_mul_ps(_mm256_mul_ps(w, sz), cz),
+            );
+            let t = _mm256_div_ps(num, det);
+            // Rust's `det != 0.0` is true for NaN: the unordered comparison.
+            let crossed = _mm256_andnot_ps(_mm256_and_ps(neg, pos), _mm256_cmp_ps::<_CMP_NEQ_UQ>(det, zero));
+            let within = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_GE_OQ>(t, _mm256_set1_ps(tmin)),
+                _mm256_cmp_ps::<_CMP_LE_OQ>(t, _mm256_set1_ps(tmax)),
+            );
+            let mut b = Block {
+                hit: _mm256_movemask_ps(_mm256_and_ps(crossed, within)) as u32 & lanes & !exact,
+                ..Block::default()
+            };
+            // Each store writes one [f32; 8] (unaligned stores are allowed).
+            _mm256_storeu_ps(b.t.as_mut_ptr(), t);
+            _mm256_storeu_ps(b.w1.as_mut_ptr(), vv);
+            _mm256_storeu_ps(b.w2.as_mut_ptr(), w);
+            _mm256_storeu_ps(b.det.as_mut_ptr(), det);
+            let mut l = exact;
+            while l != 0 {
+                let i = l.trailing_zeros() as usize;
+                l &= l - 1;
+                b.set_scalar(i, shear, &ordered[first + i], tmin, tmax);
+            }
+            b
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lines::LineRng;
+    use crate::scene::built_in;
+    use crate::tracer::node8::has_avx2;
+
+    /// Every lane of a block, AVX2 or not, is the scalar test's answer to
+    /// the bit (`t`, crossed within `[tmin, tmax]`, barycentrics), for
+    /// random rays and for rays along the axes from grid points, which
+    /// meet vertices and edges exactly (the edge functions' exact zeros).
+    #[test]
+    fn blocks_match_the_scalar_test() {
+        let mut crossed = 0u64;
+        for spec in ["cornell-box", "cube-enclosure:4", "geosphere"] {
+            let p = Prepared::new(&built_in(spec).unwrap());
+            let tris = &p.triangles;
+            let lanes = TriangleLanes::new(tris);
+            for i in 0..3_000u64 {
+                let r = LineRng::new(17, i);
+                let grid = |k: u32| (r.uniform(k) * 8.0).floor() / 8.0 - 0.5;
+                let (o, d) = if i % 2 == 0 {
+                    let o = DVec3::new(grid(0), grid(1), grid(2));
+                    let mut d = DVec3::ZERO;
+                    d[(i / 2 % 3) as usize] = if i % 4 == 0 { 1.0 } else { -1.0 };
+                    (o, d)
+                } else {
+                    let o = DVec3::new(r.uniform(0), r.uniform(1), r.uniform(2)) - 0.5;
+                    (o, DVec3::new(r.uniform(3) - 0.5, r.uniform(4) - 0.5, r.uniform(5) - 0.5).normalize())
+                };
+                let l = Line::ray(o, d, 0.0, 0.2 + r.uniform(6));
+                let (shear, _) = Shear::of(&l);
+                for first in (0..tris.len()).step_by(BLOCK) {
+                    let n = (tris.len() - first).min(BLOCK);
+                    let all = (1u32 << n) - 1;
+                    // SAFETY: `true` only where the CPU has AVX2.
+                    let blocks = unsafe {
+                        [
+                            Some(lanes.block::<false>(tris, &shear, first, all, l.tmin, l.tmax)),
+                            has_avx2().then(|| lanes.block::<true>(tris, &shear, first, all, l.tmin, l.tmax)),
+                        ]
+                    };
+                    for b in blocks.iter().flatten() {
+                        for k in 0..n {
+                            let (t, within) = shear.hit_within(&tris[first + k], l.tmin, l.tmax);
+                            assert_eq!(b.hit >> k & 1 == 1, within, "{spec} ray {i} triangle {}", first + k);
+                            if within {
+                                crossed += 1;
+                                assert_eq!(b.t[k].to_bits(), t.to_bits());
+                                let (_, bary) = shear.hit_barycentric(&tris[first + k]).unwrap();
+                                assert_eq!(b.barycentric(k).map(f32::to_bits), bary.map(f32::to_bits));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(crossed > 1_000, "only {crossed} crossings compared");
+    }
+}

@@ -352,7 +352,9 @@ pub fn permute(mut i: u32, len: u32, key: u32) -> u32 {
             break;
         }
     }
-    (i.wrapping_add(p)) % len
+    let j = i.wrapping_add(p);
+    // For a power of two `len == w + 1`: the same remainder without a division.
+    if len.is_power_of_two() { j & w } else { j % len }
 }
 
 /// Index of the first element of the cumulative sums `cdf` exceeding `x`.

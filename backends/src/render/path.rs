@@ -41,6 +41,12 @@ use crate::tracer::{BackendError, Prepared, Tracer};
 /// `a × b` strata of a batch of `n` samples: `a` the largest divisor ≤ √n.
 #[must_use]
 pub fn strata(n: u32) -> (u32, u32) {
+    if n.is_power_of_two() {
+        // The same grid without the square root and divisions: for `n = 2^k`
+        // the largest divisor ≤ √n is `2^⌊k/2⌋`.
+        let k = n.trailing_zeros();
+        return (1 << (k / 2), n >> (k / 2));
+    }
     let mut a = (f64::from(n).sqrt() as u32).max(1);
     while a > 1 && !n.is_multiple_of(a) {
         a -= 1;
@@ -105,10 +111,20 @@ impl Stratum {
     #[inline]
     fn place(&self, (a, b): (u32, u32), which: u32, u: f32, v: f32) -> (f32, f32) {
         let cell = permute(self.index, self.count, pcg(self.key ^ which));
-        let (cx, cy) = (cell % a, cell / a);
         // `cx + u` can round up to `cx + 1`: keep the draw below 1.
         let below_one = 1.0 - f32::EPSILON / 2.0;
-        (((cx as f32 + u) / a as f32).min(below_one), ((cy as f32 + v) / b as f32).min(below_one))
+        let (x, y) = if a.is_power_of_two() && b.is_power_of_two() {
+            // The same numbers without divisions (they were most of this
+            // function's time): shifts and masks, and multiplying by `1/a`,
+            // which is exact for a power of two, so equals dividing by `a`.
+            let (ka, kb) = (a.trailing_zeros(), b.trailing_zeros());
+            let inv = |k: u32| f32::from_bits((127 - k) << 23);
+            (((cell & (a - 1)) as f32 + u) * inv(ka), ((cell >> ka) as f32 + v) * inv(kb))
+        } else {
+            let (cx, cy) = (cell % a, cell / a);
+            ((cx as f32 + u) / a as f32, (cy as f32 + v) / b as f32)
+        };
+        (x.min(below_one), y.min(below_one))
     }
 }
 

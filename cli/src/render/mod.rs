@@ -76,7 +76,8 @@ pub struct RenderOptions {
     pub binary_contrast: bool,
     /// Also write the pixel quality and contrast maps of an 8-spp pass (Part IV §3-4, Figs. 1-6):
     /// quality.png, geometry-quality.png, contrast.png, colour-contrast.png, binary-contrast.png,
-    /// geometry-contrast.png, quality.exr, contrast.exr
+    /// geometry-contrast.png, geometry-binary-contrast.png (eq. 21), geometry-log-contrast.png
+    /// (eq. 22), quality.exr, contrast.exr, geometry-contrast.exr
     #[arg(long)]
     pub maps: bool,
     /// Also write variance.exr: each pixel's sample variance per channel (of the samples averaged

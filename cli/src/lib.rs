@@ -2,6 +2,7 @@
 //! reports, and the commands themselves (the binary is a thin `main`).
 
 pub mod clap_error;
+pub mod commands;
 pub mod complexity;
 pub mod devices;
 pub mod export;

@@ -11,6 +11,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::counts_valid::SceneFingerprint;
+pub use super::counts_valid::block_lines;
 use super::pairs::{Accumulator, key, sym_key};
 use super::{BlockCounts, ContinuousSums, CountsError, FixedSum, LineOptions, MAX_BLOCKS, VisibilityCounts};
 use crate::lines::{Line, LineRng, SeedHash, cosine_direction, global_lines_of, sample_cdf};
@@ -352,14 +353,6 @@ fn first_past_origin(
         }
     }
     Ok(out)
-}
-
-/// The lines of block `b` of `blocks` in `[start, end)`: the first index
-/// `i ≡ b (mod blocks)` and how many there are (stride `blocks`).
-#[must_use]
-pub fn block_lines(start: u64, end: u64, b: u64, blocks: u64) -> (u64, u64) {
-    let first = start.saturating_add((b + blocks - start % blocks) % blocks);
-    if first >= end { (first, 0) } else { (first, (end - 1 - first) / blocks + 1) }
 }
 
 /// Casts the lines `offset .. offset + lines` through `tracer` and counts

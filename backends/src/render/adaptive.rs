@@ -5,8 +5,7 @@
 //!    `0..PILOT`). They stay in the pixel's value.
 //! 2. **Allocation**: a pixel's weight is the display-space noise of its
 //!    *neighbours'* pilot samples (the `(2R + 1)² − 1` pixels around it,
-//!    itself excluded): the power mean of order 4 ([`neighbour_weights`])
-//!    of their per-sample deviations of
+//!    itself excluded): the root of their mean per-sample variance of
 //!    `255 · sRGB(L)` to first order (the 8-bit values RMSE_a of Part IV
 //!    Table 2 is taken on), channels weighted equally. Since a pixel's
 //!    display error at `n` samples is about that deviation over `√n`, a
@@ -95,15 +94,8 @@ fn display_variance(s: &[[f64; 3]]) -> f64 {
     (0..3).map(|c| (255.0 * srgb_slope(m[c])).powi(2) * v[c]).sum::<f64>() / 3.0
 }
 
-/// The weight of every pixel: the power mean of order 4 of its neighbours'
-/// pilot display deviations, `(mean_q s_q⁴)^(1/4)` with `s_q²` a neighbour's
-/// display variance (see the module notes). Order 4 leans towards the
-/// noisiest neighbours (a pixel beside a noisy edge is likelier noisy than
-/// the mean says): on `open-sphere` it gave 0.733, 0.720, 0.734, 0.741,
-/// 0.725 × uniform's RMSE_a at seeds 11–15 against order 2's (the root of
-/// the mean variance) 0.744, 0.727, 0.752, 0.757, 0.730; `open-blocks` the
-/// same (0.664, 0.681, 0.676 against 0.665, 0.689, 0.670 at seeds 13–15);
-/// 4,096-spp reference of seed 2000, not the table's.
+/// The weight of every pixel: the root of the mean display variance of its
+/// neighbours' pilots (see the module notes).
 #[must_use]
 pub fn neighbour_weights(display_variance: &[f64], width: u32, height: u32) -> Vec<f64> {
     let (w, h) = (i64::from(width), i64::from(height));
@@ -114,12 +106,12 @@ pub fn neighbour_weights(display_variance: &[f64], width: u32, height: u32) -> V
             for ny in (y - RADIUS).max(0)..=(y + RADIUS).min(h - 1) {
                 for nx in (x - RADIUS).max(0)..=(x + RADIUS).min(w - 1) {
                     if (nx, ny) != (x, y) {
-                        acc += display_variance[(ny * w + nx) as usize].powi(2);
+                        acc += display_variance[(ny * w + nx) as usize];
                         n += 1;
                     }
                 }
             }
-            if n == 0 { 0.0 } else { (acc / f64::from(n)).sqrt().sqrt() }
+            if n == 0 { 0.0 } else { (acc / f64::from(n)).sqrt() }
         })
         .collect()
 }
@@ -264,11 +256,10 @@ mod tests {
     #[test]
     fn weights_ignore_the_pixel_itself() {
         // A single noisy pixel in a flat image: its own weight stays 0, its
-        // eight and sixteen neighbours get the power mean of order 4 of its
-        // deviation 24^(1/4) over their 24 neighbours: (24 / 24)^(1/4) = 1.
+        // eight and sixteen neighbours get its variance spread over theirs.
         let (w, h) = (7u32, 7u32);
         let mut dv = vec![0.0; 49];
-        dv[3 * 7 + 3] = 24f64.sqrt();
+        dv[3 * 7 + 3] = 24.0;
         let wt = neighbour_weights(&dv, w, h);
         assert_eq!(wt[3 * 7 + 3], 0.0);
         assert!((wt[3 * 7 + 4] - 1.0).abs() < 1e-12, "{}", wt[3 * 7 + 4]);

@@ -47,11 +47,9 @@ def itgfx_register(exe, d, bins, sigmas, metric="mi"):
     return v["angle_deg"], v["tx"], v["ty"], v["seconds"], wall, v["iterations"]
 
 
-def sitk_register(d, bins, sigmas):
-    fixed = sitk.ReadImage(f"{d}/fixed.png", sitk.sitkFloat32)
-    moving = sitk.ReadImage(f"{d}/moving.png", sitk.sitkFloat32)
-    tx = sitk.CenteredTransformInitializer(fixed, moving, sitk.Euler2DTransform(),
-                                           sitk.CenteredTransformInitializerFilter.GEOMETRY)
+def sitk_method(bins, sigmas):
+    """Mattes MI on every pixel, linear interpolation, ImageRegistration4's regular-step gradient
+    descent, scales from physical shift, shrink 4,2,1 with `sigmas` in pixels (also used in 3D)."""
     r = sitk.ImageRegistrationMethod()
     r.SetMetricAsMattesMutualInformation(numberOfHistogramBins=bins)
     r.SetMetricSamplingStrategy(r.NONE)
@@ -62,6 +60,15 @@ def sitk_register(d, bins, sigmas):
     r.SetShrinkFactorsPerLevel([4, 2, 1])
     r.SetSmoothingSigmasPerLevel(sigmas)
     r.SmoothingSigmasAreSpecifiedInPhysicalUnitsOff()
+    return r
+
+
+def sitk_register(d, bins, sigmas):
+    fixed = sitk.ReadImage(f"{d}/fixed.png", sitk.sitkFloat32)
+    moving = sitk.ReadImage(f"{d}/moving.png", sitk.sitkFloat32)
+    tx = sitk.CenteredTransformInitializer(fixed, moving, sitk.Euler2DTransform(),
+                                           sitk.CenteredTransformInitializerFilter.GEOMETRY)
+    r = sitk_method(bins, sigmas)
     r.SetInitialTransform(tx, inPlace=False)
     t = time.perf_counter()
     out = r.Execute(fixed, moving)

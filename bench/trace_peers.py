@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """All crossings of the same global lines with Embree and Mitsuba 3, for BENCHMARKS.md.
 
-Usage:  python3 bench/trace_peers.py DIR [--lines N] [--no-mitsuba]
+Usage:  python3 bench/trace_peers.py DIR [--lines N] [--no-mitsuba] [--entry-exit] [--repeat R]
 DIR holds scene.obj and lines.f32 written by
   cargo bench -p itgfx-backends --bench trace -- SCENE N --export DIR
 Each peer finds every crossing of each line by repeated closest-hit queries
@@ -32,7 +32,7 @@ def load(d, n=None):
 
 
 def embree_worker(args):
-    d, lo, hi = args
+    d, lo, hi, depth, repeat = args
     from embreex import rtcore_scene as rtcs
     from embreex.mesh_construction import TriangleMesh
     v, f, raw = load(d)
@@ -40,30 +40,33 @@ def embree_worker(args):
     scene = rtcs.EmbreeScene()
     TriangleMesh(scene, v[f].astype(np.float32))
     t0, c0 = time.perf_counter(), time.process_time()
-    org = raw[:, 0:3].astype(np.float32).copy()
-    dirs = raw[:, 3:6].astype(np.float32).copy()
-    tmax = raw[:, 6].astype(np.float32)
-    tnear = np.zeros(len(raw), dtype=np.float32)
-    alive = np.arange(len(raw))
     crossings = 0
-    while len(alive):
-        res = scene.run(org[alive], dirs[alive], output=1, dists=tmax[alive] - tnear[alive])
-        hit = res["geomID"] >= 0
-        crossings += int(hit.sum())
-        idx = alive[hit]
-        t = res["tfar"][hit]
-        org[idx] += dirs[idx] * (t + EPS)[:, None]
-        tnear[idx] += t + EPS
-        alive = idx
+    for _ in range(repeat):
+        org = raw[:, 0:3].astype(np.float32).copy()
+        dirs = raw[:, 3:6].astype(np.float32).copy()
+        tmax = raw[:, 6].astype(np.float32)
+        tnear = np.zeros(len(raw), dtype=np.float32)
+        alive = np.arange(len(raw))
+        queries = 0
+        while len(alive) and queries < depth:
+            res = scene.run(org[alive], dirs[alive], output=1, dists=tmax[alive] - tnear[alive])
+            queries += 1
+            hit = res["geomID"] >= 0
+            crossings += int(hit.sum())
+            idx = alive[hit]
+            t = res["tfar"][hit]
+            org[idx] += dirs[idx] * (t + EPS)[:, None]
+            tnear[idx] += t + EPS
+            alive = idx
     return time.perf_counter() - t0, time.process_time() - c0, crossings
 
 
-def embree(d, n, procs=2):
+def embree(d, n, procs=2, depth=1 << 30, repeat=1):
     from multiprocessing import Pool
     with Pool(procs) as p:
         cuts = [n * k // procs for k in range(procs + 1)]
         t0 = time.perf_counter()
-        out = p.map(embree_worker, [(d, cuts[k], cuts[k + 1]) for k in range(procs)])
+        out = p.map(embree_worker, [(d, cuts[k], cuts[k + 1], depth, repeat) for k in range(procs)])
         wall = time.perf_counter() - t0
     return max(t for t, _, _ in out), wall, sum(cpu for _, cpu, _ in out), sum(c for _, _, c in out)
 
@@ -107,8 +110,14 @@ def main():
     n = int(float(sys.argv[sys.argv.index("--lines") + 1])) if "--lines" in sys.argv else None
     _, _, raw = load(d, n)
     n = len(raw)
-    t, wall, cpu, c = embree(d, n)
-    print(json.dumps({"impl": "embree (embreex, 2 processes)", "lines": n, "seconds": round(t, 3), "wall_s": round(wall, 3), "cpu_s": round(cpu, 3), "mlines_per_s": round(n / t / 1e6, 2), "crossings": c}))
+    # --entry-exit: at most two closest hits per line (the entry and the exit
+    # of a closed scene: issue 27's Embree figure); --repeat R: the lines
+    # traced R times over (10^9 lines from 10^7 exported, 28 bytes a line).
+    depth = 2 if "--entry-exit" in sys.argv else 1 << 30
+    repeat = int(float(sys.argv[sys.argv.index("--repeat") + 1])) if "--repeat" in sys.argv else 1
+    t, wall, cpu, c = embree(d, n, depth=depth, repeat=repeat)
+    kind = "entry and exit" if depth == 2 else "every crossing"
+    print(json.dumps({"impl": f"embree (embreex, 2 processes, {kind})", "lines": n * repeat, "seconds": round(t, 3), "wall_s": round(wall, 3), "cpu_s": round(cpu, 3), "mlines_per_s": round(n * repeat / t / 1e6, 2), "crossings": c}))
     if "--no-mitsuba" in sys.argv:
         return
     t, c = mitsuba(d, n)

@@ -1,6 +1,7 @@
-//! Choosing and opening a backend: the names `--backend` accepts, the
-//! errors a backend reports, and [`open`], which builds the chosen
-//! [`Tracer`] over a prepared scene.
+//! Choosing and opening a backend: the names a backend goes by, the errors
+//! a backend reports, [`open`], which builds the chosen [`Tracer`] over a
+//! prepared scene, and [`open_volume`], the chosen [`VolumeCaster`] over a
+//! volume: the one registry of backends, above the CPU and Vulkan ones.
 //!
 //! Every engine (scene visibility, viewpoints, rendering, radiosity) is
 //! written against the [`Tracer`] seam and never names a backend; this
@@ -9,7 +10,10 @@
 use std::fmt;
 use std::str::FromStr;
 
+pub use crate::tracer::BackendError;
 use crate::tracer::{CpuTracer, Prepared, ReferenceTracer, Tracer};
+use crate::volume::cast::VolumeCaster;
+use crate::volume::raycast::Caster;
 
 /// Which backend to open.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -63,53 +67,58 @@ impl FromStr for BackendChoice {
     }
 }
 
-/// Why a backend could not trace.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum BackendError {
-    /// The backend is not available here (no device, no loader, no driver).
-    Unavailable {
-        /// Backend name.
-        backend: &'static str,
-        /// Why, with the fix where there is one.
-        reason: String,
-    },
-    /// The scene or batch does not fit the backend's limits (buffer sizes).
-    TooLarge {
-        /// Backend name.
-        backend: &'static str,
-        /// What did not fit, with the limit and the way out.
-        reason: String,
-    },
-    /// Device memory ran out.
-    OutOfMemory,
-    /// The device was lost.
-    DeviceLost,
-}
-
-impl fmt::Display for BackendError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            BackendError::Unavailable { backend, reason } => {
-                write!(f, "the {backend} backend is unavailable: {reason}")
-            }
-            BackendError::TooLarge { backend, reason } => write!(f, "too large for the {backend} backend: {reason}"),
-            BackendError::OutOfMemory => write!(f, "out of device memory"),
-            BackendError::DeviceLost => write!(f, "device lost"),
-        }
-    }
-}
-
-impl std::error::Error for BackendError {}
-
 /// Opens a backend on a prepared scene.
 ///
 /// # Errors
-/// [`BackendError::Unavailable`] when Vulkan has no loader, driver or device.
+/// [`BackendError::Unavailable`] when Vulkan has no loader, driver or device;
+/// [`BackendError::TooLarge`] when the address space for the BVH build
+/// cannot be reserved ([`crate::memory::probe`]).
 pub fn open(choice: BackendChoice, scene: &Prepared) -> Result<Box<dyn Tracer>, BackendError> {
+    if choice != BackendChoice::Reference {
+        // Both build an obvhs BVH, which panics if an allocation fails: its
+        // peak address space is claimed (and given back) first.
+        let n = scene.triangles.len() as u64;
+        crate::memory::probe(
+            || format!("the BVH over {n} triangles"),
+            n.saturating_mul(crate::memory::BVH_BUILD_BYTES_PER_TRIANGLE),
+        )
+        .map_err(|e| BackendError::TooLarge { backend: choice.name(), reason: e.to_string() })?;
+    }
     match choice {
         BackendChoice::Cpu => Ok(Box::new(CpuTracer::new(scene))),
         BackendChoice::Reference => Ok(Box::new(ReferenceTracer::new(scene))),
         BackendChoice::Vulkan => Ok(Box::new(crate::vulkan::tracer::VulkanTracer::new(scene)?)),
+    }
+}
+
+/// Bytes a backend allocates besides the channel for views of `rays` rays,
+/// before it allocates them: 0 on the CPU; the device's buffers on Vulkan
+/// ([`crate::vulkan::volume::device_memory`], host memory too on lavapipe).
+#[must_use]
+pub fn volume_memory(choice: BackendChoice, caster: &Caster<'_>, rays: u64) -> u64 {
+    match choice {
+        BackendChoice::Vulkan => crate::vulkan::volume::device_memory(caster, rayon::current_num_threads(), rays),
+        BackendChoice::Cpu | BackendChoice::Reference => 0,
+    }
+}
+
+/// Opens a volume caster ([`VolumeCaster`]) over `caster`.
+///
+/// # Errors
+/// [`BackendError::Unavailable`] when Vulkan has no loader, driver or
+/// device, or for `reference` (a triangle tracer: volumes have none);
+/// [`BackendError::TooLarge`] when the volume exceeds the device's buffers.
+pub fn open_volume<'a>(
+    choice: BackendChoice,
+    caster: &'a Caster<'a>,
+) -> Result<Box<dyn VolumeCaster + 'a>, BackendError> {
+    match choice {
+        BackendChoice::Cpu => Ok(Box::new(caster)),
+        BackendChoice::Vulkan => Ok(Box::new(crate::vulkan::volume::VulkanVolumeCaster::new(caster)?)),
+        BackendChoice::Reference => Err(BackendError::Unavailable {
+            backend: "reference",
+            reason: "it traces triangles; volumes are cast by the cpu or vulkan backend".into(),
+        }),
     }
 }
 

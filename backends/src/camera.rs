@@ -1,13 +1,13 @@
 //! A pinhole camera: pixel `(x, y)` of a `w × h` image to a ray.
 //!
 //! Cameras are stated in scene units (`--camera eye,target,up,fov`) and
-//! traced in the tracer's normalised coordinates ([`Camera::normalised`]).
+//! traced in the tracer's normalised coordinates (`Camera::normalised`, defined
+//! beside [`crate::tracer::Prepared`] so that the camera sits below the tracer).
 //! Pixel `(0, 0)` is the top-left; `(x + 0.5, y + 0.5)` is a pixel's centre.
 
 use glam::DVec3;
 
 use crate::lines::Line;
-use crate::tracer::Prepared;
 
 /// A pinhole camera.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -70,12 +70,6 @@ impl Camera {
         let up = if fwd.cross(DVec3::Y).length() < 1e-6 { DVec3::Z } else { DVec3::Y };
         let half = (1.15 / eye.length()).min(0.9).asin();
         Self::look_at(eye, DVec3::ZERO, up, 2.0 * half.to_degrees()).expect("a finite eye away from the origin")
-    }
-
-    /// The same camera in the tracer's normalised coordinates.
-    #[must_use]
-    pub fn normalised(&self, p: &Prepared) -> Self {
-        Self { eye: p.to_normalised(self.eye), ..*self }
     }
 
     /// Unit direction through image point `(sx, sy)` in pixels (fractional:

@@ -40,6 +40,7 @@ pub mod preview;
 pub mod radiosity;
 pub mod render;
 pub mod scene;
+pub mod shapes;
 pub mod shards;
 pub mod simplify;
 pub mod solids;

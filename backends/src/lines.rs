@@ -84,7 +84,7 @@ impl LineRng {
     #[inline]
     #[must_use]
     pub fn uniform(&self, k: u32) -> f64 {
-        (f64::from(self.u32(k)) + 0.5) * (1.0 / 4_294_967_296.0)
+        uniform_of(self.u32(k))
     }
 
     /// A uniform float in `(0, 1)` from draw `k`: 23 bits, so that
@@ -100,18 +100,32 @@ impl LineRng {
     #[inline]
     #[must_use]
     pub fn sphere_point(&self, first: u32) -> DVec3 {
+        self.sphere_point_from(first, [self.u32(first), self.u32(first + 1)])
+    }
+
+    /// [`LineRng::sphere_point`] with its first two draws (`first`,
+    /// `first + 1`) already at hand.
+    #[inline]
+    fn sphere_point_from(&self, first: u32, mut draws: [u32; 2]) -> DVec3 {
         let mut k = first;
         loop {
-            let u = 2.0 * self.uniform(k) - 1.0;
-            let v = 2.0 * self.uniform(k + 1) - 1.0;
+            let u = 2.0 * uniform_of(draws[0]) - 1.0;
+            let v = 2.0 * uniform_of(draws[1]) - 1.0;
             k += 2;
             let s = u * u + v * v;
             if s < 1.0 {
                 let r = 2.0 * (1.0 - s).sqrt();
                 return DVec3::new(u * r, v * r, 1.0 - 2.0 * s);
             }
+            draws = [self.u32(k), self.u32(k + 1)];
         }
     }
+}
+
+/// The uniform double in `(0, 1)` of a 32-bit draw.
+#[inline]
+fn uniform_of(word: u32) -> f64 {
+    (f64::from(word) + 0.5) * (1.0 / 4_294_967_296.0)
 }
 
 /// A uniform double in `[0, 1)` for draw `stream` of line `index` (for
@@ -144,14 +158,109 @@ pub fn global_line(seed: u64, index: u64, radius: f64) -> Line {
 #[must_use]
 pub fn global_line_of(seed: SeedHash, index: u64, radius: f64) -> Line {
     let rng = LineRng::of(seed, index);
+    global_line_from(&rng, [rng.u32(0), rng.u32(1), rng.u32(64), rng.u32(65)], radius)
+}
+
+/// [`global_line_of`] from its generator and its draws 0, 1, 64 and 65.
+#[inline]
+fn global_line_from(rng: &LineRng, draws: [u32; 4], radius: f64) -> Line {
     // Draws 0.. for the first point, 64.. for the second (rejection rarely
     // needs more than a few pairs; 32 pairs fail with probability 0.21^32).
-    let p = rng.sphere_point(0) * radius;
-    let q = rng.sphere_point(64) * radius;
+    let p = rng.sphere_point_from(0, [draws[0], draws[1]]) * radius;
+    let q = rng.sphere_point_from(64, [draws[2], draws[3]]) * radius;
     let d = q - p;
     let len = d.length();
     let dir = if len > 0.0 { d / len } else { DVec3::Z };
     Line { origin: p.as_vec3().to_array(), tmin: 0.0, direction: dir.as_vec3().to_array(), tmax: len as f32 }
+}
+
+/// The global lines `first`, `first + stride`, … (`count` of them),
+/// appended to `out`: [`global_line_of`] for each, bit for bit. With AVX2
+/// the integer hashing (each line's generator and its first draws, 13 of
+/// the ~15 [`pcg`] calls of a line) runs for 8 lines at once; the
+/// floating-point rest, and any rejected draw, is the scalar code.
+pub fn global_lines_of(seed: SeedHash, first: u64, stride: u64, count: u64, radius: f64, out: &mut Vec<Line>) {
+    let mut k = 0;
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        while k + 8 <= count {
+            let index: [u64; 8] = std::array::from_fn(|l| first + (k + l as u64) * stride);
+            // SAFETY: AVX2 was detected just above.
+            let (w1, w2, d) = unsafe { hash8(seed, &index) };
+            for l in 0..8 {
+                let rng = LineRng { w1: w1[l], w2: w2[l] };
+                out.push(global_line_from(&rng, [d[0][l], d[1][l], d[2][l], d[3][l]], radius));
+            }
+            k += 8;
+        }
+    }
+    out.extend((k..count).map(|k| global_line_of(seed, first + k * stride, radius)));
+}
+
+/// [`pcg`] on 8 lanes: the same 32-bit operations.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn pcg8(v: std::arch::x86_64::__m256i) -> std::arch::x86_64::__m256i {
+    use std::arch::x86_64::{
+        _mm256_add_epi32, _mm256_mullo_epi32, _mm256_set1_epi32, _mm256_srli_epi32, _mm256_srlv_epi32, _mm256_xor_si256,
+    };
+    let state =
+        _mm256_add_epi32(_mm256_mullo_epi32(v, _mm256_set1_epi32(747_796_405)), _mm256_set1_epi32(-1_403_630_843));
+    let shift = _mm256_add_epi32(_mm256_srli_epi32::<28>(state), _mm256_set1_epi32(4));
+    let word =
+        _mm256_mullo_epi32(_mm256_xor_si256(_mm256_srlv_epi32(state, shift), state), _mm256_set1_epi32(277_803_737));
+    _mm256_xor_si256(_mm256_srli_epi32::<22>(word), word)
+}
+
+/// [`LineRng::of`] for 8 line indices, and draws 0, 1, 64 and 65 of each:
+/// `(w1, w2, draws)`, lane `l` for `index[l]`.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn hash8(seed: SeedHash, index: &[u64; 8]) -> ([u32; 8], [u32; 8], [[u32; 8]; 4]) {
+    use std::arch::x86_64::{_mm256_add_epi32, _mm256_xor_si256};
+    let (lo, hi) = (load8(&index.map(|i| i as u32)), load8(&index.map(|i| (i >> 32) as u32)));
+    // `LineRng::of`'s words, operation for operation.
+    let w1 = pcg8(_mm256_xor_si256(splat8(seed.0), pcg8(_mm256_xor_si256(lo, pcg8(hi)))));
+    let w2 = pcg8(_mm256_xor_si256(
+        _mm256_xor_si256(_mm256_xor_si256(w1, splat8(0x85EB_CA6B)), pcg8(_mm256_xor_si256(lo, splat8(0xC2B2_AE35)))),
+        hi,
+    ));
+    // `LineRng::u32(k)` for the four draws.
+    let mut draws = [[0u32; 8]; 4];
+    for (d, k) in draws.iter_mut().zip([0u32, 1, 64, 65]) {
+        let v = pcg8(_mm256_xor_si256(w1, pcg8(_mm256_add_epi32(w2, splat8(k.wrapping_mul(0x9E37_79B9))))));
+        *d = store8(v);
+    }
+    (store8(w1), store8(w2), draws)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn splat8(x: u32) -> std::arch::x86_64::__m256i {
+    std::arch::x86_64::_mm256_set1_epi32(x as i32)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn load8(a: &[u32; 8]) -> std::arch::x86_64::__m256i {
+    // SAFETY: `a` is 32 readable bytes; the load is unaligned.
+    unsafe { std::arch::x86_64::_mm256_loadu_si256(a.as_ptr().cast()) }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn store8(v: std::arch::x86_64::__m256i) -> [u32; 8] {
+    let mut a = [0u32; 8];
+    // SAFETY: `a` is 32 writable bytes; the store is unaligned.
+    unsafe { std::arch::x86_64::_mm256_storeu_si256(a.as_mut_ptr().cast(), v) };
+    a
 }
 
 /// A cosine-distributed unit direction around `n` (Malley's method).
@@ -340,6 +449,27 @@ mod tests {
         assert!((c1 / m - 2.0 / 3.0).abs() < 5.0 * (1.0f64 / 18.0 / m).sqrt(), "{}", c1 / m);
         assert!((c2 / m - 0.5).abs() < 5e-3, "{}", c2 / m);
         assert!((t / m as f32).length() < 5e-3);
+    }
+
+    /// The batched lines (8-lane hashing where AVX2 runs) are each
+    /// [`global_line_of`]'s, bit for bit, across rejections, odd counts,
+    /// strides and indices past 2^32.
+    #[test]
+    fn batched_lines_are_the_single_lines() {
+        for (seed, first, stride, count) in [
+            (1u64, 0u64, 1u64, 20_011u64),
+            (7, 5, 8, 3_000),
+            (u64::MAX, (1 << 32) - 9, 3, 1_000),
+            (3, u64::MAX - 64, 1, 64),
+        ] {
+            let h = SeedHash::new(seed);
+            let mut batch = Vec::new();
+            global_lines_of(h, first, stride, count, 0.9, &mut batch);
+            assert_eq!(batch.len() as u64, count);
+            for (k, l) in batch.iter().enumerate() {
+                assert_eq!(*l, global_line_of(h, first + k as u64 * stride, 0.9), "seed {seed} line {k}");
+            }
+        }
     }
 
     #[test]

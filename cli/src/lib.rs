@@ -2,6 +2,7 @@
 //! reports, and the commands themselves (the binary is a thin `main`).
 
 pub mod clap_error;
+pub mod commands;
 pub mod complexity;
 pub mod devices;
 pub mod export;
@@ -13,9 +14,7 @@ pub mod options;
 pub mod output;
 pub mod plot;
 pub mod progress;
-pub mod radiosity;
-pub mod radiosity_check;
-pub mod radiosity_mesh;
+pub use commands::radiosity;
 pub mod render;
 pub mod report;
 pub mod scene;

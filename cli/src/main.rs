@@ -54,6 +54,10 @@ fn run(cli: Cli) -> Result<String, CliError> {
             Ok(render(&itgfx_cli::render::run(&o)?, o.common.json))
         }
         Command::Compare(o) => Ok(render(&itgfx_cli::render::run_compare(&o)?, o.common.json)),
+        Command::Shapes(o) => {
+            threads(o.tracing.threads)?;
+            Ok(render(&itgfx_cli::commands::shapes::run::run(&o)?, o.common.json))
+        }
         Command::Radiosity(o) => {
             threads(o.tracing.threads)?;
             Ok(render(&itgfx_cli::radiosity::run(&o)?, o.common.json))

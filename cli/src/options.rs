@@ -78,6 +78,8 @@ pub enum Command {
     Segment(crate::imaging::SegmentOptions),
     /// A synthetic two-modality image pair with a known rigid transform (Part 8)
     Phantom(crate::imaging::PhantomOptions),
+    /// Shape descriptors from the viewpoint channel (Part V), D2 and A3: distances and retrieval scores
+    Shapes(crate::commands::shapes::args::ShapesOptions),
     /// Evaluate an information measure
     #[command(arg_required_else_help = true, subcommand_value_name = "NAME", subcommand_help_heading = "Measures")]
     Measure(MeasureCommand),

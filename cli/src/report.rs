@@ -30,6 +30,8 @@ pub enum Item {
     Missing,
     /// Yes or no (JSON `true`/`false`).
     Flag(bool),
+    /// Rows of reals (JSON: an array of arrays), e.g. a distance matrix.
+    Matrix(Vec<Vec<f64>>),
 }
 
 /// Named quantities in the order they are reported.
@@ -114,6 +116,12 @@ impl Report {
         self
     }
 
+    /// Adds rows of reals (a matrix).
+    pub fn matrix(&mut self, key: &str, v: Vec<Vec<f64>>) -> &mut Self {
+        self.items.push((key.to_string(), Item::Matrix(v)));
+        self
+    }
+
     /// Adds nested records.
     pub fn records(&mut self, key: &str, v: Vec<Report>) -> &mut Self {
         self.items.push((key.to_string(), Item::Records(v)));
@@ -144,6 +152,9 @@ impl Report {
                 Item::Records(rs) => Value::Array(rs.iter().map(Report::to_json).collect()),
                 Item::Missing => Value::Null,
                 Item::Flag(b) => Value::Bool(*b),
+                Item::Matrix(rows) => {
+                    Value::Array(rows.iter().map(|r| Value::Array(r.iter().map(|&x| json_real(x)).collect())).collect())
+                }
             };
             m.insert(k.clone(), j);
         }
@@ -176,6 +187,9 @@ impl Report {
                 Item::Records(rs) => format!("{} records (use --json for all)", rs.len()),
                 Item::Missing => "n/a".into(),
                 Item::Flag(b) => if *b { "yes" } else { "no" }.into(),
+                Item::Matrix(rows) => {
+                    format!("{} x {} matrix (use --json)", rows.len(), rows.first().map_or(0, Vec::len))
+                }
             };
             out.push_str(&format!("{k:<width$}  {val}\n"));
         }

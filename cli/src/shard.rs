@@ -51,6 +51,41 @@ pub fn parse(s: &str) -> Result<Shard, String> {
     Ok(Shard { index, count })
 }
 
+/// A shard-file error in the CLI's words: each run setting named by the flag
+/// that sets it, and the merge's own refusals prefixed with `--merge`.
+#[must_use]
+pub fn describe(e: &itgfx_backends::shards::ShardError) -> String {
+    use itgfx_backends::shards::ShardError;
+    let line = e.describe(|s| flag(s).to_string());
+    match e {
+        ShardError::NoShards | ShardError::Missing { .. } => format!("--merge: {line}"),
+        _ => line,
+    }
+}
+
+/// The flag that sets a run setting.
+fn flag(s: itgfx_backends::shards::Setting) -> &'static str {
+    use itgfx_backends::shards::Setting;
+    match s {
+        Setting::Sampler => "--sampler",
+        Setting::SamplesPerPixel => "--spp",
+        Setting::MaxSamplesPerPixel => "--max-spp",
+        Setting::Threshold => "--threshold",
+        Setting::TutorialForm => "--tutorial-form",
+        Setting::Delta => "--delta",
+        Setting::BinaryContrast => "--binary-contrast",
+        Setting::ImageSize | Setting::ImageResolution => "--size",
+        Setting::Seed => "--seed",
+        Setting::Camera => "--camera",
+        Setting::Backend => "--backend",
+        Setting::Viewpoints => "--viewpoints",
+        Setting::Estimator => "--estimator",
+        Setting::Distance => "--distance",
+        Setting::Levels => "subdivision levels",
+        Setting::Resolution => "--resolution",
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

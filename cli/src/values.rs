@@ -22,13 +22,31 @@ pub fn count(s: &str) -> Result<u64, String> {
     })
 }
 
-fn ranged(s: &str, lo: u64, hi: u64) -> Result<u64, String> {
+/// The one integer range parser: a [`count`] in `lo..=hi`. Every command's
+/// bounded integer options are built on it.
+///
+/// # Errors
+/// A reason.
+pub fn ranged(s: &str, lo: u64, hi: u64) -> Result<u64, String> {
     let v = count(s)?;
     if (lo..=hi).contains(&v) { Ok(v) } else { Err(format!("must be in {lo}..={hi}")) }
 }
 
-fn real(s: &str) -> Result<f64, String> {
+/// A finite number.
+///
+/// # Errors
+/// A reason.
+pub fn real(s: &str) -> Result<f64, String> {
     s.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| "is not a finite number".to_string())
+}
+
+/// The one real range parser: a finite number in `[lo, hi]`.
+///
+/// # Errors
+/// A reason.
+pub fn real_in(s: &str, lo: f64, hi: f64) -> Result<f64, String> {
+    let v = real(s)?;
+    if (lo..=hi).contains(&v) { Ok(v) } else { Err(format!("must be in [{lo}, {hi}]")) }
 }
 
 /// `--lines`: positive, at most 10^18 (line indices are 64-bit).

@@ -162,7 +162,7 @@ pub fn merged(
         let s = ViewpointShard::from_json(&text).map_err(|e| CliError::usage(format!("--merge {f:?}: {e}")))?;
         named.push((format!("{f:?}"), s));
     }
-    let shards = order_shards(named, &scene, &st).map_err(CliError::usage)?;
+    let shards = order_shards(named, &scene, &st).map_err(|e| CliError::usage(crate::shard::describe(&e)))?;
     if o.estimator == "grid" {
         return Ok((grid_channel(prepared.patches, &shards, dirs, o.distance, st.resolution), None));
     }

@@ -267,11 +267,12 @@ fn grey_levels(info: &[f64]) -> Vec<[u8; 3]> {
 const BYTES_PER_ENTRY: u64 = 72;
 
 /// Refuses, before the tracer and its BVH are built, a run whose scene
-/// estimate ([`Limits::estimate_bytes`]) plus a channel entry for every
-/// viewpoint and polygon is over what the process may use. A bound: at 42
+/// estimate ([`Limits::estimate_bytes`](itgfx_backends::scene::Limits::estimate_bytes))
+/// plus a channel entry for every viewpoint and polygon is over what the
+/// process may use (`viewpoints`, and `shapes` for each mesh). A bound: at 42
 /// viewpoints `torus:512,256` peaks at 320 MiB against 602 MiB estimated,
 /// `torus:1024,256` at 560 MiB against 1.11 GiB (`/usr/bin/time -v`).
-fn memory_check(scene: &itgfx_backends::scene::Scene, views: usize) -> Result<(), CliError> {
+pub fn memory_check(scene: &itgfx_backends::scene::Scene, views: usize) -> Result<(), CliError> {
     use itgfx_backends::scene::Limits;
     let (t, p) = (scene.triangles.len() as u64, scene.patches.len() as u64);
     let need =

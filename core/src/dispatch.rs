@@ -1,129 +1,147 @@
-//! Run-time selection of an AVX2 build of the hot kernels.
+//! The one SIMD dispatch layer: run-time selection of a wider build of the
+//! hot kernels ([`crate::kernels`]).
 //!
 //! The kernels are written once, branch-free over 8 lanes, and compiled
 //! three times: for the portable x86-64 baseline (SSE2, 2 lanes) and, inside
-//! the `#[target_feature]` functions below, for AVX2 + FMA (4 lanes) and
+//! the `#[target_feature]` functions of [`x86`], for AVX2 + FMA (4 lanes) and
 //! AVX-512 (8 lanes). With the `std` feature on x86-64, the CPU is asked
 //! (std caches the answer) and the widest build it supports is used
-//! (BENCHMARKS.md has the figures). Without `std` the portable build is used; a
-//! no_std user can still get the fast build with `-C target-cpu=x86-64-v3`.
+//! (BENCHMARKS.md has the figures). Without `std`, or off x86-64, the
+//! portable build is used; a no_std user can still get the fast build with
+//! `-C target-cpu=x86-64-v3`. The measures call the four entry points here
+//! (through [`crate::scan`]); this is the only file that names a build.
 //!
 //! This module holds the crate's only `unsafe`: calling a target-feature
 //! function, which is sound exactly when the CPU has those features.
 
+use crate::kernels::{Mass, kl_pass_body, mass_body, mass_xlnx_body, mixture_body};
 use crate::matrix::MatrixRef;
-use crate::scan::{Mass, kl_pass_body, mass_body, mass_xlnx_body};
 use crate::{Error, Real};
 
-/// The widest build to use: 0 portable, 1 AVX2, 2 AVX-512. Detected once;
-/// the environment variable `ITGFX_SIMD=portable|avx2|avx512` can lower it
-/// (CI runs the core's tests under each, whatever the machine prefers).
+/// The widest build the CPU allows: 0 portable, 1 AVX2, 2 AVX-512.
+#[inline]
 fn level() -> u8 {
-    static LEVEL: std::sync::OnceLock<u8> = std::sync::OnceLock::new();
-    *LEVEL.get_or_init(|| {
-        let avx2 = std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma");
-        let avx512 = avx2
-            && std::is_x86_feature_detected!("avx512f")
-            && std::is_x86_feature_detected!("avx512dq")
-            && std::is_x86_feature_detected!("avx512vl");
-        let best = if avx512 { 2 } else { u8::from(avx2) };
-        let cap = match std::env::var("ITGFX_SIMD").as_deref() {
-            Ok("portable") => 0,
-            Ok("avx2") => 1,
-            _ => 2,
-        };
-        best.min(cap)
-    })
+    #[cfg(all(feature = "std", target_arch = "x86_64"))]
+    return x86::level();
+    #[cfg(not(all(feature = "std", target_arch = "x86_64")))]
+    0
 }
 
-/// Whether an AVX2 (or wider) build may be used.
-#[inline]
-pub(crate) fn avx2() -> bool {
-    level() >= 1
-}
-
-/// Whether the AVX-512 build (8 lanes of f64) may be used.
-#[inline]
-fn avx512() -> bool {
-    level() >= 2
-}
-
-#[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512vl")]
-fn mass_xlnx_avx512<T: Real>(xs: &[T]) -> Result<Mass, Error> {
-    mass_xlnx_body(xs)
-}
-
-#[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512vl")]
-fn kl_pass_avx512<T: Real>(p: &[T], q: &[T]) -> Result<(f64, f64, f64), Error> {
-    kl_pass_body(p, q)
-}
-
-#[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512vl")]
-fn mixture_avx512<T: Real, W: Real>(w: &[W], m: &MatrixRef<'_, T>) -> (f64, f64, f64) {
-    crate::divergence::mixture_body(w, m)
-}
-
-#[target_feature(enable = "avx2,fma")]
-fn mass_xlnx_avx2<T: Real>(xs: &[T]) -> Result<Mass, Error> {
-    mass_xlnx_body(xs)
-}
-
-#[target_feature(enable = "avx2,fma")]
-fn mass_avx2<T: Real>(xs: &[T]) -> Result<f64, Error> {
-    mass_body(xs)
-}
-
-#[target_feature(enable = "avx2,fma")]
-fn kl_pass_avx2<T: Real>(p: &[T], q: &[T]) -> Result<(f64, f64, f64), Error> {
-    kl_pass_body(p, q)
-}
-
-#[target_feature(enable = "avx2,fma")]
-fn mixture_avx2<T: Real, W: Real>(w: &[W], m: &MatrixRef<'_, T>) -> (f64, f64, f64) {
-    crate::divergence::mixture_body(w, m)
-}
-
-/// [`crate::scan::mass_xlnx`] compiled for AVX2; call only when [`avx2`] is true.
-#[allow(unsafe_code)]
-pub(crate) fn mass_xlnx<T: Real>(xs: &[T]) -> Result<Mass, Error> {
-    debug_assert!(avx2());
-    if avx512() {
-        // SAFETY: `avx512()` just confirmed every feature the function enables.
-        return unsafe { mass_xlnx_avx512(xs) };
-    }
-    // SAFETY: every caller checks `avx2()` first, so the CPU has the
-    // target features this function was compiled for.
-    unsafe { mass_xlnx_avx2(xs) }
-}
-
-/// [`crate::scan::mass`] (validation and sum) compiled for AVX2; call only when [`avx2`] is true.
+/// Checks every element is finite and non-negative; returns the compensated sum.
 #[allow(unsafe_code)]
 pub(crate) fn mass<T: Real>(xs: &[T]) -> Result<f64, Error> {
-    debug_assert!(avx2());
-    // SAFETY: as in `mass_xlnx`: the caller checked `avx2()`.
-    unsafe { mass_avx2(xs) }
+    match level() {
+        // SAFETY: `level()` ≥ 1 only when the CPU has AVX2 and FMA, every
+        // feature `mass_avx2` enables (the AVX-512 build adds nothing here).
+        #[cfg(all(feature = "std", target_arch = "x86_64"))]
+        1.. => unsafe { x86::mass_avx2(xs) },
+        _ => mass_body(xs),
+    }
 }
 
-/// [`crate::scan::kl_pass`] compiled for AVX2; call only when [`avx2`] is true.
+/// Checks every element and returns `Σ x` and `Σ x ln x` in one pass.
+#[allow(unsafe_code)]
+pub(crate) fn mass_xlnx<T: Real>(xs: &[T]) -> Result<Mass, Error> {
+    match level() {
+        // SAFETY: `level()` is 2 only when the CPU has AVX2, FMA and
+        // AVX-512 F/DQ/VL, every feature the AVX-512 build enables.
+        #[cfg(all(feature = "std", target_arch = "x86_64"))]
+        2.. => unsafe { x86::mass_xlnx_avx512(xs) },
+        // SAFETY: `level()` is 1 only when the CPU has AVX2 and FMA.
+        #[cfg(all(feature = "std", target_arch = "x86_64"))]
+        1 => unsafe { x86::mass_xlnx_avx2(xs) },
+        _ => mass_xlnx_body(xs),
+    }
+}
+
+/// `x ln(x/y)` summed over two validated slices in one pass, with `Σ x` and
+/// `Σ y` (nats). Conventions of Part II eq. (8).
 #[allow(unsafe_code)]
 pub(crate) fn kl_pass<T: Real>(p: &[T], q: &[T]) -> Result<(f64, f64, f64), Error> {
-    debug_assert!(avx2());
-    if avx512() {
-        // SAFETY: `avx512()` just confirmed every feature the function enables.
-        return unsafe { kl_pass_avx512(p, q) };
+    match level() {
+        // SAFETY: as in `mass_xlnx`: level 2 means every AVX-512 feature.
+        #[cfg(all(feature = "std", target_arch = "x86_64"))]
+        2.. => unsafe { x86::kl_pass_avx512(p, q) },
+        // SAFETY: as in `mass_xlnx`: level 1 means AVX2 and FMA.
+        #[cfg(all(feature = "std", target_arch = "x86_64"))]
+        1 => unsafe { x86::kl_pass_avx2(p, q) },
+        _ => kl_pass_body(p, q),
     }
-    // SAFETY: as in `mass_xlnx`: the caller checked `avx2()`.
-    unsafe { kl_pass_avx2(p, q) }
 }
 
-/// The channel/Jensen-Shannon kernel compiled for AVX2; call only when [`avx2`] is true.
+/// The channel/Jensen-Shannon kernel: `Σ_i w_i D_KL(M_i ‖ Σ_k w_k M_k)`,
+/// `H(Σ w_i M_i)` and `Σ_i w_i H(M_i)` in nats.
 #[allow(unsafe_code)]
 pub(crate) fn mixture<T: Real, W: Real>(w: &[W], m: &MatrixRef<'_, T>) -> (f64, f64, f64) {
-    debug_assert!(avx2());
-    if avx512() {
-        // SAFETY: `avx512()` just confirmed every feature the function enables.
-        return unsafe { mixture_avx512(w, m) };
+    match level() {
+        // SAFETY: as in `mass_xlnx`: level 2 means every AVX-512 feature.
+        #[cfg(all(feature = "std", target_arch = "x86_64"))]
+        2.. => unsafe { x86::mixture_avx512(w, m) },
+        // SAFETY: as in `mass_xlnx`: level 1 means AVX2 and FMA.
+        #[cfg(all(feature = "std", target_arch = "x86_64"))]
+        1 => unsafe { x86::mixture_avx2(w, m) },
+        _ => mixture_body(w, m),
     }
-    // SAFETY: as in `mass_xlnx`: the caller checked `avx2()`.
-    unsafe { mixture_avx2(w, m) }
+}
+
+/// The x86-64 builds and the CPU query (std only: `is_x86_feature_detected`).
+#[cfg(all(feature = "std", target_arch = "x86_64"))]
+mod x86 {
+    use super::*;
+
+    /// The widest build to use: 0 portable, 1 AVX2, 2 AVX-512. Detected once;
+    /// the environment variable `ITGFX_SIMD=portable|avx2|avx512` can lower it
+    /// (CI runs the core's tests under each, whatever the machine prefers).
+    pub(super) fn level() -> u8 {
+        static LEVEL: std::sync::OnceLock<u8> = std::sync::OnceLock::new();
+        *LEVEL.get_or_init(|| {
+            let avx2 = std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma");
+            let avx512 = avx2
+                && std::is_x86_feature_detected!("avx512f")
+                && std::is_x86_feature_detected!("avx512dq")
+                && std::is_x86_feature_detected!("avx512vl");
+            let best = if avx512 { 2 } else { u8::from(avx2) };
+            let cap = match std::env::var("ITGFX_SIMD").as_deref() {
+                Ok("portable") => 0,
+                Ok("avx2") => 1,
+                _ => 2,
+            };
+            best.min(cap)
+        })
+    }
+
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512vl")]
+    pub(super) fn mass_xlnx_avx512<T: Real>(xs: &[T]) -> Result<Mass, Error> {
+        mass_xlnx_body(xs)
+    }
+
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512vl")]
+    pub(super) fn kl_pass_avx512<T: Real>(p: &[T], q: &[T]) -> Result<(f64, f64, f64), Error> {
+        kl_pass_body(p, q)
+    }
+
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512vl")]
+    pub(super) fn mixture_avx512<T: Real, W: Real>(w: &[W], m: &MatrixRef<'_, T>) -> (f64, f64, f64) {
+        mixture_body(w, m)
+    }
+
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) fn mass_xlnx_avx2<T: Real>(xs: &[T]) -> Result<Mass, Error> {
+        mass_xlnx_body(xs)
+    }
+
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) fn mass_avx2<T: Real>(xs: &[T]) -> Result<f64, Error> {
+        mass_body(xs)
+    }
+
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) fn kl_pass_avx2<T: Real>(p: &[T], q: &[T]) -> Result<(f64, f64, f64), Error> {
+        kl_pass_body(p, q)
+    }
+
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) fn mixture_avx2<T: Real, W: Real>(w: &[W], m: &MatrixRef<'_, T>) -> (f64, f64, f64) {
+        mixture_body(w, m)
+    }
 }

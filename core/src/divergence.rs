@@ -2,9 +2,10 @@
 //! Csiszár f-divergences (Part III-IV eqs. (1)–(9), Table 1), Jensen–Shannon
 //! (Part II eq. (17)), and the Bregman and Burbea–Rao families (Part III-IV §2.2).
 
+use crate::kernels::kl_term;
 use crate::math::{ln, xlnx};
-use crate::matrix::{MatrixRef, for_column_blocks};
-use crate::scan::{check_normalized, kl_pass, kl_term, mass, same_len};
+use crate::matrix::MatrixRef;
+use crate::scan::{check_normalized, kl_pass, mass, same_len};
 use crate::sum::Neumaier;
 use crate::{Base, Error, Real};
 
@@ -349,110 +350,7 @@ pub(crate) fn mixture_divergence<T: Real, W: Real>(w: &[W], m: &MatrixRef<'_, T>
 /// `Σ_i w_i H(M_i)` in nats: one logarithm per matrix element serves both
 /// the divergence and the row entropies.
 pub(crate) fn mixture_divergence_and_entropy<T: Real, W: Real>(w: &[W], m: &MatrixRef<'_, T>) -> (f64, f64, f64) {
-    #[cfg(all(feature = "std", target_arch = "x86_64"))]
-    if crate::dispatch::avx2() {
-        return crate::dispatch::mixture(w, m);
-    }
-    mixture_body(w, m)
-}
-
-#[inline(always)]
-pub(crate) fn mixture_body<T: Real, W: Real>(w: &[W], m: &MatrixRef<'_, T>) -> (f64, f64, f64) {
-    #[cfg(feature = "alloc")]
-    if m.cols() > crate::matrix::COL_BLOCK {
-        return mixture_streaming(w, m);
-    }
-    mixture_blocked(w, m)
-}
-
-/// Row-streaming form of [`mixture_body`] for wide matrices (`alloc`): the
-/// mixture `m_j` and `ln m_j` go to heap buffers in one contiguous pass, the
-/// terms in a second. The blocked form reads 256-column strips of every row
-/// instead, which for a 10^4 × 10^4 matrix touches a new page per row and
-/// strip.
-#[cfg(feature = "alloc")]
-#[inline(always)]
-fn mixture_streaming<T: Real, W: Real>(w: &[W], m: &MatrixRef<'_, T>) -> (f64, f64, f64) {
-    let cols = m.cols();
-    let mut mix = alloc::vec![0.0f64; cols];
-    for (i, wi) in w.iter().enumerate() {
-        let wi = wi.to_f64();
-        if wi != 0.0 {
-            for (acc, x) in mix.iter_mut().zip(m.row(i)) {
-                *acc += wi * x.to_f64();
-            }
-        }
-    }
-    let mut h = Neumaier::new();
-    let lnm: alloc::vec::Vec<f64> = mix
-        .iter()
-        .map(|&x| {
-            h.add(-xlnx(x));
-            if x > 0.0 { ln(x) } else { 0.0 }
-        })
-        .collect();
-    let mut d = Neumaier::new();
-    let mut rows = Neumaier::new();
-    for (i, wi) in w.iter().enumerate() {
-        let wi = wi.to_f64();
-        if wi == 0.0 {
-            continue;
-        }
-        let (xl, xm) = row_terms(m.row(i), &lnm);
-        d.add(wi * (xl - xm));
-        rows.add(-wi * xl);
-    }
-    let v = d.value();
-    (if v < 0.0 { 0.0 } else { v }, h.value(), rows.value())
-}
-
-/// `(Σ x ln x, Σ x ln m_j)` over one row segment, 8 lanes.
-#[inline(always)]
-fn row_terms<T: Real>(row: &[T], lnm: &[f64]) -> (f64, f64) {
-    let mut xl = [0.0f64; 8];
-    let mut xm = [0.0f64; 8];
-    let mut lanes = row.chunks_exact(8).zip(lnm.chunks_exact(8));
-    for (xs, ls) in &mut lanes {
-        for l in 0..8 {
-            let x = xs[l].to_f64();
-            xl[l] += xlnx(x);
-            xm[l] += x * ls[l];
-        }
-    }
-    let done = row.len() - row.len() % 8;
-    for (x, l) in row[done..].iter().zip(&lnm[done..]) {
-        let x = x.to_f64();
-        xl[0] += xlnx(x);
-        xm[0] += x * l;
-    }
-    (xl.iter().sum(), xm.iter().sum())
-}
-
-#[inline(always)]
-fn mixture_blocked<T: Real, W: Real>(w: &[W], m: &MatrixRef<'_, T>) -> (f64, f64, f64) {
-    let mut d = Neumaier::new();
-    let mut h = Neumaier::new();
-    let mut rows = Neumaier::new();
-    let mut lnm = [0.0f64; crate::matrix::COL_BLOCK];
-    for_column_blocks(m, Some(w), |c0, mix| {
-        for (l, &x) in lnm.iter_mut().zip(mix) {
-            *l = if x > 0.0 { ln(x) } else { 0.0 };
-            h.add(-xlnx(x));
-        }
-        let width = mix.len();
-        for (i, wi) in w.iter().enumerate() {
-            let wi = wi.to_f64();
-            if wi == 0.0 {
-                continue;
-            }
-            // x > 0 implies mix_j ≥ w_i x > 0, so ln mix_j is finite where used.
-            let (xl, xm) = row_terms(&m.row(i)[c0..c0 + width], &lnm[..width]);
-            d.add(wi * (xl - xm));
-            rows.add(-wi * xl);
-        }
-    });
-    let v = d.value();
-    (if v < 0.0 { 0.0 } else { v }, h.value(), rows.value())
+    crate::dispatch::mixture(w, m)
 }
 
 /// A convex function with its derivative, generating Bregman and Burbea–Rao
@@ -567,8 +465,8 @@ mod tests {
         }
         let w = [0.05, 0.1, 0.2, 0.0, 0.3, 0.15, 0.2];
         let mat = MatrixRef::new(&m[..], r, c).unwrap();
-        let blocked = mixture_blocked(&w, &mat);
-        let body = mixture_body(&w, &mat);
+        let blocked = crate::kernels::mixture_blocked(&w, &mat);
+        let body = crate::kernels::mixture_body(&w, &mat);
         for (a, b) in [(blocked.0, body.0), (blocked.1, body.1), (blocked.2, body.2)] {
             assert!((a - b).abs() < 1e-12 * a.abs().max(1.0), "{a} vs {b}");
         }

@@ -53,13 +53,13 @@ mod base;
 mod bottleneck;
 mod channel;
 mod coding;
-#[cfg(all(feature = "std", target_arch = "x86_64"))]
 mod dispatch;
 mod divergence;
 mod entropy;
 mod error;
 mod fano;
 mod grouping;
+mod kernels;
 mod markov;
 mod math;
 mod matrix;
@@ -96,6 +96,7 @@ pub use entropy::{
 pub use error::Error;
 pub use fano::{fano_bound, fano_minimum_error, fano_weak_bound};
 pub use grouping::{Grouping, grouping, grouping_by_label};
+pub use kernels::kl_term;
 #[cfg(feature = "alloc")]
 pub use markov::stationary_distribution;
 pub use markov::{entropy_rate, excess_entropy_from_blocks, markov_excess_entropy, stationary_distribution_into};
@@ -103,7 +104,6 @@ pub use math::{ln, xlnx};
 pub use matrix::MatrixRef;
 pub use pmf::Pmf;
 pub use real::Real;
-pub use scan::kl_term;
 pub use scene::{
     ContinuousMutualInformation, PairCount, SceneMeasures, continuous_mutual_information,
     discretisation_error_area_sampling, discretisation_error_lines, log_area_form_factor,

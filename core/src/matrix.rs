@@ -1,6 +1,7 @@
-//! Row-major matrices borrowed from slices, and column-block traversal.
+//! Row-major matrices borrowed from slices, and column-block traversal
+//! (the validating checks, which need the dispatched kernels, are in
+//! [`crate::scan`]).
 
-use crate::scan::{check_normalized, mass};
 use crate::{Error, Real};
 
 /// Columns handled per block by the allocation-free column reductions.
@@ -57,29 +58,6 @@ impl<'a, T: Real> MatrixRef<'a, T> {
     #[must_use]
     pub fn row(&self, i: usize) -> &'a [T] {
         &self.data[i * self.cols..(i + 1) * self.cols]
-    }
-
-    /// Checks the matrix is a joint distribution (all entries sum to 1).
-    ///
-    /// # Errors
-    /// As [`crate::Pmf::new`], indices row-major.
-    pub fn check_joint(&self) -> Result<(), Error> {
-        check_normalized::<T>(mass(self.data)?)
-    }
-
-    /// Checks every row is a distribution (a channel's conditional matrix).
-    ///
-    /// # Errors
-    /// [`Error::NonFinite`]/[`Error::Negative`] (row-major index),
-    /// [`Error::RowNotNormalized`].
-    pub fn check_stochastic(&self) -> Result<(), Error> {
-        for i in 0..self.rows {
-            let s = mass(self.row(i)).map_err(|e| offset(e, i * self.cols))?;
-            if !((s - 1.0).abs() <= T::MASS_TOLERANCE) {
-                return Err(Error::RowNotNormalized { row: i, sum: s });
-            }
-        }
-        Ok(())
     }
 }
 

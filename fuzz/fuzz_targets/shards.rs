@@ -33,7 +33,7 @@ fn one_line(e: &str) {
 fn render(text: &str) {
     let s = match RenderShard::from_json(text) {
         Ok(s) => s,
-        Err(e) => return one_line(&e),
+        Err(e) => return one_line(&e.to_string()),
     };
     assert!(s.validate().is_ok());
     let again = RenderShard::from_json(&s.to_json().unwrap()).unwrap();
@@ -47,7 +47,7 @@ fn render(text: &str) {
             assert_eq!(s.shards, 1, "one shard of several merged");
             assert!(frame.rgb.iter().flatten().all(|v| v.is_finite()));
         }
-        Err(e) => one_line(&e),
+        Err(e) => one_line(&e.to_string()),
     }
     // The same shard twice is refused.
     assert!(merge(vec![("a".into(), s.clone()), ("b".into(), s)]).is_err());
@@ -56,7 +56,7 @@ fn render(text: &str) {
 fn viewpoints(text: &str) {
     let s = match ViewpointShard::from_json(text) {
         Ok(s) => s,
-        Err(e) => return one_line(&e),
+        Err(e) => return one_line(&e.to_string()),
     };
     assert!(s.validate().is_ok());
     let again = ViewpointShard::from_json(&s.to_json().unwrap()).unwrap();
@@ -64,6 +64,6 @@ fn viewpoints(text: &str) {
     let (scene, settings) = (s.scene.clone(), s.settings.clone());
     match order_shards(vec![("a".into(), s.clone()), ("b".into(), s)], &scene, &settings) {
         Ok(v) => panic!("the same shard twice ordered into {} shards", v.len()),
-        Err(e) => one_line(&e),
+        Err(e) => one_line(&e.to_string()),
     }
 }

@@ -4,9 +4,10 @@
 //! opens, unless `ITGFX_REQUIRE_VULKAN=1` (CI, on lavapipe) requires it.
 
 use itgfx_backends::BackendChoice;
+use itgfx_backends::backend::open_volume;
 use itgfx_backends::viewpoint::{ViewpointChannel, icosphere};
 use itgfx_backends::volume::builtin::built_in;
-use itgfx_backends::volume::cast::{VolumeCaster, open};
+use itgfx_backends::volume::cast::VolumeCaster;
 use itgfx_backends::volume::raycast::Caster;
 use itgfx_backends::volume::{TransferFunction, VolumeChannelOptions, volume_channel};
 use itgfx_backends::vulkan::volume::VulkanVolumeCaster;
@@ -85,7 +86,7 @@ fn chunked_and_close_views_agree() {
 fn open_names_the_backends() {
     let v = built_in("cube:8").unwrap();
     let caster = Caster::new(&v, &TransferFunction::preset("step").unwrap(), 0.5);
-    assert_eq!(open(BackendChoice::Cpu, &caster).unwrap().name(), "cpu");
-    let e = open(BackendChoice::Reference, &caster).err().unwrap();
-    assert!(e.to_string().contains("--backend cpu or vulkan"), "{e}");
+    assert_eq!(open_volume(BackendChoice::Cpu, &caster).unwrap().name(), "cpu");
+    let e = open_volume(BackendChoice::Reference, &caster).err().unwrap();
+    assert!(e.to_string().contains("cpu or vulkan backend"), "{e}");
 }

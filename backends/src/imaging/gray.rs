@@ -28,9 +28,7 @@ impl Gray {
     /// Smallest and largest sample (`(0, 0)` when empty).
     #[must_use]
     pub fn range(&self) -> (f32, f32) {
-        let mut it = self.data.iter().copied();
-        let first = it.next().unwrap_or(0.0);
-        it.fold((first, first), |(lo, hi), v| (lo.min(v), hi.max(v)))
+        range_of(&self.data)
     }
 
     /// Bilinear sample at continuous pixel coordinates (pixel centres at
@@ -75,31 +73,7 @@ impl Gray {
     /// (kernel radius `⌈3σ⌉`, edges clamped); `sigma ≤ 0` copies.
     #[must_use]
     pub fn smoothed(&self, sigma: f64) -> Self {
-        if sigma <= 0.0 || self.data.is_empty() {
-            return self.clone();
-        }
-        let r = (3.0 * sigma).ceil() as isize;
-        let mut k: Vec<f64> = (-r..=r).map(|i| (-((i * i) as f64) / (2.0 * sigma * sigma)).exp()).collect();
-        let s: f64 = k.iter().sum();
-        k.iter_mut().for_each(|v| *v /= s);
-        let (w, h) = (self.width as isize, self.height as isize);
-        let pass = |src: &[f32], horizontal: bool| -> Vec<f32> {
-            let mut out = vec![0.0f32; src.len()];
-            for y in 0..h {
-                for x in 0..w {
-                    let mut acc = 0.0;
-                    for (j, kv) in k.iter().enumerate() {
-                        let d = j as isize - r;
-                        let (xx, yy) =
-                            if horizontal { ((x + d).clamp(0, w - 1), y) } else { (x, (y + d).clamp(0, h - 1)) };
-                        acc += kv * f64::from(src[(yy * w + xx) as usize]);
-                    }
-                    out[(y * w + x) as usize] = acc as f32;
-                }
-            }
-            out
-        };
-        let data = pass(&pass(&self.data, true), false);
+        let data = smooth_grid(&self.data, &[self.width, self.height], sigma);
         Self { width: self.width, height: self.height, data }
     }
 
@@ -123,6 +97,56 @@ impl Gray {
         }
         out
     }
+}
+
+/// Smallest and largest of `data` (`(0, 0)` when empty).
+pub(super) fn range_of(data: &[f32]) -> (f32, f32) {
+    let mut it = data.iter().copied();
+    let first = it.next().unwrap_or(0.0);
+    it.fold((first, first), |(lo, hi), v| (lo.min(v), hi.max(v)))
+}
+
+/// The normalised Gaussian taps `exp(−i²/2σ²)`, `i ∈ [−⌈3σ⌉, ⌈3σ⌉]`.
+fn gaussian_kernel(sigma: f64) -> Vec<f64> {
+    let r = (3.0 * sigma).ceil() as isize;
+    let mut k: Vec<f64> = (-r..=r).map(|i| (-((i * i) as f64) / (2.0 * sigma * sigma)).exp()).collect();
+    let s: f64 = k.iter().sum();
+    k.iter_mut().for_each(|v| *v /= s);
+    k
+}
+
+/// One pass of the odd-length kernel `k` along `axis` of a grid stored with
+/// `dims[0]` fastest, edges clamped.
+fn convolve_axis(src: &[f32], dims: &[usize], axis: usize, k: &[f64]) -> Vec<f32> {
+    let r = (k.len() / 2) as isize;
+    let stride: usize = dims[..axis].iter().product();
+    let n = dims[axis] as isize;
+    let mut out = vec![0.0f32; src.len()];
+    for (idx, o) in out.iter_mut().enumerate() {
+        let pos = ((idx / stride) % dims[axis]) as isize;
+        let base = idx - pos as usize * stride;
+        let mut acc = 0.0;
+        for (j, kv) in k.iter().enumerate() {
+            let p = (pos + j as isize - r).clamp(0, n - 1) as usize;
+            acc += kv * f64::from(src[base + p * stride]);
+        }
+        *o = acc as f32;
+    }
+    out
+}
+
+/// Separable Gaussian smoothing of a 2D or 3D grid (`dims[0]` fastest),
+/// one pass per axis in order; `sigma ≤ 0` copies.
+pub(super) fn smooth_grid(data: &[f32], dims: &[usize], sigma: f64) -> Vec<f32> {
+    if sigma <= 0.0 || data.is_empty() {
+        return data.to_vec();
+    }
+    let k = gaussian_kernel(sigma);
+    let mut out = convolve_axis(data, dims, 0, &k);
+    for axis in 1..dims.len() {
+        out = convolve_axis(&out, dims, axis, &k);
+    }
+    out
 }
 
 #[cfg(test)]

@@ -24,9 +24,10 @@ pub struct Level {
     pub sigma: f64,
 }
 
-/// What to do.
+/// What to do; `T` is the transform ([`Rigid2`] for images,
+/// [`super::Rigid3`] for volumes).
 #[derive(Clone, Debug, PartialEq)]
-pub struct RegisterOptions {
+pub struct RegisterOptions<T = Rigid2> {
     /// Histogram bins per axis (2..=256).
     pub bins: usize,
     /// Binned or Parzen histogram.
@@ -36,7 +37,7 @@ pub struct RegisterOptions {
     /// Coarse to fine.
     pub levels: Vec<Level>,
     /// Starting transform.
-    pub initial: Rigid2,
+    pub initial: T,
     /// Most Powell iterations per level.
     pub max_iterations: usize,
     /// Least fraction of the fixed pixels that must map inside the moving
@@ -49,7 +50,7 @@ pub struct RegisterOptions {
     pub max_step: f64,
 }
 
-impl Default for RegisterOptions {
+impl<T: Default> Default for RegisterOptions<T> {
     fn default() -> Self {
         Self {
             bins: 32,
@@ -60,7 +61,7 @@ impl Default for RegisterOptions {
                 Level { shrink: 2, sigma: 1.0 },
                 Level { shrink: 1, sigma: 1.0 },
             ],
-            initial: Rigid2::default(),
+            initial: T::default(),
             max_iterations: 50,
             min_overlap: 0.25,
             max_step: 8.0,
@@ -188,6 +189,93 @@ impl Pair {
     }
 }
 
+/// One pyramid level of a fixed/moving pair in 2 or 3 dimensions, seen by
+/// the search as a function of `P` transform parameters.
+pub(super) trait LevelPair<const P: usize> {
+    /// Fills `h` for parameters `p`; returns the fraction of fixed samples
+    /// whose mapped point falls inside the moving image.
+    fn fill(&self, p: &[f64; P], kind: HistogramKind, h: &mut JointHistogram) -> f64;
+    /// The level's sizes, fixed image.
+    fn size(&self) -> Vec<usize>;
+}
+
+impl LevelPair<3> for Pair {
+    /// Parameters `(t_x, t_y, θ°)`: Powell's directions start as the
+    /// translations, then the rotation, the shift usually being the larger
+    /// part of a misalignment.
+    fn fill(&self, p: &[f64; 3], kind: HistogramKind, h: &mut JointHistogram) -> f64 {
+        self.histogram(&Rigid2 { angle_deg: p[2], tx: p[0], ty: p[1] }, kind, h)
+    }
+
+    fn size(&self) -> Vec<usize> {
+        vec![self.fixed.width, self.fixed.height]
+    }
+}
+
+/// One level of a search: the parameters it ended at and Powell's record.
+pub(super) struct LevelSearch<const P: usize> {
+    pub(super) level: Level,
+    pub(super) size: Vec<usize>,
+    pub(super) iterations: usize,
+    pub(super) evaluations: usize,
+    pub(super) x: [f64; P],
+    /// Metric at the level's start, then after each iteration.
+    pub(super) trace: Vec<f64>,
+}
+
+/// The multiresolution search shared by 2D and 3D: at each level, Powell
+/// maximises `o.metric` of the pair `make(level)` from the previous level's
+/// parameters, starting along `scales(level)` (one unit of each moves the
+/// image's rim by about one level pixel or voxel). Returns the levels and,
+/// at full resolution unsmoothed, the entropies at `x0` (`None` without
+/// overlap), at the answer, and the answer's overlap.
+pub(super) fn search<const P: usize, T, L: LevelPair<P>>(
+    o: &RegisterOptions<T>,
+    x0: [f64; P],
+    make: impl Fn(Level) -> L,
+    scales: impl Fn(Level) -> [f64; P],
+    mut progress: impl FnMut(usize, usize),
+) -> Result<(Vec<LevelSearch<P>>, Option<JointEntropies>, JointEntropies, f64), RegisterError> {
+    let mut x = x0;
+    let mut h = JointHistogram::new(o.bins);
+    let mut levels = Vec::with_capacity(o.levels.len());
+    for (k, &level) in o.levels.iter().enumerate() {
+        progress(k, o.levels.len());
+        let pair = make(level);
+        let objective = |p: &[f64; P]| {
+            let overlap = pair.fill(p, o.kind, &mut h);
+            if overlap < o.min_overlap {
+                return PENALTY;
+            }
+            h.entropies(Base::Bits).map_or(PENALTY, |e| -o.metric.value(&e))
+        };
+        let popt = PowellOptions {
+            ftol: 1e-7,
+            xtol: if level.shrink == 1 { 0.002 } else { 0.01 },
+            max_iterations: o.max_iterations,
+            max_step: if k == 0 { o.max_step } else { o.max_step / 2.0 },
+        };
+        let r = minimise(objective, x, scales(level), &popt);
+        x = r.x;
+        levels.push(LevelSearch {
+            level,
+            size: pair.size(),
+            iterations: r.iterations,
+            evaluations: r.evaluations,
+            x,
+            trace: r.trace.iter().map(|v| -v).collect(),
+        });
+    }
+    let full = make(Level { shrink: 1, sigma: 0.0 });
+    let initial = {
+        let ov = full.fill(&x0, o.kind, &mut h);
+        if ov > 0.0 { h.entropies(Base::Bits) } else { None }
+    };
+    let overlap = full.fill(&x, o.kind, &mut h);
+    let entropies = h.entropies(Base::Bits).ok_or(RegisterError::NoOverlap)?;
+    Ok((levels, initial, entropies, overlap))
+}
+
 /// Registers `moving` onto `fixed`; `progress(level, levels)` is called as
 /// each level starts.
 ///
@@ -197,7 +285,7 @@ pub fn register(
     fixed: &Gray,
     moving: &Gray,
     o: &RegisterOptions,
-    mut progress: impl FnMut(usize, usize),
+    progress: impl FnMut(usize, usize),
 ) -> Result<Registration, RegisterError> {
     if (fixed.width, fixed.height) != (moving.width, moving.height) {
         return Err(RegisterError::SizeMismatch);
@@ -212,49 +300,29 @@ pub fn register(
         }
     }
     let radius = fixed.width.max(fixed.height) as f64 / 2.0;
-    let mut t = o.initial;
-    let mut h = JointHistogram::new(o.bins);
-    let mut levels = Vec::with_capacity(o.levels.len());
-    for (k, &level) in o.levels.iter().enumerate() {
-        progress(k, o.levels.len());
-        let pair = Pair::new(fixed, moving, level, o.bins);
-        let s = level.shrink as f64;
-        // Powell's directions start as the translations, then the rotation:
-        // the shift is usually the larger part of a misalignment.
-        let objective = |p: &[f64; 3]| {
-            let tr = Rigid2 { angle_deg: p[2], tx: p[0], ty: p[1] };
-            let overlap = pair.histogram(&tr, o.kind, &mut h);
-            if overlap < o.min_overlap {
-                return PENALTY;
-            }
-            h.entropies(Base::Bits).map_or(PENALTY, |e| -o.metric.value(&e))
-        };
-        let popt = PowellOptions {
-            ftol: 1e-7,
-            xtol: if level.shrink == 1 { 0.002 } else { 0.01 },
-            max_iterations: o.max_iterations,
-            max_step: if k == 0 { o.max_step } else { o.max_step / 2.0 },
-        };
-        // One unit of each direction moves the image's rim by about one level pixel.
-        let scales = [s, s, s * radius.recip().to_degrees()];
-        let r = minimise(objective, [t.tx, t.ty, t.angle_deg], scales, &popt);
-        t = Rigid2 { angle_deg: r.x[2], tx: r.x[0], ty: r.x[1] };
-        levels.push(LevelResult {
-            level,
-            size: (pair.fixed.width, pair.fixed.height),
-            iterations: r.iterations,
-            evaluations: r.evaluations,
-            transform: t,
-            trace: r.trace.iter().map(|v| -v).collect(),
-        });
-    }
-    let full = Pair::new(fixed, moving, Level { shrink: 1, sigma: 0.0 }, o.bins);
-    let initial_entropies = {
-        let ov = full.histogram(&o.initial, o.kind, &mut h);
-        if ov > 0.0 { h.entropies(Base::Bits) } else { None }
-    };
-    let overlap = full.histogram(&t, o.kind, &mut h);
-    let entropies = h.entropies(Base::Bits).ok_or(RegisterError::NoOverlap)?;
+    let to = |p: [f64; 3]| Rigid2 { angle_deg: p[2], tx: p[0], ty: p[1] };
+    let (found, initial_entropies, entropies, overlap) = search(
+        o,
+        [o.initial.tx, o.initial.ty, o.initial.angle_deg],
+        |level| Pair::new(fixed, moving, level, o.bins),
+        |level| {
+            let s = level.shrink as f64;
+            [s, s, s * radius.recip().to_degrees()]
+        },
+        progress,
+    )?;
+    let levels: Vec<LevelResult> = found
+        .into_iter()
+        .map(|l| LevelResult {
+            level: l.level,
+            size: (l.size[0], l.size[1]),
+            iterations: l.iterations,
+            evaluations: l.evaluations,
+            transform: to(l.x),
+            trace: l.trace,
+        })
+        .collect();
+    let t = levels.last().map_or(o.initial, |l| l.transform);
     Ok(Registration { transform: t, metric: o.metric.value(&entropies), entropies, initial_entropies, overlap, levels })
 }
 

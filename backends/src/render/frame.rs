@@ -13,7 +13,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::path::{PathTracer, Start, Stratum};
+use super::path::{PathTracer, Start, Stratum, strata};
 use crate::camera::Camera;
 use crate::lines::{LineRng, SeedHash};
 use crate::tracer::BackendError;
@@ -89,6 +89,10 @@ pub struct PixelSamples {
     pub rgb: Vec<[f64; 3]>,
 }
 
+/// A pixel a policy rendered its own way ([`Policy::render_own`]): mean
+/// RGB, image samples, pilot samples.
+pub type OwnPixel = ([f64; 3], u32, u32);
+
 /// How many samples a pixel takes: a first batch, then more while the
 /// policy asks for them.
 pub trait Policy: Sync {
@@ -101,20 +105,19 @@ pub trait Policy: Sync {
     fn unbiased(&self) -> bool {
         false
     }
-    /// The refinement tree of Part IV §6 instead of batches.
-    fn tree(&self) -> Option<super::tree::Tree> {
+    /// A policy that renders its pixels its own way (the refinement tree of
+    /// Part IV §6) instead of in batches: (mean, image samples, pilot
+    /// samples) per pixel of `ids`. The hook keeps this file below the
+    /// policies that use its types.
+    fn render_own(
+        &self,
+        _pt: &PathTracer,
+        _view: &View,
+        _ids: &[u32],
+        _estimate: bool,
+    ) -> Option<Result<Vec<OwnPixel>, BackendError>> {
         None
     }
-}
-
-/// `a × b` strata of a batch of `n` samples: `a` the largest divisor ≤ √n.
-#[must_use]
-pub fn strata(n: u32) -> (u32, u32) {
-    let mut a = (f64::from(n).sqrt() as u32).max(1);
-    while a > 1 && !n.is_multiple_of(a) {
-        a -= 1;
-    }
-    (a, n / a.max(1))
 }
 
 /// Image-plane position of sample `i` of pixel `(x, y)`, which is sample
@@ -296,8 +299,8 @@ fn render_pixels(
     ids: &[u32],
     estimate: bool,
 ) -> Result<Vec<PixelValue>, BackendError> {
-    if let Some(t) = policy.tree() {
-        let values = super::tree::render_tree(pt, view, &t, ids, estimate)?;
+    if let Some(values) = policy.render_own(pt, view, ids, estimate) {
+        let values = values?;
         return Ok(values
             .into_iter()
             .map(|(rgb, samples, pilot)| PixelValue { rgb, variance: None, samples, pilot })

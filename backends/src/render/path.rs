@@ -34,10 +34,19 @@ use std::f32::consts::FRAC_1_PI;
 
 use glam::{DVec3, Vec3A};
 
-use super::frame::strata as strata_of;
 use super::lights::{Lights, Surfaces};
 use crate::lines::{Line, LineRng, cosine_direction32, pcg, permute};
 use crate::tracer::{BackendError, Prepared, Tracer};
+
+/// `a × b` strata of a batch of `n` samples: `a` the largest divisor ≤ √n.
+#[must_use]
+pub fn strata(n: u32) -> (u32, u32) {
+    let mut a = (f64::from(n).sqrt() as u32).max(1);
+    while a > 1 && !n.is_multiple_of(a) {
+        a -= 1;
+    }
+    (a, n / a.max(1))
+}
 
 /// Offset of a new ray's origin along the shading normal (normalised
 /// units; f32 hit points are good to about 1e-7).
@@ -251,7 +260,7 @@ impl PathTracer<'_> {
                     let (mut l1, mut l2, mut d1, mut d2) = (u(1), u(2), u(3), u(4));
                     if let Some(s) = strata {
                         let s = &s[p.slot as usize];
-                        let grid = strata_of(s.count);
+                        let grid = self::strata(s.count);
                         let v = p.depth.wrapping_mul(0x9E37_79B9);
                         (l1, l2) = s.place(grid, v ^ 0x4c49_4748, l1, l2);
                         (d1, d2) = s.place(grid, v ^ 0x4449_5245, d1, d2);
@@ -316,7 +325,7 @@ mod tests {
     #[test]
     fn a_batch_covers_each_cell_once() {
         for count in [1u32, 7, 8, 60, 64, 256] {
-            let grid = strata_of(count);
+            let grid = self::strata(count);
             for which in [0x4c49_4748u32, 0x4449_5245, 5u32.wrapping_mul(0x9E37_79B9) ^ 0x4c49_4748] {
                 let mut seen = vec![false; count as usize];
                 let rng = LineRng::new(3, u64::from(count));

@@ -24,6 +24,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::frame::Frame;
+use crate::shards::{Difference, Foreign, Setting, ShardError};
 pub use crate::viewpoint::shard_file::MeshFingerprint;
 
 /// The `format` field of a render shard file.
@@ -63,23 +64,24 @@ pub struct RenderSettings {
 }
 
 impl RenderSettings {
-    /// The first setting that differs from `other`'s, as `name A here, B there`.
+    /// The first setting that differs from `other`'s.
     #[must_use]
-    pub fn difference(&self, other: &Self) -> Option<String> {
-        let d = |name: &str, a: String, b: String| (a != b).then(|| format!("{name} {a} here, {b} there"));
-        d("--sampler", self.sampler.clone(), other.sampler.clone())
-            .or_else(|| d("--spp", self.spp.to_string(), other.spp.to_string()))
-            .or_else(|| d("--max-spp", self.max_spp.to_string(), other.max_spp.to_string()))
-            .or_else(|| d("--threshold", format!("{:?}", self.threshold), format!("{:?}", other.threshold)))
-            .or_else(|| d("--tutorial-form", (!self.unbiased).to_string(), (!other.unbiased).to_string()))
-            .or_else(|| d("--delta", format!("{:?}", self.delta), format!("{:?}", other.delta)))
-            .or_else(|| d("--binary-contrast", self.binary_contrast.to_string(), other.binary_contrast.to_string()))
+    pub fn difference(&self, other: &Self) -> Option<Difference> {
+        let d = |s: Setting, a: String, b: String| Difference::of(s, a, b, "there");
+        d(Setting::Sampler, self.sampler.clone(), other.sampler.clone())
+            .or_else(|| d(Setting::SamplesPerPixel, self.spp.to_string(), other.spp.to_string()))
+            .or_else(|| d(Setting::MaxSamplesPerPixel, self.max_spp.to_string(), other.max_spp.to_string()))
+            .or_else(|| d(Setting::Threshold, format!("{:?}", self.threshold), format!("{:?}", other.threshold)))
+            .or_else(|| d(Setting::TutorialForm, (!self.unbiased).to_string(), (!other.unbiased).to_string()))
+            .or_else(|| d(Setting::Delta, format!("{:?}", self.delta), format!("{:?}", other.delta)))
+            .or_else(|| d(Setting::BinaryContrast, self.binary_contrast.to_string(), other.binary_contrast.to_string()))
             .or_else(|| {
-                d("--size", format!("{}x{}", self.width, self.height), format!("{}x{}", other.width, other.height))
+                let size = |s: &Self| format!("{}x{}", s.width, s.height);
+                d(Setting::ImageSize, size(self), size(other))
             })
-            .or_else(|| d("--seed", self.seed.to_string(), other.seed.to_string()))
-            .or_else(|| d("--camera", format!("{:?}", self.camera), format!("{:?}", other.camera)))
-            .or_else(|| d("--backend", self.backend.clone(), other.backend.clone()))
+            .or_else(|| d(Setting::Seed, self.seed.to_string(), other.seed.to_string()))
+            .or_else(|| d(Setting::Camera, format!("{:?}", self.camera), format!("{:?}", other.camera)))
+            .or_else(|| d(Setting::Backend, self.backend.clone(), other.backend.clone()))
     }
 }
 
@@ -159,7 +161,7 @@ impl RenderShard {
     ///
     /// # Errors
     /// One line naming what is wrong.
-    pub fn from_json(text: &str) -> Result<Self, String> {
+    pub fn from_json(text: &str) -> Result<Self, ShardError> {
         let s: Self = crate::shards::read_json(text, "render shard file", FORMAT_NAME, FORMAT_VERSION)?;
         s.validate()?;
         Ok(s)
@@ -168,8 +170,12 @@ impl RenderShard {
     /// Checks the invariants the merge relies on.
     ///
     /// # Errors
-    /// One line naming the first violation.
-    pub fn validate(&self) -> Result<(), String> {
+    /// [`ShardError::Invalid`] naming the first violation.
+    pub fn validate(&self) -> Result<(), ShardError> {
+        self.violation().map_err(ShardError::Invalid)
+    }
+
+    fn violation(&self) -> Result<(), String> {
         let st = &self.settings;
         if st.width == 0 || st.height == 0 {
             return Err("an empty image".into());
@@ -197,20 +203,24 @@ impl RenderShard {
 /// # Errors
 /// One line: foreign shards (another scene or settings than the first, or
 /// another threshold), duplicates, missing ones.
-pub fn merge(named: Vec<(String, RenderShard)>) -> Result<(RenderShard, Frame), String> {
-    let first = named.first().map(|s| s.1.clone()).ok_or_else(|| "--merge: no shard files".to_string())?;
+pub fn merge(named: Vec<(String, RenderShard)>) -> Result<(RenderShard, Frame), ShardError> {
+    let first = named.first().map(|s| s.1.clone()).ok_or(ShardError::NoShards)?;
     let foreign = |s: &RenderShard| {
         if s.scene != first.scene {
-            return Some(format!(
+            return Some(Foreign::Other(format!(
                 "a shard of another scene ({:?}, hash {}), not of {:?} (hash {})",
                 s.scene.name, s.scene.hash, first.scene.name, first.scene.hash
-            ));
+            )));
         }
         if let Some(d) = first.settings.difference(&s.settings) {
-            return Some(format!("a shard of another run ({d})"));
+            return Some(Foreign::Run(d));
         }
-        (s.threshold_used != first.threshold_used)
-            .then(|| format!("a shard that used threshold {:?}, not {:?}", s.threshold_used, first.threshold_used))
+        (s.threshold_used != first.threshold_used).then(|| {
+            Foreign::Other(format!(
+                "a shard that used threshold {:?}, not {:?}",
+                s.threshold_used, first.threshold_used
+            ))
+        })
     };
     let shards = crate::shards::order(named, |s| (s.shard, s.shards), foreign)?;
     let mut frame = Frame {
@@ -276,11 +286,12 @@ mod tests {
         let want: Vec<[f64; 3]> = parts.iter().flat_map(|s| s.rgb.clone()).collect();
         assert_eq!(frame.rgb, want);
         let err = merge(vec![("a".into(), shard(0, 3, 1)), ("b".into(), shard(1, 3, 2))]).unwrap_err();
-        assert_eq!(err, "b: a shard of another run (--seed 1 here, 2 there)");
-        assert!(merge(vec![("a".into(), shard(0, 3, 1))]).unwrap_err().contains("1/3, 2/3 missing"));
+        assert_eq!(err.to_string(), "b: a shard of another run (seed 1 here, 2 there)");
+        assert!(merge(vec![("a".into(), shard(0, 3, 1))]).unwrap_err().to_string().contains("1/3, 2/3 missing"));
         let mut bad = shard(1, 3, 1);
         bad.first_row = 0;
-        assert!(RenderShard::from_json(&bad.to_json().unwrap()).unwrap_err().contains("wrong rows"));
-        assert!(RenderShard::from_json("{\"format\":\"itgfx-counts\"}").unwrap_err().contains("not a render shard"));
+        assert!(RenderShard::from_json(&bad.to_json().unwrap()).unwrap_err().to_string().contains("wrong rows"));
+        let other = RenderShard::from_json("{\"format\":\"itgfx-counts\"}").unwrap_err();
+        assert!(other.to_string().contains("not a render shard"));
     }
 }

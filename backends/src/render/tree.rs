@@ -35,7 +35,7 @@ use itgfx_core::pixel::{
     pixel_contrast, priority_colour,
 };
 
-use super::frame::{PILOT, PixelSamples, Policy, View};
+use super::frame::{OwnPixel, PILOT, PixelSamples, Policy, View};
 use super::path::{PathTracer, Start};
 use crate::lines::LineRng;
 use crate::tracer::BackendError;
@@ -95,8 +95,14 @@ impl Policy for Tree {
     fn more(&self, _: &PixelSamples) -> u32 {
         0
     }
-    fn tree(&self) -> Option<Tree> {
-        Some(*self)
+    fn render_own(
+        &self,
+        pt: &PathTracer,
+        view: &View,
+        ids: &[u32],
+        estimate: bool,
+    ) -> Option<Result<Vec<OwnPixel>, BackendError>> {
+        Some(render_tree(pt, view, self, ids, estimate))
     }
     fn unbiased(&self) -> bool {
         self.unbiased

@@ -121,11 +121,11 @@ impl std::fmt::Display for SimplifyError {
             SimplifyError::Channel(e) => e.fmt(f),
             SimplifyError::TooLarge { bytes } => write!(
                 f,
-                "the viewpoint weights need {:.1} GiB (more than {} GiB): use fewer --viewpoints",
+                "the viewpoint weights need {:.1} GiB (more than {} GiB): fewer viewpoints need less",
                 *bytes as f64 / f64::from(1u32 << 30),
                 MAX_BYTES >> 30
             ),
-            SimplifyError::Memory(e) => write!(f, "{e}: use fewer --viewpoints"),
+            SimplifyError::Memory(e) => write!(f, "{e}: fewer viewpoints need less"),
         }
     }
 }

@@ -32,6 +32,7 @@
 //! [`Prepared`]). Design notes: `docs/TRACING.md`.
 
 mod cpu;
+mod error;
 mod interleave;
 mod node8;
 mod packet;
@@ -44,9 +45,9 @@ pub use cpu::CpuTracer;
 pub(crate) use cpu::bvh_input;
 pub use reference::ReferenceTracer;
 
-pub use crate::backend::BackendError;
 use crate::lines::Line;
 use crate::scene::{Scene, SphereCells};
+pub use error::BackendError;
 
 /// How far [`Line::ray`] backs a ray's origin off (normalised units): ten
 /// times obvhs's near-culling distance of 1e-4.
@@ -189,6 +190,14 @@ pub struct Prepared {
     pub scale: f64,
     /// Number of patches.
     pub patches: usize,
+}
+
+impl crate::camera::Camera {
+    /// The same camera in the tracer's normalised coordinates.
+    #[must_use]
+    pub fn normalised(&self, p: &Prepared) -> Self {
+        Self { eye: p.to_normalised(self.eye), ..*self }
+    }
 }
 
 impl Prepared {

@@ -28,6 +28,7 @@ use serde::{Deserialize, Serialize};
 
 use super::ViewpointChannel;
 use super::solid_angle::ViewLadder;
+use crate::shards::{Difference, Foreign, Setting, ShardError};
 use crate::tracer::Prepared;
 
 /// The `format` field of a viewpoint shard file.
@@ -123,18 +124,18 @@ pub struct ShardSettings {
 }
 
 impl ShardSettings {
-    /// The first setting that differs from `other`'s (a shard's), as
-    /// `name A here, B in the shard`.
+    /// The first setting that differs from `other`'s (a shard's).
     #[must_use]
-    pub fn difference(&self, other: &Self) -> Option<String> {
-        let d = |name: &str, a: String, b: String| (a != b).then(|| format!("{name} {a} here, {b} in the shard"));
-        let resolution = if self.estimator == VOLUME_ESTIMATOR { "--size" } else { "--resolution" };
-        d("--viewpoints", self.viewpoints.to_string(), other.viewpoints.to_string())
-            .or_else(|| d("--estimator", self.estimator.clone(), other.estimator.clone()))
-            .or_else(|| d("--distance", format!("{:?}", self.distance), format!("{:?}", other.distance)))
-            .or_else(|| d("subdivision levels", format!("{:?}", self.levels), format!("{:?}", other.levels)))
+    pub fn difference(&self, other: &Self) -> Option<Difference> {
+        let d = |s: Setting, a: String, b: String| Difference::of(s, a, b, "in the shard");
+        let resolution =
+            if self.estimator == VOLUME_ESTIMATOR { Setting::ImageResolution } else { Setting::Resolution };
+        d(Setting::Viewpoints, self.viewpoints.to_string(), other.viewpoints.to_string())
+            .or_else(|| d(Setting::Estimator, self.estimator.clone(), other.estimator.clone()))
+            .or_else(|| d(Setting::Distance, format!("{:?}", self.distance), format!("{:?}", other.distance)))
+            .or_else(|| d(Setting::Levels, format!("{:?}", self.levels), format!("{:?}", other.levels)))
             .or_else(|| d(resolution, self.resolution.to_string(), other.resolution.to_string()))
-            .or_else(|| d("--backend", self.backend.clone(), other.backend.clone()))
+            .or_else(|| d(Setting::Backend, self.backend.clone(), other.backend.clone()))
     }
 }
 
@@ -273,7 +274,7 @@ impl ViewpointShard {
     ///
     /// # Errors
     /// One line naming what is wrong.
-    pub fn from_json(text: &str) -> Result<Self, String> {
+    pub fn from_json(text: &str) -> Result<Self, ShardError> {
         let s: Self = crate::shards::read_json(text, "viewpoint shard file", FORMAT_NAME, FORMAT_VERSION)?;
         s.validate()?;
         Ok(s)
@@ -282,8 +283,12 @@ impl ViewpointShard {
     /// Checks the invariants the merge relies on.
     ///
     /// # Errors
-    /// One line naming the first violation.
-    pub fn validate(&self) -> Result<(), String> {
+    /// [`ShardError::Invalid`] naming the first violation.
+    pub fn validate(&self) -> Result<(), ShardError> {
+        self.violation().map_err(ShardError::Invalid)
+    }
+
+    fn violation(&self) -> Result<(), String> {
         let st = &self.settings;
         if self.shards == 0 || self.shard >= self.shards || self.shards > st.viewpoints {
             return Err(format!("shard {}/{} of {} viewpoints is not a shard", self.shard, self.shards, st.viewpoints));
@@ -370,18 +375,18 @@ pub fn order_shards(
     named: Vec<(String, ViewpointShard)>,
     scene: &MeshFingerprint,
     settings: &ShardSettings,
-) -> Result<Vec<ViewpointShard>, String> {
+) -> Result<Vec<ViewpointShard>, ShardError> {
     crate::shards::order(
         named,
         |s| (s.shard, s.shards),
         |s| {
             if s.scene != *scene {
-                return Some(format!(
+                return Some(Foreign::Other(format!(
                     "a shard of another scene ({:?}, {} patches, hash {}), not of {:?} ({} patches, hash {})",
                     s.scene.name, s.scene.patches, s.scene.hash, scene.name, scene.patches, scene.hash
-                ));
+                )));
             }
-            settings.difference(&s.settings).map(|d| format!("a shard of another run ({d})"))
+            settings.difference(&s.settings).map(Foreign::Run)
         },
     )
 }

@@ -219,7 +219,7 @@ impl VisibilityCounts {
         let version = r.u32("the version")?;
         if version != BINARY_VERSION {
             return Err(CountsError::Format(format!(
-                "a binary counts file of version {version}: this itgfx reads version {BINARY_VERSION}; count again with --save-counts"
+                "a binary counts file of version {version}: this itgfx reads version {BINARY_VERSION}; count again to save them in this version"
             )));
         }
         let flags = r.u32("the flags")?;
@@ -371,7 +371,7 @@ impl VisibilityCounts {
         let version = f.u32("the version")?;
         if version != BINARY_VERSION {
             return Err(CountsError::Format(format!(
-                "a binary counts file of version {version}: this itgfx reads version {BINARY_VERSION}; count again with --save-counts"
+                "a binary counts file of version {version}: this itgfx reads version {BINARY_VERSION}; count again to save them in this version"
             )));
         }
         let (flags, seed, blocks) = (f.u32("the flags")?, f.u64("the seed")?, f.u32("the block count")?);

@@ -154,7 +154,7 @@ impl VisibilityCounts {
     pub fn load(text: &str) -> Result<(String, Self), CountsError> {
         if text.starts_with("itgfx-counts 1") {
             return Err(CountsError::Format(
-                "a version 1 counts file: this itgfx reads version 2; count again with --save-counts".into(),
+                "a version 1 counts file: this itgfx reads version 2; count again to save them in this version".into(),
             ));
         }
         let f: File = serde_json::from_str(text)

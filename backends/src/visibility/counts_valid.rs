@@ -3,9 +3,16 @@
 //! block shares, sparse entries, totals, the `I_S^c` sums), checked on every
 //! file read, whatever its format (JSON v2 or binary v3).
 
-use super::count::block_lines;
 use super::{ContinuousSums, CountsError, MAX_BLOCKS, VisibilityCounts};
 use crate::scene::Scene;
+
+/// The lines of block `b` of `blocks` in `[start, end)`: the first index
+/// `i ≡ b (mod blocks)` and how many there are (stride `blocks`).
+#[must_use]
+pub fn block_lines(start: u64, end: u64, b: u64, blocks: u64) -> (u64, u64) {
+    let first = start.saturating_add((b + blocks - start % blocks) % blocks);
+    if first >= end { (first, 0) } else { (first, (end - 1 - first) / blocks + 1) }
+}
 
 /// Bound on `|ln(A_T F)|` for any finite positive `A_T F` (`ln(2^-1074)` is
 /// −744.4): the sums of a block are checked against it.

@@ -15,6 +15,7 @@ use std::borrow::Cow;
 
 use itgfx_core::sum::Neumaier;
 use itgfx_core::{Base, PairCount, SceneMeasures, entropy_nats_of_sums, kl_term, scene_measures_from_counts};
+use rayon::prelude::*;
 
 use super::merge::merge_sorted;
 use super::{BlockCounts, ContinuousSums, VisibilityCounts};
@@ -73,10 +74,10 @@ fn add_sorted(a: &[PairCount], b: &[PairCount]) -> Vec<PairCount> {
 }
 
 /// `N_ij` of all blocks, sorted, background as column `n` (pairwise merge
-/// tree: exact integer sums).
+/// tree: exact integer sums; the merges of a level run in parallel).
 fn total_pairs(blocks: &[Cow<'_, [PairCount]>]) -> Vec<PairCount> {
     let mut level: Vec<Vec<PairCount>> = blocks
-        .chunks(2)
+        .par_chunks(2)
         .map(|w| match w {
             [a, b] => add_sorted(a, b),
             [a] => a.to_vec(),
@@ -85,7 +86,7 @@ fn total_pairs(blocks: &[Cow<'_, [PairCount]>]) -> Vec<PairCount> {
         .collect();
     while level.len() > 1 {
         level = level
-            .chunks(2)
+            .par_chunks(2)
             .map(|w| match w {
                 [a, b] => add_sorted(a, b),
                 [a] => a.clone(),
@@ -94,6 +95,29 @@ fn total_pairs(blocks: &[Cow<'_, [PairCount]>]) -> Vec<PairCount> {
             .collect();
     }
     level.pop().unwrap_or_default()
+}
+
+/// `totals` cut into about `parts` runs of whole rows (a row's pairs are
+/// adjacent in a sorted list): the pieces per-row sums can be computed on
+/// in parallel, each row's terms still added in their order.
+fn row_pieces(totals: &[PairCount], parts: usize) -> Vec<&[PairCount]> {
+    let step = totals.len().div_ceil(parts.max(1)).max(1);
+    let mut pieces = Vec::with_capacity(parts + 1);
+    let mut at = 0;
+    while at < totals.len() {
+        let mut end = (at + step).min(totals.len());
+        while end < totals.len() && totals[end].from == totals[end - 1].from {
+            end += 1;
+        }
+        pieces.push(&totals[at..end]);
+        at = end;
+    }
+    pieces
+}
+
+/// Pieces of [`row_pieces`] per rayon thread.
+fn pieces_per_thread() -> usize {
+    rayon::current_num_threads() * 8
 }
 
 /// The first index `≥ from` of `totals` whose key is `key` (present by
@@ -125,47 +149,62 @@ fn leave_one_out_scene_entropy(a: &[f64], per_block: &[&[PairCount]], totals: &[
     let n = a.len();
     let mut s = vec![0.0; n];
     {
-        let mut acc = vec![Neumaier::new(); n];
-        for p in totals {
-            acc[p.from as usize].add(xlnx(p.count));
-        }
-        for (x, y) in s.iter_mut().zip(&acc) {
-            *x = y.value();
+        // Each row's `S_i` sums its pairs in order, so pieces of whole rows
+        // give the serial sums' bits.
+        let sums: Vec<Vec<(u32, f64)>> = row_pieces(totals, pieces_per_thread())
+            .into_par_iter()
+            .map(|piece| {
+                let mut out: Vec<(u32, f64)> = Vec::new();
+                let mut acc = Neumaier::new();
+                for (k, p) in piece.iter().enumerate() {
+                    acc.add(xlnx(p.count));
+                    if piece.get(k + 1).is_none_or(|q| q.from != p.from) {
+                        out.push((p.from, acc.value()));
+                        acc = Neumaier::new();
+                    }
+                }
+                out
+            })
+            .collect();
+        for (i, v) in sums.into_iter().flatten() {
+            s[i as usize] = v;
         }
     }
     let terms: Vec<f64> = (0..n).map(|i| row_term(a[i], rows[i], s[i])).collect();
     let mut full = Neumaier::new();
     terms.iter().for_each(|&t| full.add(t));
     let full = full.value();
-    let mut r = vec![0u64; n];
-    let mut d = vec![Neumaier::new(); n];
-    let mut touched: Vec<u32> = Vec::new();
+    // Blocks are independent: each in parallel, with per-thread scratch rows
+    // (left zeroed after each block).
     per_block
-        .iter()
-        .map(|pairs| {
-            let mut pos = 0;
-            for p in pairs.iter() {
-                pos = find(totals, pos, (p.from, p.to));
-                let total = totals[pos].count;
-                let i = p.from as usize;
-                if r[i] == 0 {
-                    touched.push(p.from);
+        .par_iter()
+        .map_init(
+            || (vec![0u64; n], vec![Neumaier::new(); n], Vec::<u32>::new()),
+            |(r, d, touched), pairs| {
+                let mut pos = 0;
+                for p in pairs.iter() {
+                    pos = find(totals, pos, (p.from, p.to));
+                    let total = totals[pos].count;
+                    let i = p.from as usize;
+                    if r[i] == 0 {
+                        touched.push(p.from);
+                    }
+                    r[i] += p.count;
+                    d[i].add(xlnx(total) - xlnx(total - p.count));
                 }
-                r[i] += p.count;
-                d[i].add(xlnx(total) - xlnx(total - p.count));
-            }
-            let mut h = Neumaier::new();
-            h.add(full);
-            for &i in &touched {
-                let i = i as usize;
-                h.add(-terms[i]);
-                h.add(row_term(a[i], rows[i] - r[i], s[i] - d[i].value()));
-                r[i] = 0;
-                d[i] = Neumaier::new();
-            }
-            touched.clear();
-            h.value().max(0.0)
-        })
+                let mut h = Neumaier::new();
+                h.add(full);
+                for &i in touched.iter() {
+                    let i = i as usize;
+                    h.add(-terms[i]);
+                    h.add(row_term(a[i], rows[i] - r[i], s[i] - d[i].value()));
+                    r[i] = 0;
+                    d[i] = Neumaier::new();
+                }
+                touched.clear();
+                h.value().max(0.0)
+            },
+        )
         .collect()
 }
 
@@ -184,16 +223,25 @@ fn jackknife(full: f64, leave_out: &[f64]) -> (f64, f64) {
 }
 
 impl VisibilityCounts {
-    /// Per-block pairs with background, the total pairs and their row
-    /// totals, areas with the background's zero appended.
-    #[allow(clippy::type_complexity)]
-    fn tables(&self) -> (Vec<Cow<'_, [PairCount]>>, Vec<PairCount>, Vec<u64>, Vec<f64>, SceneMeasures) {
+    /// Per-block pairs with background, the total pairs, areas with the
+    /// background's zero appended (the blocks and the merge levels in
+    /// parallel: exact integer sums, the same lists).
+    fn pair_tables(&self) -> (Vec<Cow<'_, [PairCount]>>, Vec<PairCount>, Vec<f64>) {
         let n = self.areas.len();
-        let per_block: Vec<Cow<'_, [PairCount]>> = self.blocks.iter().map(|b| with_background(b, n)).collect();
+        let per_block: Vec<Cow<'_, [PairCount]>> = self.blocks.par_iter().map(|b| with_background(b, n)).collect();
         let totals = total_pairs(&per_block);
         let mut a = self.areas.clone();
         a.push(0.0);
-        let mut rows = vec![0u64; n + 1];
+        (per_block, totals, a)
+    }
+
+    /// [`VisibilityCounts::pair_tables`] with the row totals and the
+    /// measures in nats.
+    #[cfg(test)]
+    #[allow(clippy::type_complexity)]
+    fn tables(&self) -> (Vec<Cow<'_, [PairCount]>>, Vec<PairCount>, Vec<u64>, Vec<f64>, SceneMeasures) {
+        let (per_block, totals, a) = self.pair_tables();
+        let mut rows = vec![0u64; a.len()];
         let m = scene_measures_from_counts(&a, &totals, &mut rows, Base::Nats).expect("validated counts");
         (per_block, totals, rows, a, m)
     }
@@ -224,8 +272,14 @@ impl VisibilityCounts {
     #[must_use]
     pub fn complexity(&self, base: Base) -> Complexity {
         let n = self.areas.len();
-        let (per_block, totals, rows, a, nats) = self.tables();
-        let mut measures = scene_measures_from_counts(&a, &totals, &mut vec![0; n + 1], base).expect("validated");
+        let (per_block, totals, a) = self.pair_tables();
+        // The measures in nats (and the row totals) and in `base`: two
+        // passes over the totals, side by side.
+        let mut rows = vec![0u64; n + 1];
+        let (nats, mut measures) = rayon::join(
+            || scene_measures_from_counts(&a, &totals, &mut rows, Base::Nats).expect("validated counts"),
+            || scene_measures_from_counts(&a, &totals, &mut vec![0; n + 1], base).expect("validated"),
+        );
         measures.patches = n;
         let k = base.per_nat();
         let cont = self
@@ -237,8 +291,40 @@ impl VisibilityCounts {
         let continuous = estimate(&cont);
         let used: Vec<&BlockCounts> = self.blocks.iter().filter(|b| b.lines > 0).collect();
         let (mut se, mut corrected, mut cse) = (None, None, None);
-        if used.len() >= 2 {
-            let mi = self.leave_one_out_mutual_information(&per_block, &totals, &rows, nats.positional_entropy, base);
+        // The leave-one-out `I_S` and the per-patch `I_i` (eq. (65)) side by
+        // side; each row's `I_i` adds its pairs in order, so pieces of whole
+        // rows give the serial sums' bits.
+        let total: f64 = self.areas.iter().sum();
+        let (mi, info_rows) = rayon::join(
+            || {
+                (used.len() >= 2).then(|| {
+                    self.leave_one_out_mutual_information(&per_block, &totals, &rows, nats.positional_entropy, base)
+                })
+            },
+            || {
+                row_pieces(&totals, pieces_per_thread())
+                    .into_par_iter()
+                    .map(|piece| {
+                        let mut out: Vec<(u32, f64)> = Vec::new();
+                        let mut acc = 0.0;
+                        for (e, p) in piece.iter().enumerate() {
+                            let (i, j) = (p.from as usize, p.to as usize);
+                            if j < n {
+                                let (ai, aj) = (self.areas[i] / total, self.areas[j] / total);
+                                let f = p.count as f64 / rows[i] as f64;
+                                acc += ai * kl_term(f, aj) * k;
+                            }
+                            if piece.get(e + 1).is_none_or(|q| q.from != p.from) {
+                                out.push((p.from, acc));
+                                acc = 0.0;
+                            }
+                        }
+                        out
+                    })
+                    .collect::<Vec<_>>()
+            },
+        );
+        if let Some(mi) = mi {
             let (s, c) = jackknife(measures.mutual_information, &mi);
             se = Some(s);
             corrected = Some(c);
@@ -258,14 +344,9 @@ impl VisibilityCounts {
                 cse = Some(jackknife(full, &ci).0);
             }
         }
-        // Per-patch I_i (eq. (65)) and I_i^c from the endpoint samples.
-        let total: f64 = self.areas.iter().sum();
         let mut info = vec![0.0; n];
-        for p in totals.iter().filter(|p| (p.to as usize) < n) {
-            let (i, j) = (p.from as usize, p.to as usize);
-            let (ai, aj) = (self.areas[i] / total, self.areas[j] / total);
-            let f = p.count as f64 / rows[i] as f64;
-            info[i] += ai * kl_term(f, aj) * k;
+        for (i, v) in info_rows.into_iter().flatten() {
+            info[i as usize] = v;
         }
         let patch_continuous = (0..n)
             .map(|i| {

@@ -95,7 +95,7 @@ fn same_run(
     }
     if a.3 != b.3 {
         return Err(CountsError::Mismatch(format!(
-            "the counts have {} and {} jackknife blocks: shards of one run share --blocks",
+            "the counts have {} and {} jackknife blocks: shards of one run share their block count",
             a.3, b.3
         )));
     }

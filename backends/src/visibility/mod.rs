@@ -96,6 +96,11 @@ impl FixedSum {
             let m = i128::from((bits & ((1 << 52) - 1)) | (1 << 52)) << (e - 52);
             return Self(if y < 0.0 { -m } else { m });
         }
+        if e < 63 {
+            // |y| < 2^63: the integer `y` is exact in an i64 (one
+            // instruction, where `as i128` is a library call).
+            return Self(i128::from(y as i64));
+        }
         Self(y as i128)
     }
 

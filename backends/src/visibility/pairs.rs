@@ -19,6 +19,7 @@ use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
 use itgfx_core::PairCount;
+use rayon::prelude::*;
 
 use super::CountsError;
 
@@ -143,19 +144,33 @@ impl Accumulator {
                     to: (idx % n) as u32,
                     count: u64::from(c),
                 };
-                let mut v: Vec<PairCount> = Vec::new();
+                let mut v: Vec<PairCount>;
                 if let Some(mut t) = touched.take() {
-                    t.sort_unstable();
+                    // Distinct cells: any sort gives the same order; this
+                    // one runs on every thread (the rest wait for it).
+                    t.par_sort_unstable();
                     v = t.iter().map(|&idx| pair(idx as usize, std::mem::take(&mut counts[idx as usize]))).collect();
                 } else {
-                    for (c, chunk) in counts.chunks_mut(16).enumerate() {
-                        if chunk.iter().fold(0, |a, &x| a | x) == 0 {
-                            continue;
-                        }
-                        for (k, x) in chunk.iter_mut().enumerate().filter(|(_, x)| **x > 0) {
-                            v.push(pair(c * 16 + k, std::mem::take(x)));
-                        }
-                    }
+                    // The sweep in pieces on every thread (the rest wait for
+                    // it), joined in order: the same sorted list.
+                    let piece = (counts.len() / (rayon::current_num_threads() * 8)).next_multiple_of(16).max(16);
+                    let parts: Vec<Vec<PairCount>> = counts
+                        .par_chunks_mut(piece)
+                        .enumerate()
+                        .map(|(p, part)| {
+                            let mut v = Vec::new();
+                            for (c, chunk) in part.chunks_mut(16).enumerate() {
+                                if chunk.iter().fold(0, |a, &x| a | x) == 0 {
+                                    continue;
+                                }
+                                for (k, x) in chunk.iter_mut().enumerate().filter(|(_, x)| **x > 0) {
+                                    v.push(pair(p * piece + c * 16 + k, std::mem::take(x)));
+                                }
+                            }
+                            v
+                        })
+                        .collect();
+                    v = parts.concat();
                 }
                 *touched = Some(Vec::new());
                 for (k, c) in overflow.drain() {

@@ -1,6 +1,6 @@
 //! The volume-casting seam: what the channel over voxels asks of a ray
-//! caster, and [`open`], which maps `--backend` to an implementation (as
-//! [`crate::backend::open`] does for the tracing seam).
+//! caster. [`crate::backend::open_volume`] maps a backend choice to an
+//! implementation, in the one registry that opens the tracing seam too.
 //!
 //! * `cpu`: [`Caster`] itself, rayon over viewpoints in the caller;
 //! * `vulkan`: [`crate::vulkan::volume::VulkanVolumeCaster`], a compute
@@ -11,7 +11,7 @@
 //! The pictures are always cast on the CPU: they are a few rays next to the
 //! channel's `N_v · size²`.
 
-use crate::backend::{BackendChoice, BackendError};
+use crate::backend::BackendError;
 use crate::camera::Camera;
 
 use super::raycast::Caster;
@@ -72,33 +72,5 @@ impl<T: VolumeCaster + ?Sized> VolumeCaster for &T {
 
     fn rays_finished_on_host(&self) -> u64 {
         (**self).rays_finished_on_host()
-    }
-}
-
-/// Bytes a backend allocates besides the channel for views of `rays` rays,
-/// before it allocates them: 0 on the CPU; the device's buffers on Vulkan
-/// ([`crate::vulkan::volume::device_memory`], host memory too on lavapipe).
-#[must_use]
-pub fn backend_memory(choice: BackendChoice, caster: &Caster<'_>, rays: u64) -> u64 {
-    match choice {
-        BackendChoice::Vulkan => crate::vulkan::volume::device_memory(caster, rayon::current_num_threads(), rays),
-        BackendChoice::Cpu | BackendChoice::Reference => 0,
-    }
-}
-
-/// Opens a volume caster over `caster`.
-///
-/// # Errors
-/// [`BackendError::Unavailable`] when Vulkan has no loader, driver or
-/// device, or for `reference` (a triangle tracer: volumes have none);
-/// [`BackendError::TooLarge`] when the volume exceeds the device's buffers.
-pub fn open<'a>(choice: BackendChoice, caster: &'a Caster<'a>) -> Result<Box<dyn VolumeCaster + 'a>, BackendError> {
-    match choice {
-        BackendChoice::Cpu => Ok(Box::new(caster)),
-        BackendChoice::Vulkan => Ok(Box::new(crate::vulkan::volume::VulkanVolumeCaster::new(caster)?)),
-        BackendChoice::Reference => Err(BackendError::Unavailable {
-            backend: "reference",
-            reason: "it traces triangles; volumes are cast by --backend cpu or vulkan".into(),
-        }),
     }
 }

@@ -69,7 +69,7 @@ pub fn channel_memory(caster: &Caster<'_>, seeable: usize, viewpoints: usize) ->
 /// a dense row of that length), then keeps its positive entries: the same
 /// sums, in the same order, as a row over every voxel. `progress(done,
 /// total)` counts viewpoints. The rays are cast by `backend` (the CPU's
-/// [`Caster`] or a device, [`super::cast::open`]): every backend gives these
+/// [`Caster`] or a device, [`crate::backend::open_volume`]): every backend gives these
 /// rows bit for bit.
 ///
 /// # Errors

@@ -43,7 +43,7 @@ pub struct DeviceInfo {
     pub heap_bytes: u64,
 }
 
-const FIX: &str = "install Mesa's Vulkan drivers (apt-get install mesa-vulkan-drivers libvulkan1) or a GPU driver, or use --backend cpu";
+const FIX: &str = "install Mesa's Vulkan drivers (apt-get install mesa-vulkan-drivers libvulkan1) or a GPU driver, or use the cpu backend";
 
 fn unavailable(reason: impl Into<String>) -> BackendError {
     BackendError::Unavailable { backend: "vulkan", reason: reason.into() }
@@ -193,7 +193,7 @@ impl Drop for Device {
 }
 
 /// An open device with one compute queue; every submission is serialised.
-pub struct Gpu {
+pub(crate) struct Gpu {
     shared: Arc<Device>,
     queue: Mutex<vk::Queue>,
     pool: Mutex<vk::CommandPool>,
@@ -269,7 +269,7 @@ impl Gpu {
             return Err(BackendError::TooLarge {
                 backend: "vulkan",
                 reason: format!(
-                    "a {bytes}-byte buffer exceeds this device's storage-buffer limit of {} bytes (at 48 bytes a triangle, about 2.8 million triangles on lavapipe); use --backend cpu",
+                    "a {bytes}-byte buffer exceeds this device's storage-buffer limit of {} bytes (at 48 bytes a triangle, about 2.8 million triangles on lavapipe); the cpu backend has no such limit",
                     self.info.max_storage_buffer_range
                 ),
             });
@@ -385,9 +385,22 @@ impl Gpu {
 
     /// Records and runs one dispatch of `groups` workgroups and waits for it.
     ///
+    /// The kernel's bindings are `read` then `write`, in order: the kernels
+    /// declare the `read` ones `var<storage, read>`, so the device writes
+    /// only the buffers borrowed `&mut` here, and no `&[u8]` from
+    /// [`Buffer::bytes`] can be alive while it does.
+    ///
     /// # Errors
     /// Submission failures.
-    pub fn dispatch(&self, k: &Kernel, buffers: &[&Buffer], push: &[u8], groups: u32) -> Result<(), BackendError> {
+    pub(crate) fn dispatch(
+        &self,
+        k: &Kernel,
+        read: &[&Buffer],
+        write: &mut [&mut Buffer],
+        push: &[u8],
+        groups: u32,
+    ) -> Result<(), BackendError> {
+        let buffers: Vec<&Buffer> = read.iter().copied().chain(write.iter().map(|b| &**b)).collect();
         assert_eq!(buffers.len() as u32, k.bindings, "one buffer per binding");
         assert!(
             Arc::ptr_eq(&k.shared, &self.shared) && buffers.iter().all(|b| Arc::ptr_eq(&b.shared, &self.shared)),
@@ -487,7 +500,7 @@ enum Failed {
 }
 
 /// A mapped host-visible storage buffer; it keeps its device alive.
-pub struct Buffer {
+pub(crate) struct Buffer {
     shared: Arc<Device>,
     buffer: vk::Buffer,
     memory: vk::DeviceMemory,
@@ -495,10 +508,13 @@ pub struct Buffer {
     bytes: usize,
 }
 
-// SAFETY: the mapping is plain memory; access is serialised by `&mut`/`&`
-// and by the GPU's dispatch lock (no dispatch is in flight outside it).
+// SAFETY: the mapping is plain memory owned by this value (the raw pointer
+// is what makes the type !Send by default); moving it to another thread
+// moves that ownership.
 unsafe impl Send for Buffer {}
-// SAFETY: as above.
+// SAFETY: through `&Buffer` the host only reads the mapping, and the device
+// only writes a buffer that `Gpu::dispatch` borrows `&mut` (it waits for the
+// dispatch to finish before returning), so no write overlaps a shared borrow.
 unsafe impl Sync for Buffer {}
 
 impl Buffer {
@@ -549,7 +565,7 @@ impl Drop for Buffer {
 }
 
 /// A compute pipeline with its descriptor set; it keeps its device alive.
-pub struct Kernel {
+pub(crate) struct Kernel {
     shared: Arc<Device>,
     module: vk::ShaderModule,
     set_layout: vk::DescriptorSetLayout,

@@ -188,11 +188,11 @@ impl Terms {
 impl Reducer {
     /// Runs `xlogy` over the `n` elements already in `input`/`second`/`weights`;
     /// returns whether any input was invalid.
-    fn xlogy_pass(&self, n: usize, bcols: usize, wcols: usize, t: &mut Terms) -> Result<bool, BackendError> {
+    fn xlogy_pass(&mut self, n: usize, bcols: usize, wcols: usize, t: &mut Terms) -> Result<bool, BackendError> {
         let inv = n.div_ceil(PER);
         let p = push(&[n as u32, PER as u32, bcols as u32, wcols as u32]);
-        let buffers = [&self.input, &self.second, &self.weights, &self.partial, &self.bad];
-        self.gpu.dispatch(&self.xlogy, &buffers, &p, inv.div_ceil(64) as u32)?;
+        let read = [&self.input, &self.second, &self.weights];
+        self.gpu.dispatch(&self.xlogy, &read, &mut [&mut self.partial, &mut self.bad], &p, inv.div_ceil(64) as u32)?;
         let mut invalid = false;
         for i in 0..inv {
             let f = self.bad.word(i);
@@ -207,10 +207,17 @@ impl Reducer {
     }
 
     /// Runs `axis_sum` over the matrix in `input`; sums land in `sums`.
-    fn axis_pass(&self, count: usize, len: usize, s1: usize, s2: usize, weighted: bool) -> Result<bool, BackendError> {
+    fn axis_pass(
+        &mut self,
+        count: usize,
+        len: usize,
+        s1: usize,
+        s2: usize,
+        weighted: bool,
+    ) -> Result<bool, BackendError> {
         let p = push(&[count as u32, len as u32, s1 as u32, s2 as u32, u32::from(weighted), 0, 0, 0]);
-        let buffers = [&self.input, &self.weights, &self.sums, &self.bad];
-        self.gpu.dispatch(&self.axis, &buffers, &p, count.div_ceil(64) as u32)?;
+        let read = [&self.input, &self.weights];
+        self.gpu.dispatch(&self.axis, &read, &mut [&mut self.sums, &mut self.bad], &p, count.div_ceil(64) as u32)?;
         Ok((0..count).any(|j| self.bad.word(j) != 0))
     }
 

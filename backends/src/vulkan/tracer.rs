@@ -140,8 +140,8 @@ impl VulkanTracer {
         let push: Vec<u8> =
             [lines.len() as u32, MAX_HITS as u32, mode, 0].iter().flat_map(|w| w.to_le_bytes()).collect();
         let groups = lines.len().div_ceil(64) as u32;
-        let buffers = [&self.nodes, &self.triangles, &self.prims, &st.lines, &st.counts, &st.hits];
-        self.gpu.dispatch(&self.kernel, &buffers, &push, groups)?;
+        let read = [&self.nodes, &self.triangles, &self.prims, &st.lines];
+        self.gpu.dispatch(&self.kernel, &read, &mut [&mut st.counts, &mut st.hits], &push, groups)?;
         Ok(dirs)
     }
 

@@ -134,7 +134,7 @@ impl<'a> VulkanVolumeCaster<'a> {
             return Err(BackendError::TooLarge {
                 backend: "vulkan",
                 reason: format!(
-                    "the volume caster needs {} MiB of device memory, the device has {} MiB; use --backend cpu",
+                    "the volume caster needs {} MiB of device memory, the device has {} MiB; the cpu backend has no such limit",
                     need >> 20,
                     gpu.info.heap_bytes >> 20
                 ),
@@ -145,7 +145,7 @@ impl<'a> VulkanVolumeCaster<'a> {
             return Err(BackendError::TooLarge {
                 backend: "vulkan",
                 reason: format!(
-                    "{} voxels take {} MiB as f32, over this device's storage-buffer limit of {} MiB; use --backend cpu",
+                    "{} voxels take {} MiB as f32, over this device's storage-buffer limit of {} MiB; the cpu backend has no such limit",
                     caster.volume.voxels(),
                     data_bytes >> 20,
                     gpu.info.max_storage_buffer_range >> 20
@@ -249,8 +249,9 @@ impl<'a> VulkanVolumeCaster<'a> {
             .map(|(i, &w)| if (2..5).contains(&i) { c.volume.dims[i - 2] as u32 } else { w })
             .flat_map(u32::to_le_bytes)
             .collect();
-        let buffers = [&self.consts, &self.data, &self.active, &st.rays, &st.samples, &st.state, &st.counts];
-        self.gpu.dispatch(&self.kernel, &buffers, &push, n.div_ceil(64))?;
+        let read = [&self.consts, &self.data, &self.active, &st.rays];
+        let write = &mut [&mut st.samples, &mut st.state, &mut st.counts];
+        self.gpu.dispatch(&self.kernel, &read, write, &push, n.div_ceil(64))?;
         let (samples, state) = (st.samples.bytes(), st.state.bytes());
         for (j, &(d, t1)) in dirs.iter().enumerate() {
             let word = st.counts.word(j);

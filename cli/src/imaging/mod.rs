@@ -3,6 +3,7 @@
 
 pub mod pictures;
 pub mod register;
+pub mod register3;
 pub mod segment;
 pub mod synth;
 
@@ -34,6 +35,58 @@ pub fn size(s: &str) -> Result<(usize, usize), String> {
         return Err(format!("{w} x {h} is more than {} pixels", pictures::MAX_PIXELS));
     }
     Ok((w, h))
+}
+
+/// A comma-separated list of 1 to 8 finite numbers (the length is checked
+/// where the dimension is known: 2D or 3D).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Numbers(pub Vec<f64>);
+
+/// Parses [`Numbers`].
+///
+/// # Errors
+/// A reason.
+pub fn numbers(s: &str) -> Result<Numbers, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>().ok().filter(|v| v.is_finite()).ok_or(format!("{x:?} is not a finite number")))
+        .collect::<Result<_, _>>()?;
+    if v.len() > 8 { Err("give at most 8 numbers".into()) } else { Ok(Numbers(v)) }
+}
+
+/// Largest side of a generated phantom volume.
+pub const MAX_SIDE_3D: usize = 1024;
+
+/// `--size` of `phantom`: `W,H` ([`size`]) or `X,Y,Z` (sides in `4..=1024`,
+/// at most [`pictures::MAX_PIXELS`] voxels).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Size {
+    /// An image.
+    Two(usize, usize),
+    /// A volume.
+    Three([usize; 3]),
+}
+
+/// Parses [`Size`].
+///
+/// # Errors
+/// A reason.
+pub fn sizes(s: &str) -> Result<Size, String> {
+    if s.split(',').count() != 3 {
+        return size(s).map(|(w, h)| Size::Two(w, h));
+    }
+    let mut d = [0usize; 3];
+    for (k, v) in s.split(',').enumerate() {
+        let n: usize = v.trim().parse().map_err(|_| format!("{v:?} is not a whole number"))?;
+        if !(4..=MAX_SIDE_3D).contains(&n) {
+            return Err(format!("each side must be in 4..={MAX_SIDE_3D}, not {n}"));
+        }
+        d[k] = n;
+    }
+    if (d[0] * d[1] * d[2]) as u64 > pictures::MAX_PIXELS {
+        return Err(format!("{} x {} x {} is more than {} voxels", d[0], d[1], d[2], pictures::MAX_PIXELS));
+    }
+    Ok(Size::Three(d))
 }
 
 /// `X,Y`: two finite numbers.
@@ -89,18 +142,30 @@ pub fn bins(s: &str) -> Result<usize, String> {
 /// `itgfx phantom`.
 #[derive(Debug, Args)]
 pub struct PhantomOptions {
-    /// Directory for fixed.png, moving.png and transform.json (made if missing)
+    /// Directory for fixed.png, moving.png and transform.json, or with --dims 3 fixed.nrrd, moving.nrrd
+    /// and transform.json (made if missing)
     #[arg(long, value_name = "DIR", value_parser = out_path)]
     pub out: PathBuf,
-    /// Image size
-    #[arg(long, value_name = "W,H", default_value = "128,128", value_parser = size)]
-    pub size: (usize, usize),
-    /// True rotation, degrees (counter-clockwise in image axes, about the centre)
-    #[arg(long, value_name = "DEG", default_value = "5", value_parser = angle, allow_hyphen_values = true)]
-    pub angle: f64,
-    /// True translation, pixels (fixed to moving), |X| and |Y| below the image's width and height
-    #[arg(long, value_name = "X,Y", default_value = "4,-3", value_parser = pair, allow_hyphen_values = true)]
-    pub shift: (f64, f64),
+    /// 2: an image pair (PNG); 3: a volume pair (NRRD, float)
+    #[arg(long, value_name = "2|3", default_value = "2", value_parser = clap::value_parser!(u8).range(2..=3))]
+    pub dims: u8,
+    /// Image size W,H (default 128,128), or with --dims 3 volume size X,Y,Z in voxels (default 64,64,64)
+    #[arg(long, value_name = "W,H[,D]", value_parser = sizes)]
+    pub size: Option<Size>,
+    /// 2D: true rotation, degrees (counter-clockwise in image axes, about the centre) [default: 5]
+    #[arg(long, value_name = "DEG", value_parser = angle, allow_hyphen_values = true)]
+    pub angle: Option<f64>,
+    /// 3D: true rotation, degrees about x, y and z, R = Rz Ry Rx about the volume centre, each in
+    /// [-180, 180] [default: 5,-3,4]
+    #[arg(long, value_name = "AX,AY,AZ", value_parser = numbers, allow_hyphen_values = true)]
+    pub rotation: Option<Numbers>,
+    /// True translation (fixed to moving): pixels X,Y [default: 4,-3], or with --dims 3 physical units
+    /// X,Y,Z [default: 3,-2,2.5]; each below the image's extent along its axis
+    #[arg(long, value_name = "X,Y[,Z]", value_parser = numbers, allow_hyphen_values = true)]
+    pub shift: Option<Numbers>,
+    /// 3D: voxel edge lengths X,Y,Z (written as NRRD space directions) [default: 1,1,1]
+    #[arg(long, value_name = "X,Y,Z", value_parser = numbers)]
+    pub spacing: Option<Numbers>,
     /// Gaussian noise standard deviation (intensities in [0, 1])
     #[arg(long, value_name = "S", default_value = "0.02", value_parser = unit)]
     pub noise: f64,
@@ -118,17 +183,17 @@ pub struct PhantomOptions {
 /// `itgfx register`.
 #[derive(Debug, Args)]
 pub struct RegisterOptions {
-    /// The fixed (reference) image, PNG
-    #[arg(value_name = "FIXED.png")]
+    /// The fixed (reference) image, PNG, or volume, NRRD
+    #[arg(value_name = "FIXED")]
     pub fixed: PathBuf,
-    /// The moving image, PNG, same size
-    #[arg(value_name = "MOVING.png")]
+    /// The moving image or volume, same kind and size
+    #[arg(value_name = "MOVING")]
     pub moving: PathBuf,
     /// The true transform (transform.json from `itgfx phantom`): errors are reported
     #[arg(long, value_name = "transform.json")]
     pub truth: Option<PathBuf>,
-    /// Directory for registered.png, checkerboard.png, overlay.png, joint.png, joint-initial.png, trace.png,
-    /// result.json
+    /// Directory for registered.png (volumes: registered.nrrd), checkerboard.png, overlay.png (images only),
+    /// joint.png, joint-initial.png, trace.png, result.json
     #[arg(long, value_name = "DIR", value_parser = out_path)]
     pub out: PathBuf,
     /// Histogram bins per axis
@@ -144,9 +209,10 @@ pub struct RegisterOptions {
     /// Pyramid, coarse to fine: shrink:sigma per level (sigma in full-resolution pixels)
     #[arg(long, value_name = "S:SIGMA,...", default_value = "4:2,2:1,1:1", value_parser = register::levels)]
     pub levels: register::Levels,
-    /// Starting transform: angle in degrees, then x and y shifts in pixels
-    #[arg(long, value_name = "DEG,X,Y", default_value = "0,0,0", value_parser = register::start, allow_hyphen_values = true)]
-    pub initial: itgfx_backends::imaging::Rigid2,
+    /// Starting transform: DEG,X,Y (angle in degrees, shifts in pixels), or for volumes AX,AY,AZ,X,Y,Z
+    /// (degrees about x, y, z as in --rotation of phantom, shifts in physical units) [default: identity]
+    #[arg(long, value_name = "DEG,X,Y", value_parser = numbers, allow_hyphen_values = true)]
+    pub initial: Option<Numbers>,
     /// Most Powell iterations per level
     #[arg(long, value_name = "N", default_value = "50", value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub max_iterations: u32,

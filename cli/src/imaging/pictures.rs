@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use image::{GrayImage, ImageReader, Rgb, RgbImage};
-use itgfx_backends::imaging::Gray;
+use itgfx_backends::imaging::{Gray, Gray3};
 
 use crate::CliError;
 use crate::export::{viridis, write_png};
@@ -132,4 +132,67 @@ pub fn plot(curves: &[Curve], x: (f64, f64), y: (f64, f64), size: (u32, u32)) ->
 /// Encoding and I/O errors, one line.
 pub fn write_rgb(img: &RgbImage, path: &Path) -> Result<(), CliError> {
     write_png(img, path)
+}
+
+/// A volume as NRRD bytes: `float`, raw, little-endian, its spacing as
+/// axis-aligned `space directions` (what `volume` and `register` read).
+#[must_use]
+pub fn nrrd_bytes(v: &Gray3) -> Vec<u8> {
+    let [nx, ny, nz] = v.dims;
+    let [sx, sy, sz] = v.spacing;
+    let head = format!(
+        "NRRD0004\n# itgfx\ntype: float\ndimension: 3\nspace: left-posterior-superior\nsizes: {nx} {ny} {nz}\n\
+         space directions: ({sx:?},0,0) (0,{sy:?},0) (0,0,{sz:?})\nkinds: domain domain domain\n\
+         endian: little\nencoding: raw\nspace origin: (0,0,0)\n\n"
+    );
+    let mut bytes = Vec::with_capacity(head.len() + v.data.len() * 4);
+    bytes.extend_from_slice(head.as_bytes());
+    v.data.iter().for_each(|x| bytes.extend_from_slice(&x.to_le_bytes()));
+    bytes
+}
+
+/// Writes a volume as NRRD ([`nrrd_bytes`]).
+///
+/// # Errors
+/// I/O errors, one line.
+pub fn write_nrrd(v: &Gray3, path: &Path) -> Result<(), CliError> {
+    crate::output::write(path, &nrrd_bytes(v))
+}
+
+/// The middle slices of a volume across `z`, `y` and `x` (axial `x–y`,
+/// coronal `x–z`, sagittal `y–z`), as images.
+#[must_use]
+pub fn middle_slices(v: &Gray3) -> [Gray; 3] {
+    let [nx, ny, nz] = v.dims;
+    let slice = |w: usize, h: usize, f: &dyn Fn(usize, usize) -> f32| {
+        let mut g = Gray::new(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                g.data[y * w + x] = f(x, y);
+            }
+        }
+        g
+    };
+    [
+        slice(nx, ny, &|x, y| v.at(x, y, nz / 2)),
+        slice(nx, nz, &|x, z| v.at(x, ny / 2, z)),
+        slice(ny, nz, &|y, z| v.at(nx / 2, y, z)),
+    ]
+}
+
+/// Pictures side by side on black, 4 pixels apart, tops aligned.
+#[must_use]
+pub fn side_by_side(parts: &[RgbImage]) -> RgbImage {
+    let gap = 4;
+    let w = parts.iter().map(|p| p.width() + gap).sum::<u32>().saturating_sub(gap).max(1);
+    let h = parts.iter().map(RgbImage::height).max().unwrap_or(1);
+    let mut out = RgbImage::new(w, h);
+    let mut x0 = 0;
+    for p in parts {
+        for (x, y, px) in p.enumerate_pixels() {
+            out.put_pixel(x0 + x, y, *px);
+        }
+        x0 += p.width() + gap;
+    }
+    out
 }

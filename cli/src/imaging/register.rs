@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use itgfx_backends::imaging::register::{joint_histogram, resample};
 use itgfx_backends::imaging::{HistogramKind, Level, Metric, RegisterOptions as Engine, Rigid2, register};
+use itgfx_core::JointEntropies;
 
 use super::RegisterOptions;
 use super::pictures::{checkerboard, histogram_image, overlay, plot, read_gray, write_gray, write_rgb};
@@ -41,19 +42,136 @@ pub fn levels(s: &str) -> Result<Levels, String> {
     Ok(Levels(out))
 }
 
-/// `--initial DEG,X,Y`.
+/// What a registration input holds, from its first bytes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// A PNG image (2D).
+    Png,
+    /// An NRRD volume (3D).
+    Nrrd,
+}
+
+/// Reads the signature of `path`.
 ///
 /// # Errors
-/// A reason.
-pub fn start(s: &str) -> Result<Rigid2, String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|x| x.trim().parse::<f64>().ok().filter(|v| v.is_finite()).ok_or(format!("{x:?} is not a finite number")))
-        .collect::<Result<_, _>>()?;
-    match v[..] {
-        [a, x, y] if a.abs() <= 180.0 => Ok(Rigid2 { angle_deg: a, tx: x, ty: y }),
-        [_, _, _] => Err("the angle must be in [-180, 180]".into()),
-        _ => Err("is not DEG,X,Y (three numbers)".into()),
+/// One line naming the file: missing, unreadable, neither PNG nor NRRD.
+pub fn sniff(path: &Path) -> Result<Kind, CliError> {
+    let fail = |e: &dyn std::fmt::Display| CliError::usage(format!("{path:?}: {e}"));
+    if path.is_dir() {
+        return Err(fail(&"is a directory, not a PNG image or NRRD volume"));
+    }
+    let mut head = [0u8; 8];
+    let mut file = itgfx_backends::files::open_regular(path).map_err(|e| fail(&e))?;
+    let n = std::io::Read::read(&mut file, &mut head).map_err(|e| fail(&e))?;
+    match &head[..n] {
+        b"\x89PNG\r\n\x1a\n" => Ok(Kind::Png),
+        h if h.starts_with(b"NRRD000") => Ok(Kind::Nrrd),
+        _ => Err(fail(&"not a PNG image nor an NRRD volume (no PNG or NRRD signature)")),
+    }
+}
+
+/// `--histogram` and `--metric`.
+#[must_use]
+pub fn choices(o: &RegisterOptions) -> (HistogramKind, Metric) {
+    let kind = match o.histogram.as_str() {
+        "binned" => HistogramKind::Binned,
+        "pv" => HistogramKind::PartialVolume,
+        _ => HistogramKind::Parzen,
+    };
+    let metric = match o.metric.as_str() {
+        "nmi" => Metric::Nmi,
+        "ecc" => Metric::Ecc,
+        "mi-over-joint" => Metric::MiOverJoint,
+        _ => Metric::Mi,
+    };
+    (kind, metric)
+}
+
+/// The metric after every Powell iteration, levels one after another, one
+/// colour each (values differ between levels: smoothing and shrinking
+/// change the histogram).
+#[must_use]
+pub fn trace_picture(traces: &[&[f64]]) -> image::RgbImage {
+    let colours = [[200, 40, 40], [40, 90, 200], [40, 160, 40], [230, 120, 20]];
+    let (mut curves, mut at) = (Vec::new(), 0usize);
+    for (k, l) in traces.iter().enumerate() {
+        let pts: Vec<(f64, f64)> = l.iter().enumerate().map(|(i, v)| ((at + i) as f64, *v)).collect();
+        at += l.len();
+        curves.push((pts, colours[k % colours.len()]));
+    }
+    let all = traces.iter().flat_map(|l| l.iter().copied());
+    let (lo, hi) = all.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+    plot(&curves, (0.0, (at.max(2) - 1) as f64), (lo, hi), (320, 200))
+}
+
+/// The joint histogram's measures at the answer (converted from bits to
+/// `--base`), the MI at the start, and what was maximised.
+pub fn measures(
+    rep: &mut Report,
+    o: &RegisterOptions,
+    metric: Metric,
+    e: &JointEntropies,
+    initial: Option<&JointEntropies>,
+) {
+    let base = o.common.base;
+    let k = std::f64::consts::LN_2 * base.per_nat();
+    let unit = Some(base.unit());
+    rep.text("metric", metric.name())
+        .text("histogram", o.histogram.as_str())
+        .count("bins", o.bins as u64)
+        .text("unit", base.unit())
+        .real("metric_value", in_base(metric, metric.value(e), k), None)
+        .real("MI", e.mutual_information * k, unit)
+        .real("NMI", e.studholme_nmi(), None)
+        .real("ECC", e.entropy_correlation(), None)
+        .real("MI_over_joint", e.mi_over_joint(), None)
+        .real("H_fixed", e.h_x * k, unit)
+        .real("H_moving", e.h_y * k, unit)
+        .real("H_joint", e.h_xy * k, unit)
+        .maybe_real("MI_initial", initial.map(|e| e.mutual_information * k), unit);
+}
+
+/// A metric value in bits converted by `k` when it is MI (the normalised
+/// metrics have no unit).
+#[must_use]
+pub fn in_base(metric: Metric, v: f64, k: f64) -> f64 {
+    if metric == Metric::Mi { v * k } else { v }
+}
+
+/// One level of `result.json`: its pyramid step, size, Powell's iterations
+/// and evaluations, the parameters it ended at and the metric after each
+/// iteration (in `--base` for MI, `k` converting from bits).
+#[must_use]
+pub fn level_report(
+    level: Level,
+    size: &[usize],
+    counts: (usize, usize),
+    params: &[f64],
+    trace: &[f64],
+    metric: Metric,
+    k: f64,
+) -> Report {
+    let mut x = Report::new();
+    x.count("shrink", level.shrink as u64)
+        .real("sigma", level.sigma, None)
+        .counts("size", size.iter().map(|&n| n as u64).collect())
+        .count("iterations", counts.0 as u64)
+        .count("evaluations", counts.1 as u64)
+        .reals("transform", params.to_vec())
+        .reals("trace", trace.iter().map(|v| in_base(metric, *v, k)).collect());
+    x
+}
+
+/// `--initial` of an image: `DEG,X,Y`.
+///
+/// # Errors
+/// One line.
+fn start(o: &RegisterOptions) -> Result<Rigid2, CliError> {
+    match o.initial.as_ref().map(|n| n.0.as_slice()) {
+        None => Ok(Rigid2::default()),
+        Some(&[a, x, y]) if a.abs() <= 180.0 => Ok(Rigid2 { angle_deg: a, tx: x, ty: y }),
+        Some(&[_, _, _]) => Err(CliError::usage("--initial: the angle must be in [-180, 180]")),
+        Some(_) => Err(CliError::usage("--initial: an image takes DEG,X,Y (three numbers)")),
     }
 }
 
@@ -80,7 +198,23 @@ const FILES: [&str; 7] =
 /// # Errors
 /// Bad inputs and output errors, one line.
 pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
+    let kinds = (sniff(&o.fixed)?, sniff(&o.moving)?);
+    match kinds {
+        (Kind::Png, Kind::Png) => {}
+        (Kind::Nrrd, Kind::Nrrd) => return super::register3::run_register3(o),
+        (a, _) => {
+            let name = |k| if k == Kind::Png { "a 2D PNG image" } else { "a 3D NRRD volume" };
+            return Err(CliError::usage(format!(
+                "{:?} is {} but {:?} is {}: register needs two images or two volumes",
+                o.fixed,
+                name(a),
+                o.moving,
+                name(if a == Kind::Png { Kind::Nrrd } else { Kind::Png })
+            )));
+        }
+    }
     let levels = o.levels.0.clone();
+    let initial = start(o)?;
     let fixed = read_gray(&o.fixed)?;
     let moving = read_gray(&o.moving)?;
     if (fixed.width, fixed.height) != (moving.width, moving.height) {
@@ -102,23 +236,13 @@ pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
         }
     }
     let truth = o.truth.as_deref().map(read_truth).transpose()?;
-    let kind = match o.histogram.as_str() {
-        "binned" => HistogramKind::Binned,
-        "pv" => HistogramKind::PartialVolume,
-        _ => HistogramKind::Parzen,
-    };
-    let metric = match o.metric.as_str() {
-        "nmi" => Metric::Nmi,
-        "ecc" => Metric::Ecc,
-        "mi-over-joint" => Metric::MiOverJoint,
-        _ => Metric::Mi,
-    };
+    let (kind, metric) = choices(o);
     let engine = Engine {
         bins: o.bins,
         kind,
         metric,
         levels,
-        initial: o.initial,
+        initial,
         max_iterations: o.max_iterations as usize,
         ..Engine::default()
     };
@@ -142,42 +266,14 @@ pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
     write_rgb(&histogram_image(&hist.counts, engine.bins, scale), &paths[3])?;
     let before = joint_histogram(&fixed, &moving, &engine.initial, engine.bins, kind);
     write_rgb(&histogram_image(&before.counts, engine.bins, scale), &paths[4])?;
-    // Metric per iteration, levels one after another, one colour each (values differ between
-    // levels: smoothing and shrinking change the histogram).
-    let colours = [[200, 40, 40], [40, 90, 200], [40, 160, 40], [230, 120, 20]];
-    let (mut curves, mut at) = (Vec::new(), 0usize);
-    for (k, l) in r.levels.iter().enumerate() {
-        let pts: Vec<(f64, f64)> = l.trace.iter().enumerate().map(|(i, v)| ((at + i) as f64, *v)).collect();
-        at += l.trace.len();
-        curves.push((pts, colours[k % colours.len()]));
-    }
-    let all = r.levels.iter().flat_map(|l| l.trace.iter().copied());
-    let (lo, hi) = all.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
-    write_rgb(&plot(&curves, (0.0, (at.max(2) - 1) as f64), (lo, hi), (320, 200)), &paths[5])?;
+    let traces: Vec<&[f64]> = r.levels.iter().map(|l| l.trace.as_slice()).collect();
+    write_rgb(&trace_picture(&traces), &paths[5])?;
     // The engine measures in bits; `--base` converts every entropy.
-    let base = o.common.base;
-    let k = std::f64::consts::LN_2 * base.per_nat();
-    let unit = Some(base.unit());
-    let in_base = |v: f64| if metric == Metric::Mi { v * k } else { v };
-    let e = &r.entropies;
+    let k = std::f64::consts::LN_2 * o.common.base.per_nat();
     let mut rep = Report::new();
-    rep.real("angle_deg", t.angle_deg, Some("deg"))
-        .real("tx", t.tx, Some("px"))
-        .real("ty", t.ty, Some("px"))
-        .text("metric", metric.name())
-        .text("histogram", o.histogram.as_str())
-        .count("bins", engine.bins as u64)
-        .text("unit", base.unit())
-        .real("metric_value", in_base(r.metric), None)
-        .real("MI", e.mutual_information * k, unit)
-        .real("NMI", e.studholme_nmi(), None)
-        .real("ECC", e.entropy_correlation(), None)
-        .real("MI_over_joint", e.mi_over_joint(), None)
-        .real("H_fixed", e.h_x * k, unit)
-        .real("H_moving", e.h_y * k, unit)
-        .real("H_joint", e.h_xy * k, unit)
-        .maybe_real("MI_initial", r.initial_entropies.map(|e| e.mutual_information * k), unit)
-        .real("overlap", r.overlap, None)
+    rep.real("angle_deg", t.angle_deg, Some("deg")).real("tx", t.tx, Some("px")).real("ty", t.ty, Some("px"));
+    measures(&mut rep, o, metric, &r.entropies, r.initial_entropies.as_ref());
+    rep.real("overlap", r.overlap, None)
         .count("iterations", r.levels.iter().map(|l| l.iterations as u64).sum())
         .count("evaluations", r.levels.iter().map(|l| l.evaluations as u64).sum())
         .real("seconds", seconds, Some("s"));
@@ -185,15 +281,8 @@ pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
         .levels
         .iter()
         .map(|l| {
-            let mut x = Report::new();
-            x.count("shrink", l.level.shrink as u64)
-                .real("sigma", l.level.sigma, None)
-                .counts("size", vec![l.size.0 as u64, l.size.1 as u64])
-                .count("iterations", l.iterations as u64)
-                .count("evaluations", l.evaluations as u64)
-                .reals("transform", l.transform.params().to_vec())
-                .reals("trace", l.trace.iter().map(|v| in_base(*v)).collect());
-            x
+            let size = [l.size.0, l.size.1];
+            level_report(l.level, &size, (l.iterations, l.evaluations), &l.transform.params(), &l.trace, metric, k)
         })
         .collect();
     rep.records("levels", levels);

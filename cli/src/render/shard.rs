@@ -135,7 +135,7 @@ pub fn merged(files: &[PathBuf]) -> Result<(RenderShard, Frame, f64), CliError> 
         let s = RenderShard::from_json(&text).map_err(|e| CliError::usage(format!("--merge {f:?}: {e}")))?;
         named.push((format!("{f:?}"), s));
     }
-    let (first, frame) = merge(named).map_err(CliError::usage)?;
+    let (first, frame) = merge(named).map_err(|e| CliError::usage(crate::shard::describe(&e)))?;
     Ok((first, frame, t0.elapsed().as_secs_f64()))
 }
 

@@ -11,7 +11,7 @@ use itgfx_backends::volume::{TransferFunction, Volume};
 
 use super::VolumeOptions;
 use crate::CliError;
-use crate::values::count;
+use crate::values::{ranged, real};
 
 pub(super) fn volume_help() -> String {
     let mut s = String::from(
@@ -38,11 +38,6 @@ pub(super) fn volume_help() -> String {
     s
 }
 
-fn ranged(s: &str, lo: u64, hi: u64) -> Result<u64, String> {
-    let v = count(s)?;
-    if (lo..=hi).contains(&v) { Ok(v) } else { Err(format!("must be in {lo}..={hi}")) }
-}
-
 pub(super) fn size(s: &str) -> Result<u32, String> {
     ranged(s, 8, 1024).map(|v| v as u32)
 }
@@ -56,17 +51,17 @@ pub(super) fn path_steps(s: &str) -> Result<usize, String> {
 }
 
 pub(super) fn turn_degrees(s: &str) -> Result<f64, String> {
-    let x: f64 = s.parse().ok().filter(|x: &f64| x.is_finite()).ok_or("is not a finite number")?;
+    let x = real(s)?;
     if (0.0..=180.0).contains(&x) { Ok(x) } else { Err("must be in 0..=180 degrees".into()) }
 }
 
 pub(super) fn step(s: &str) -> Result<f64, String> {
-    let x: f64 = s.parse().ok().filter(|x: &f64| x.is_finite()).ok_or("is not a finite number")?;
+    let x = real(s)?;
     if (0.05..=2.0).contains(&x) { Ok(x) } else { Err("must be in 0.05..=2 voxels".into()) }
 }
 
 pub(super) fn iso_value(s: &str) -> Result<f64, String> {
-    let x: f64 = s.parse().ok().filter(|x: &f64| x.is_finite()).ok_or("is not a finite number")?;
+    let x = real(s)?;
     if x > 0.0 && x < 1.0 { Ok(x) } else { Err("must be in (0, 1): a value of the scalar normalised to [0, 1]".into()) }
 }
 

@@ -20,9 +20,9 @@ use std::time::Instant;
 
 use clap::Args;
 use itgfx_backends::BackendChoice;
+use itgfx_backends::backend::{open_volume, volume_memory};
 use itgfx_backends::viewpoint::selection::{best_views, exploration};
 use itgfx_backends::viewpoint::{ViewpointWeights, icosphere};
-use itgfx_backends::volume::cast::{backend_memory, open};
 use itgfx_backends::volume::channel::{channel_memory, seeable_voxels};
 use itgfx_backends::volume::raycast::Caster;
 use itgfx_backends::volume::{TransferFunction, VolumeChannelOptions, volume_channel, volume_measures};
@@ -222,7 +222,7 @@ fn run_in(
     // The device's buffers too when it casts: on lavapipe they are host memory.
     let casting = if o.shards.merge.is_empty() { u64::from(rays) * u64::from(rays) } else { 0 };
     let need = channel_memory(&caster, seeable_voxels(&caster), end - first)
-        + if casting > 0 { backend_memory(o.backend, &caster, casting) } else { 0 };
+        + if casting > 0 { volume_memory(o.backend, &caster, casting) } else { 0 };
     if need > MEMORY_LIMIT {
         return Err(CliError::usage(format!(
             "{}: the channel may need {:.1} GiB (limit {} GiB): fewer --viewpoints or a smaller volume",
@@ -235,12 +235,12 @@ fn run_in(
         .map_err(|e| CliError::usage(format!("{e}: fewer --viewpoints or a smaller volume")))?;
     let backend_err = |e: itgfx_backends::BackendError| CliError::usage(e.to_string());
     if let Some(s) = o.shards.shard {
-        return shard::save(o, s, &*open(o.backend, &caster).map_err(backend_err)?, &dirs, rays, need);
+        return shard::save(o, s, &*open_volume(o.backend, &caster).map_err(backend_err)?, &dirs, rays, need);
     }
     // Rays a device handed back to the host (reported for vulkan only).
     let mut host_rays = None;
     let ch = if o.shards.merge.is_empty() {
-        let backend = open(o.backend, &caster).map_err(backend_err)?;
+        let backend = open_volume(o.backend, &caster).map_err(backend_err)?;
         let mut progress = Progress::new();
         let copts = VolumeChannelOptions { directions: dirs.clone(), distance: o.distance, size: rays };
         let ch = volume_channel(&*backend, &copts, &mut |d, t| progress.update(d, t)).map_err(backend_err)?;
@@ -274,7 +274,7 @@ fn run_in(
     let iso = o.iso.map(|f| iso_route(&volume, f, &dirs, o.distance, rays, base)).transpose()?;
     let path_between = match (&between, &objects) {
         (Some(b), Some(ob)) => {
-            let backend = open(o.backend, &caster).map_err(backend_err)?;
+            let backend = open_volume(o.backend, &caster).map_err(backend_err)?;
             Some(between::path(b, &volume, &*backend, &dirs, ob, &m.analysis.p_o, (o.distance, rays), base)?)
         }
         _ => None,

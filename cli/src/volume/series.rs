@@ -14,8 +14,8 @@ use std::path::Path;
 use std::time::Instant;
 
 use glam::DVec3;
+use itgfx_backends::backend::{open_volume, volume_memory};
 use itgfx_backends::viewpoint::{ViewpointWeights, icosphere};
-use itgfx_backends::volume::cast::{backend_memory, open};
 use itgfx_backends::volume::channel::{channel_memory, seeable_voxels};
 use itgfx_backends::volume::paths::{dynamic_path, static_view, turn};
 use itgfx_backends::volume::raycast::Caster;
@@ -190,7 +190,7 @@ pub(super) fn run(
         }
         radius = radius.max(caster.content_radius());
         let one = channel_memory(&caster, seeable_voxels(&caster), dirs.len())
-            + backend_memory(o.backend, &caster, u64::from(rays) * u64::from(rays));
+            + volume_memory(o.backend, &caster, u64::from(rays) * u64::from(rays));
         need = need.max(held + one);
     }
     if need > MEMORY_LIMIT {
@@ -209,7 +209,7 @@ pub(super) fn run(
     let mut per_frame = Vec::with_capacity(frames.len());
     for (k, f) in frames.iter().enumerate() {
         let caster = Caster::with_range(f, tf, o.step, range);
-        let backend = open(o.backend, &caster).map_err(|e| CliError::usage(e.to_string()))?;
+        let backend = open_volume(o.backend, &caster).map_err(|e| CliError::usage(e.to_string()))?;
         let copts = VolumeChannelOptions { directions: dirs.clone(), distance: o.distance, size: rays };
         let kk = k as u64;
         let ch = volume_channel(&*backend, &copts, &mut |d, _| progress.update(kk * nv + d, nf * nv))

@@ -143,6 +143,6 @@ pub(super) fn merged(
         let s = ViewpointShard::from_json(&text).map_err(|e| CliError::usage(format!("--merge {f:?}: {e}")))?;
         named.push((format!("{f:?}"), s));
     }
-    let shards = order_shards(named, &scene, &settings).map_err(CliError::usage)?;
+    let shards = order_shards(named, &scene, &settings).map_err(|e| CliError::usage(crate::shard::describe(&e)))?;
     Ok(grid_channel(caster.volume.voxels(), &shards, dirs, o.distance, rays))
 }

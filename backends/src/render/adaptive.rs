@@ -40,8 +40,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use itgfx_core::pixel::srgb_slope;
 use rayon::prelude::*;
 
-use super::frame::{Batch, Frame, View, moments, strata, trace_geometry};
-use super::path::PathTracer;
+use super::frame::{Batch, Frame, View, moments, trace_geometry};
+use super::path::{PathTracer, strata};
 use super::supersample::allocate;
 use crate::tracer::BackendError;
 

@@ -15,7 +15,7 @@
 //!    ([`allocate`]: largest remainders, the `--max-spp` cap, the excess
 //!    passed on; all weights 0 gives a uniform share).
 //! 3. **Estimate**: each pixel traces its share (indices from `PILOT` on)
-//!    in stratified batches of near-square grids ([`near_square_batches`]:
+//!    in stratified batches of near-square grids (`near_square_batches`:
 //!    a share of 53 as one batch would be a 1 × 53 grid); its value is the
 //!    mean of all its samples, pilot included (the box filter).
 //!

@@ -1,10 +1,13 @@
 #!/usr/bin/env python3
-"""Viewpoint-driven simplification (itgfx simplify: VMI, VE, IVO) against QEM
-(meshoptimizer's simplify, the Python binding) on the shared meshes.
+"""Viewpoint-driven simplification (itgfx simplify: VMI, VE, IVO, VKL) against
+two QEM implementations (meshoptimizer's simplify, the Python binding, and
+fast-simplification, the Fast-Quadric-Mesh-Simplification binding) on the
+shared meshes.
 
-Never run by CI or the Rust tests; meshoptimizer is not a workspace
-dependency. Needs `pip install meshoptimizer numpy` (bench/simplify_table.sh
-makes a virtual environment) and a built `itgfx` (release recommended).
+Never run by CI or the Rust tests; the peers are not workspace
+dependencies. Needs `pip install meshoptimizer fast-simplification numpy`
+(bench/simplify_table.sh makes a virtual environment) and a built `itgfx`
+(release recommended).
 
 For every mesh and target: itgfx simplifies by each metric (one --sweep
 run each, so the time of a target is the time to reach it), writes the
@@ -28,9 +31,12 @@ import time
 
 import numpy as np
 import meshoptimizer
+import fast_simplification
 
-# itgfx's collapse costs: per-view VMI, viewpoint entropy, the channel's I(V;O).
-METRICS = ["vmi", "ve", "ivo"]
+# itgfx's collapse costs: per-view VMI, viewpoint entropy, the channel's
+# I(V;O), per-view KL distance to the actual areas.
+METRICS = ["vmi", "ve", "ivo", "vkl"]
+PEERS = ["qem", "fqms"]
 
 
 def read_obj(path):
@@ -92,6 +98,16 @@ def qem(vertices, indices, target_triangles):
     return dest[:n], time.perf_counter() - t0, time.process_time() - c0, float(err[0])
 
 
+def fqms(vertices, indices, target_triangles):
+    """fast-simplification (Fast Quadric Mesh Simplification) to `target_triangles`."""
+    faces = indices.reshape(-1, 3).astype(np.int64)
+    t0, c0 = time.perf_counter(), time.process_time()
+    reduction = 1.0 - target_triangles / len(faces)
+    v, f = fast_simplification.simplify(vertices.astype(np.float64), faces, target_reduction=reduction)
+    return (np.asarray(v, dtype=np.float32), np.asarray(f, dtype=np.uint32).reshape(-1),
+            time.perf_counter() - t0, time.process_time() - c0)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("itgfx")
@@ -128,6 +144,12 @@ def main():
                 row[metric] = runs[metric]["results"][k]
             row["qem"] = {**q, "seconds": q_sec, "cpu_seconds": q_cpu, "meshopt_error": q_err,
                           "zero_area_dropped": dropped}
+            f_v, f_idx, f_sec, f_cpu = fqms(v, idx, target)
+            fobj = os.path.join(a.out, name, f"fqms_{target}.obj")
+            f_dropped = write_obj(fobj, f_v, f_idx)
+            fq = itgfx(a.itgfx, ["simplify", mesh, "--evaluate", fobj, "--out", os.path.join(a.out, name, "fqms"),
+                                 "--json"])["results"][0]
+            row["fqms"] = {**fq, "seconds": f_sec, "cpu_seconds": f_cpu, "zero_area_dropped": f_dropped}
             rows.append(row)
     with open(os.path.join(a.out, "simplify_table.json"), "w") as f:
         json.dump(rows, f, indent=1)
@@ -135,9 +157,9 @@ def main():
           "| mean distance | wall s | CPU s |")
     print("|---|---|---|---:|---:|---:|---:|---:|---:|---:|")
     for r in rows:
-        for method in METRICS + ["qem"]:
+        for method in METRICS + PEERS:
             x = r[method]
-            best = min(r[m]["image_rmse"] for m in METRICS + ["qem"])
+            best = min(r[m]["image_rmse"] for m in METRICS + PEERS)
             rmse = f"{x['image_rmse']:.4f}"
             if x["image_rmse"] == best:
                 rmse = f"**{rmse}**"

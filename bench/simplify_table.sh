@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Viewpoint-driven simplification (VMI, VE) against QEM (meshoptimizer) on the
-# shared meshes: builds itgfx (release), installs meshoptimizer into a virtual
-# environment outside the workspace, runs bench/simplify_table.py.
+# Viewpoint-driven simplification (VMI, VE, IVO, VKL) against QEM (meshoptimizer
+# and fast-simplification) on the shared meshes: builds itgfx (release), installs
+# the peers into a virtual environment outside the workspace, runs
+# bench/simplify_table.py.
 # Usage: bench/simplify_table.sh [OUTDIR] [MESH.obj ...]   (never run by CI)
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
@@ -15,7 +16,8 @@ if [ ${#meshes[@]} -eq 0 ]; then
 fi
 venv="${ITGFX_BENCH_VENV:-/tmp/itgfx-simplify-venv}"
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
-"$venv/bin/python" -c "import meshoptimizer, numpy" 2>/dev/null || "$venv/bin/pip" install -q meshoptimizer numpy
+"$venv/bin/python" -c "import meshoptimizer, fast_simplification, numpy" 2>/dev/null ||
+  "$venv/bin/pip" install -q meshoptimizer fast-simplification numpy
 (cd "$here" && nice -n 10 cargo build --release -p itgfx-cli)
 nice -n 10 "$venv/bin/python" "$here/bench/simplify_table.py" "$here/target/release/itgfx" "$out" "${meshes[@]}" \
   --targets "${TARGETS:-10%,2%}" --viewpoints "${VIEWPOINTS:-42}"

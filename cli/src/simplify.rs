@@ -39,8 +39,9 @@ pub struct SimplifyOptions {
     #[arg(long, value_name = "DIR", value_parser = out_path)]
     pub out: Option<PathBuf>,
     /// Collapse cost: vmi = mean |change of each viewpoint's I(v;O)|, ve = mean |change of viewpoint
-    /// entropy|, ivo = |change of the channel's I(V;O)|
-    #[arg(long, value_name = "vmi|ve|ivo", default_value = "vmi", value_parser = ["vmi", "ve", "ivo"],
+    /// entropy|, ivo = |change of the channel's I(V;O)|, vkl = mean |change of each viewpoint's
+    /// Kullback-Leibler distance to the actual areas|
+    #[arg(long, value_name = "vmi|ve|ivo|vkl", default_value = "vmi", value_parser = ["vmi", "ve", "ivo", "vkl"],
           conflicts_with = "evaluate")]
     pub metric: String,
     /// Viewpoints of the channel: 12, 42, 162, 642 or 2562 (a subdivided icosahedron)
@@ -226,6 +227,7 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
     let metric = match o.metric.as_str() {
         "ve" => Metric::Ve,
         "ivo" => Metric::Ivo,
+        "vkl" => Metric::Vkl,
         _ => Metric::Vmi,
     };
     // Syntax first, before any file is read; the counts once the mesh is known.

@@ -21,7 +21,7 @@ fn render(out: &Path, extra: &[&str]) -> serde_json::Value {
 #[test]
 fn tree_samplers_spend_the_budget_and_geometry_contrast_refines_edges() {
     let dir = temp("tree");
-    for sampler in ["ic", "cc-tree"] {
+    for sampler in ["ic", "cc-tree", "ec-binary"] {
         // The default form: the pilot tree (8 a node) decides, 8 fresh samples a leaf estimate.
         let v = render(&dir.join(sampler), &["--spp", "32", "--sampler", sampler]);
         let traced = v["spp_traced_mean"].as_f64().unwrap();

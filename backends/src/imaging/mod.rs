@@ -12,7 +12,7 @@
 //!   [`itgfx_core::joint_entropies`] (Part II eq. (7); Part III §3.2.3).
 //! * [`powell`]: Powell's direction-set optimiser with Brent line searches.
 //! * [`mod@register`]: the multiresolution registration driver, shared by 2D
-//!   and 3D; [`register3`] runs it on volumes.
+//!   and 3D; [`register3()`] runs it on volumes.
 //! * [`mod@segment`]: BSP split by the greatest gain of `I(R;X)` and merge by the
 //!   core's agglomerative information bottleneck.
 

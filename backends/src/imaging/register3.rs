@@ -1,5 +1,5 @@
 //! Rigid registration of volumes (6 parameters): the search of
-//! [`super::register`] (pyramid, joint histogram, metric by the core,
+//! [`super::register()`] (pyramid, joint histogram, metric by the core,
 //! Powell) over a 3D level pair.
 //!
 //! Fixed voxel `i` sits at physical `i·spacing`; `T` ([`Rigid3`]) maps it

@@ -14,9 +14,10 @@
 //!    budget, `N_p (N_s − PILOT)`, is shared in proportion to the weights
 //!    ([`allocate`]: largest remainders, the `--max-spp` cap, the excess
 //!    passed on; all weights 0 gives a uniform share).
-//! 3. **Estimate**: each pixel traces its share as one stratified batch
-//!    (indices from `PILOT` on); its value is the mean of all its samples,
-//!    pilot included (the box filter).
+//! 3. **Estimate**: each pixel traces its share (indices from `PILOT` on)
+//!    in stratified batches of near-square grids (`near_square_batches`:
+//!    a share of 53 as one batch would be a 1 × 53 grid); its value is the
+//!    mean of all its samples, pilot included (the box filter).
 //!
 //! Unbiased: a pixel's count is a function of other pixels' samples only,
 //! which are independent of its own, so the mean of its samples is an
@@ -40,7 +41,7 @@ use itgfx_core::pixel::srgb_slope;
 use rayon::prelude::*;
 
 use super::frame::{Batch, Frame, View, moments, trace_geometry};
-use super::path::PathTracer;
+use super::path::{PathTracer, strata};
 use super::supersample::allocate;
 use crate::tracer::BackendError;
 
@@ -166,8 +167,13 @@ pub fn render(
         .map(|y| {
             let batches: Vec<Batch> = (0..w)
                 .map(|x| y * w + x)
-                .filter(|&p| extra[p as usize] > 0)
-                .map(|p| Batch { pixel: p, slot: p % w, first: PILOT, n: extra[p as usize], odd: false, pilot: false })
+                .flat_map(|p| {
+                    let mut first = PILOT;
+                    near_square_batches(extra[p as usize]).enumerate().map(move |(k, n)| {
+                        first += n;
+                        Batch { pixel: p, slot: p % w, first: first - n, n, odd: k % 2 == 1, pilot: false }
+                    })
+                })
                 .collect();
             let rgb = trace_geometry(pt, view, &batches, None)?;
             let mut acc: Vec<Pilot> = (0..w).map(|x| pilot[(y * w + x) as usize]).collect();
@@ -205,6 +211,31 @@ pub fn render(
     Ok(frame)
 }
 
+/// Splits a pixel's share of `n` samples into stratified batches whose
+/// `a × b` grids ([`strata`]) are at most twice as long as wide: the
+/// largest such count first, then the rest the same way (53 is 5 × 10, then
+/// 1 × 2 and 1 × 1, where one batch would be 1 × 53, stratified along one
+/// axis only).
+/// Measured on `open-sphere` (seeds 11 and 12 against a 4,096-spp reference
+/// of seed 2000): RMSE_a / uniform's 0.764 → 0.736, `open-blocks` 0.684 →
+/// 0.657.
+fn near_square_batches(mut n: u32) -> impl Iterator<Item = u32> {
+    std::iter::from_fn(move || {
+        if n == 0 {
+            return None;
+        }
+        let mut m = n;
+        while m > 1 && {
+            let (a, b) = strata(m);
+            b > 2 * a
+        } {
+            m -= 1;
+        }
+        n -= m;
+        Some(m)
+    })
+}
+
 /// Mean and sample variance (denominator `n − 1`) from a sum and a sum of squares.
 fn from_sums(p: &Pilot, n: u32) -> ([f64; 3], [f64; 3]) {
     let n = f64::from(n.max(1));
@@ -234,6 +265,24 @@ mod tests {
         assert!((wt[3 * 7 + 4] - 1.0).abs() < 1e-12, "{}", wt[3 * 7 + 4]);
         assert!((wt[2 * 7 + 2] - 1.0).abs() < 1e-12);
         assert_eq!(wt[0], 0.0);
+    }
+
+    #[test]
+    fn shares_split_into_near_square_batches() {
+        let split = |n| near_square_batches(n).collect::<Vec<u32>>();
+        assert_eq!(split(0), Vec::<u32>::new());
+        assert_eq!(split(52), vec![50, 2]);
+        assert_eq!(split(53), vec![50, 2, 1]);
+        assert_eq!(split(64), vec![64]);
+        assert_eq!(split(3), vec![2, 1]);
+        for n in 0..300 {
+            let s = split(n);
+            assert_eq!(s.iter().sum::<u32>(), n);
+            assert!(s.iter().all(|&m| {
+                let (a, b) = strata(m);
+                b <= 2 * a
+            }));
+        }
     }
 
     #[test]

@@ -34,9 +34,10 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use itgfx_core::Base;
 use itgfx_core::pixel::{
-    ChannelContrast, MITCHELL_WEIGHTS, mixed_contrast, pixel_colour_contrast, pixel_colour_quality, pixel_contrast,
-    pixel_quality,
+    ChannelContrast, MITCHELL_WEIGHTS, log_difference_contrast, mixed_contrast, pixel_colour_contrast,
+    pixel_colour_quality, pixel_contrast, pixel_quality,
 };
 use rayon::prelude::*;
 
@@ -61,6 +62,11 @@ pub struct PixelMeasures {
     pub binary_contrast: f64,
     /// Pixel geometry contrast `C^g` (eq. (20)).
     pub geometry_contrast: f64,
+    /// Pixel geometry binary contrast `C_b^g` (eq. (21)).
+    pub geometry_binary_contrast: f64,
+    /// Pixel geometry logarithmic-difference contrast `C_log^g` in bits
+    /// (eq. (22)); `+∞` when a sample's ray met nothing and another's did.
+    pub geometry_log_contrast: f64,
     /// The oracle's contrast `δ C^c + (1 − δ) C^g` (eq. (23)), `C^c` entropy or binary.
     pub contrast: f64,
 }
@@ -92,6 +98,8 @@ pub fn measures(rgb: &[[f64; 3]], g: &[f64], oracle: Oracle) -> PixelMeasures {
             colour_contrast,
             binary_contrast,
             geometry_contrast,
+            geometry_binary_contrast: itgfx_core::pixel::binary_contrast(g)?,
+            geometry_log_contrast: log_difference_contrast(g, Base::Bits)?,
             contrast: mixed_contrast(oracle.delta, colour, geometry_contrast)?,
         })
     };
@@ -99,6 +107,8 @@ pub fn measures(rgb: &[[f64; 3]], g: &[f64], oracle: Oracle) -> PixelMeasures {
         colour_contrast: 1.0,
         binary_contrast: 1.0,
         geometry_contrast: 1.0,
+        geometry_binary_contrast: 1.0,
+        geometry_log_contrast: f64::INFINITY,
         contrast: 1.0,
         ..PixelMeasures::default()
     })

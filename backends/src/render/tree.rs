@@ -31,8 +31,8 @@
 //! depend on the thread count.
 
 use itgfx_core::pixel::{
-    ChannelContrast, MITCHELL_WEIGHTS, SRGB_LUMINANCE_WEIGHTS, importance_weighted_contrast, mixed_contrast,
-    pixel_contrast, priority_colour,
+    ChannelContrast, MITCHELL_WEIGHTS, SRGB_LUMINANCE_WEIGHTS, binary_contrast, importance_weighted_contrast,
+    mixed_contrast, pixel_contrast, priority_colour,
 };
 
 use super::frame::{OwnPixel, PILOT, PixelSamples, Policy, View};
@@ -56,6 +56,10 @@ pub enum TreeContrast {
     Importance,
     /// Classic contrast weighted by the channel mean, eq. (2) (`cc-tree`).
     Classic,
+    /// Binary contrasts weighted by importance as eq. (27): colour `C_b^c`
+    /// (eqs. (17), (19)) and geometry `C_b^g` (eq. (21)) (`ec-binary`;
+    /// §6.4's test of Fig. 13.b).
+    EntropyBinary,
 }
 
 impl TreeContrast {
@@ -66,13 +70,14 @@ impl TreeContrast {
             "ec" => Some(Self::Entropy),
             "ic" => Some(Self::Importance),
             "cc-tree" => Some(Self::Classic),
+            "ec-binary" => Some(Self::EntropyBinary),
             _ => None,
         }
     }
 }
 
 /// Command-line names of the tree samplers.
-pub const NAMES: &[&str] = &["ec", "ic", "cc-tree"];
+pub const NAMES: &[&str] = &["ec", "ic", "cc-tree", "ec-binary"];
 
 /// The refinement-tree sampler with threshold `ε`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -130,11 +135,19 @@ pub fn node_contrast(rgb: &[[f64; 3]], g: &[f64], level: u32, kind: TreeContrast
                 importance_weighted_contrast(&channels, &MITCHELL_WEIGHTS, ChannelContrast::Classic, REGIONS, level)?
             }
             TreeContrast::Classic => priority_colour(&ch[0], &ch[1], &ch[2])?,
+            TreeContrast::EntropyBinary => importance_weighted_contrast(
+                &channels,
+                &SRGB_LUMINANCE_WEIGHTS,
+                ChannelContrast::Binary,
+                REGIONS,
+                level,
+            )?,
         };
         if delta >= 1.0 {
             return Ok(colour);
         }
-        mixed_contrast(delta, colour, pixel_contrast(g)?)
+        let geometry = if kind == TreeContrast::EntropyBinary { binary_contrast(g)? } else { pixel_contrast(g)? };
+        mixed_contrast(delta, colour, geometry)
     };
     value().unwrap_or(f64::INFINITY)
 }
@@ -292,6 +305,23 @@ mod tests {
     }
 
     const KINDS: [TreeContrast; 3] = [TreeContrast::Entropy, TreeContrast::Importance, TreeContrast::Classic];
+
+    /// `ec-binary` by hand: geometry factors 1 and 3 give `C_b^g = 1 − H_b(1/4)`
+    /// (eq. (21)); two colours 1 and 0 give `C_b = 1 − H_b(0) = 1` per channel,
+    /// weighted by the mean 1/2 and the importance `1/N_r^(n−1)` (eq. (27)).
+    #[test]
+    fn binary_tree_contrast_by_hand() {
+        let hb = 0.25 * 2.0 + 0.75 * (4.0f64 / 3.0).log2();
+        let grey = [[0.5; 3]; 2];
+        let g = node_contrast(&grey, &[1.0, 3.0], 1, TreeContrast::EntropyBinary, 0.0);
+        assert!((g - (1.0 - hb)).abs() < 1e-12, "{g}");
+        let edge = [[1.0; 3], [0.0; 3]];
+        let c1 = node_contrast(&edge, &[1.0, 1.0], 1, TreeContrast::EntropyBinary, 1.0);
+        assert!((c1 - 0.5).abs() < 1e-12, "{c1}");
+        let c2 = node_contrast(&edge, &[1.0, 1.0], 2, TreeContrast::EntropyBinary, 1.0);
+        assert!((c2 - 0.5 / 4.0).abs() < 1e-12, "{c2}");
+        assert_eq!(TreeContrast::from_name("ec-binary"), Some(TreeContrast::EntropyBinary));
+    }
 
     #[test]
     fn node_contrast_is_eq_27_and_falls_with_depth() {

@@ -1,6 +1,8 @@
 //! The cost of a collapse from the viewpoint channel `V → O` (Part V §3):
 //! how much `I(V;O)` (eq. (6)) or the viewpoints' entropies `H(O|v)`
-//! (eq. (2)) change when the triangles around the collapsed vertex change.
+//! (eq. (2)) change when the triangles around the collapsed vertex change,
+//! or how far each view's projected areas are from the actual areas (the
+//! viewpoint Kullback-Leibler distance, Part V eq. (3)).
 //!
 //! The channel's weights are the projected solid angles `a_o(v)` of every
 //! triangle from every viewpoint, `p(v)` proportional to the object's
@@ -23,6 +25,7 @@ use itgfx_core::{
 };
 
 use super::collapse::{Change, Dynamic};
+use super::mesh::triangle_area;
 use crate::viewpoint::ViewpointChannel;
 use crate::viewpoint::solid_angle::triangle_solid_angle;
 
@@ -38,6 +41,11 @@ pub enum Metric {
     /// `Σ_v p(v) |ΔH(O|v)|`, the mean change of viewpoint entropy
     /// (Castelló et al., WSCG 2007).
     Ve,
+    /// `Σ_v p(v) |ΔKL_v|`, the mean change of each viewpoint's
+    /// Kullback-Leibler distance from its projected areas to the actual
+    /// areas `A_o / A_T` (Part V eq. (3)): the object's triangles only, the
+    /// background has no area.
+    Vkl,
 }
 
 /// `x ln x` through the core (weights here are finite and non-negative).
@@ -86,6 +94,14 @@ pub struct ViewState {
     pub cross: Vec<f64>,
     /// `I(v;O)` in bits per viewpoint from the sums above (kept with them).
     pub vmi: Vec<f64>,
+    /// Area `A_o` of each triangle (0 once removed).
+    pub areas: Vec<f64>,
+    /// `A_T = Σ_o A_o`.
+    pub area_total: f64,
+    /// `Σ_o a_o(v) ln A_o` per viewpoint.
+    pub area_cross: Vec<f64>,
+    /// `KL_v` in bits per viewpoint (Part V eq. (3)) from the sums above.
+    pub vkl: Vec<f64>,
 }
 
 /// The new weights of the moved triangles of one collapse.
@@ -95,6 +111,8 @@ pub struct Proposal {
     pub a: Vec<f64>,
     /// `Ω_o(v)`, same layout (NaN where hidden).
     pub omega: Vec<f64>,
+    /// Area of each moved triangle.
+    pub areas: Vec<f64>,
     /// The cost.
     pub cost: f64,
 }
@@ -119,7 +137,7 @@ impl ViewState {
     /// Bytes needed for `faces` triangles and `views` viewpoints.
     #[must_use]
     pub fn bytes(faces: usize, views: usize) -> u64 {
-        2 * 8 * faces as u64 * views as u64 + 8 * (faces + 3 * views) as u64
+        2 * 8 * faces as u64 * views as u64 + 8 * (2 * faces + 5 * views) as u64
     }
 
     /// Weights from a traced channel of the living triangles: channel patch
@@ -162,7 +180,14 @@ impl ViewState {
             bg_total: 0.0,
             cross: vec![0.0; nv],
             vmi: vec![0.0; nv],
+            areas: vec![0.0; nf],
+            area_total: 0.0,
+            area_cross: vec![0.0; nv],
+            vkl: vec![0.0; nv],
         };
+        for &f in live {
+            s.areas[f as usize] = triangle_area(&d.corners(f));
+        }
         s.resum();
         s
     }
@@ -201,6 +226,27 @@ impl ViewState {
             }
         }
         self.vmi = self.viewpoint_information();
+        self.area_total = self.areas.iter().sum();
+        self.area_cross = vec![0.0; nv];
+        for (f, &area) in self.areas.iter().enumerate() {
+            for (v, &x) in self.a[f * nv..(f + 1) * nv].iter().enumerate() {
+                self.area_cross[v] += cross_term(x, area);
+            }
+        }
+        self.vkl = self.viewpoint_kl();
+    }
+
+    /// `KL_v` in bits of every viewpoint (Part V eq. (3)): the specific
+    /// information of the object's row with the actual areas `A_o / A_T` in
+    /// place of `p(o)`; 0 where nothing is seen.
+    #[must_use]
+    pub fn viewpoint_kl(&self) -> Vec<f64> {
+        (0..self.views())
+            .map(|v| {
+                let x = self.row_xlnx[v] - term(self.bg[v]);
+                specific(self.area_total, self.object[v], x, self.area_cross[v])
+            })
+            .collect()
     }
 
     /// `I(v;O)` in bits of every viewpoint (Part V eq. (7)); 0 where nothing is seen.
@@ -234,6 +280,29 @@ impl ViewState {
         for &f in &change.removed {
             let f = f as usize;
             d -= cross_term(self.a[f * nv + k], self.col_sum[f]);
+        }
+        d
+    }
+
+    /// Change of `A_T` when the moved triangles get the areas `new_areas`
+    /// and the removed ones vanish.
+    fn area_change(&self, change: &Change, new_areas: &[f64]) -> f64 {
+        let moved: f64 = change.moved.iter().zip(new_areas).map(|(&f, &a)| a - self.areas[f as usize]).sum();
+        moved - change.removed.iter().map(|&f| self.areas[f as usize]).sum::<f64>()
+    }
+
+    /// Change of `Σ_o a_o(v) ln A_o` at viewpoint `k` for the weights
+    /// `new_a` and areas `new_areas` of the moved triangles.
+    fn area_cross_change(&self, k: usize, change: &Change, new_a: &[f64], new_areas: &[f64]) -> f64 {
+        let nv = self.views();
+        let mut d = 0.0;
+        for (i, &f) in change.moved.iter().enumerate() {
+            let f = f as usize;
+            d += cross_term(new_a[i * nv + k], new_areas[i]) - cross_term(self.a[f * nv + k], self.areas[f]);
+        }
+        for &f in &change.removed {
+            let f = f as usize;
+            d -= cross_term(self.a[f * nv + k], self.areas[f]);
         }
         d
     }
@@ -284,13 +353,16 @@ impl ViewState {
     pub fn propose(&self, d: &Dynamic, u: u32, v: u32, change: &Change, metric: Metric) -> Proposal {
         let nv = self.views();
         let m = change.moved.len();
-        let mut p = Proposal { a: vec![0.0; m * nv], omega: vec![0.0; m * nv], cost: 0.0 };
         let corners: Vec<[DVec3; 3]> = change.moved.iter().map(|&f| d.moved_corners(f, u, v)).collect();
+        let areas = corners.iter().map(triangle_area).collect();
+        let mut p = Proposal { a: vec![0.0; m * nv], omega: vec![0.0; m * nv], areas, cost: 0.0 };
         let old = || change.moved.iter().chain(&change.removed).map(|&f| f as usize);
         let (mut d_total, mut d_joint, mut d_rows, mut d_bg) = (0.0, 0.0, 0.0, 0.0);
         let mut ve = 0.0;
-        let mut steps = Vec::with_capacity(if metric == Metric::Vmi { nv } else { 0 });
-        let mut hidden = Vec::with_capacity(if metric == Metric::Vmi { nv } else { 0 });
+        let keep = matches!(metric, Metric::Vmi | Metric::Vkl);
+        let mut steps = Vec::with_capacity(if keep { nv } else { 0 });
+        let mut hidden = Vec::with_capacity(if keep { nv } else { 0 });
+        let mut object_terms = Vec::with_capacity(if keep { nv } else { 0 });
         for (k, eye) in self.eyes.iter().enumerate() {
             let (mut sa, mut old_terms) = (0.0, 0.0);
             for f in old() {
@@ -334,9 +406,10 @@ impl ViewState {
             d_joint += step.d_joint;
             d_rows += step.d_rows;
             d_bg += step.bg - self.bg[k];
-            if metric == Metric::Vmi {
+            if keep {
                 steps.push(step);
                 hidden.push(sa == 0.0);
+                object_terms.push(new_terms - old_terms);
             }
             if metric == Metric::Ve && self.total > 0.0 && !step.unchanged {
                 let h0 = entropy(step.before.0, step.before.1);
@@ -366,6 +439,21 @@ impl ViewState {
                     let i0 = self.vmi[k];
                     let i1 = specific(total1, step.after.0, step.after.1, k1);
                     c += step.before.0 / self.total * (i1 - i0).abs();
+                }
+                c
+            }
+            Metric::Vkl => {
+                let area_total1 = self.area_total + self.area_change(change, &p.areas);
+                let mut c = 0.0;
+                for (k, step) in steps.iter().enumerate() {
+                    if step.before.0 <= 0.0 || self.total <= 0.0 {
+                        continue;
+                    }
+                    // A hidden viewpoint's row is unchanged; only A_T moves.
+                    let dk = if hidden[k] { 0.0 } else { self.area_cross_change(k, change, &p.a, &p.areas) };
+                    let x1 = self.row_xlnx[k] - term(self.bg[k]) + object_terms[k];
+                    let kl1 = specific(area_total1, step.object, x1, self.area_cross[k] + dk);
+                    c += step.before.0 / self.total * (kl1 - self.vkl[k]).abs();
                 }
                 c
             }
@@ -415,6 +503,11 @@ impl ViewState {
         let bg_total1 = self.bg_total + steps.iter().enumerate().map(|(k, s)| s.bg - self.bg[k]).sum::<f64>();
         let cross: Vec<f64> =
             (0..nv).map(|k| self.cross_change(k, change, &p.a, &new_cols, steps[k].bg, bg_total1)).collect();
+        let area_total1 = self.area_total + self.area_change(change, &p.areas);
+        for k in 0..nv {
+            self.area_cross[k] += self.area_cross_change(k, change, &p.a, &p.areas);
+        }
+        self.area_total = area_total1;
         for (k, step) in steps.iter().enumerate() {
             self.cross[k] += cross[k];
             self.total += step.d_total;
@@ -431,6 +524,7 @@ impl ViewState {
             self.omega[f * nv..(f + 1) * nv].copy_from_slice(&p.omega[i * nv..(i + 1) * nv]);
             self.cols_xlnx += term(new_cols[i]) - term(self.col_sum[f]);
             self.col_sum[f] = new_cols[i];
+            self.areas[f] = p.areas[i];
         }
         for &f in &change.removed {
             let f = f as usize;
@@ -438,8 +532,10 @@ impl ViewState {
             self.omega[f * nv..(f + 1) * nv].iter_mut().for_each(|x| *x = 0.0);
             self.cols_xlnx -= term(self.col_sum[f]);
             self.col_sum[f] = 0.0;
+            self.areas[f] = 0.0;
         }
         self.vmi = self.viewpoint_information();
+        self.vkl = self.viewpoint_kl();
     }
 }
 
@@ -469,7 +565,9 @@ mod tests {
 
     #[test]
     fn running_sums_match_a_recount_after_collapses() {
-        for (metric, background) in [(Metric::Vmi, true), (Metric::Ve, false), (Metric::Ivo, true)] {
+        for (metric, background) in
+            [(Metric::Vmi, true), (Metric::Ve, false), (Metric::Ivo, true), (Metric::Vkl, true), (Metric::Vkl, false)]
+        {
             let s = Settings {
                 metric,
                 directions: crate::viewpoint::icosphere(0),
@@ -513,8 +611,67 @@ mod tests {
             for (a, b) in state.viewpoint_entropies().iter().zip(fresh.viewpoint_entropies()) {
                 assert!(close(*a, b), "{metric:?} VE {a} vs {b}");
             }
+            for (a, b) in state.vkl.iter().zip(fresh.viewpoint_kl()) {
+                assert!(close(*a, b), "{metric:?} VKL {a} vs {b}");
+            }
+            assert!(close(state.area_total, fresh.area_total));
             // The removed triangles carry nothing; the channel still sees the object.
             assert!(state.total > 0.0 && state.mutual_information() > 0.0);
+        }
+    }
+
+    /// `KL_v` from the running sums equals Part V eq. (3) computed directly
+    /// by the core's `kl_divergence` from the weights and the triangle areas
+    /// (object only: the background has no area), before and after collapses.
+    #[test]
+    fn viewpoint_kl_is_eq3_by_the_core() {
+        use itgfx_core::kl_divergence;
+        for background in [false, true] {
+            let s = Settings {
+                metric: Metric::Vkl,
+                directions: crate::viewpoint::icosphere(0),
+                distance: 3.0,
+                backend: BackendChoice::Cpu,
+                refresh: 0.5,
+                tolerance: 0.05,
+                max_subdivision: 4,
+                background,
+            };
+            let mut d = Dynamic::new(&bumpy());
+            let mut state = trace(&d, &s).unwrap();
+            let direct = |state: &ViewState, d: &Dynamic| -> Vec<f64> {
+                let nv = state.views();
+                let live: Vec<usize> = (0..d.faces.len()).filter(|&f| state.areas[f] > 0.0).collect();
+                let q: Vec<f64> = live.iter().map(|&f| triangle_area(&d.corners(f as u32))).collect();
+                (0..nv)
+                    .map(|v| {
+                        let p: Vec<f64> = live.iter().map(|&f| state.a[f * nv + v]).collect();
+                        let sp: f64 = p.iter().sum();
+                        let sq: f64 = q.iter().sum();
+                        let p: Vec<f64> = p.iter().map(|x| x / sp).collect();
+                        let q: Vec<f64> = q.iter().map(|x| x / sq).collect();
+                        kl_divergence(&p, &q, Base::Bits).unwrap()
+                    })
+                    .collect()
+            };
+            for round in 0..3 {
+                let want = direct(&state, &d);
+                assert!(want.iter().any(|&x| x > 0.01), "the views are not all alike");
+                for (v, (a, b)) in state.vkl.iter().zip(&want).enumerate() {
+                    assert!((a - b).abs() < 1e-9 * (1.0 + b), "round {round} view {v}: {a} vs {b}");
+                }
+                // 20 collapses, the first valid half-edge each time.
+                for _ in 0..20 {
+                    let (u, v, c) = (0..d.positions.len() as u32)
+                        .flat_map(|u| d.neighbours(u).into_iter().map(move |v| (u, v)))
+                        .find_map(|(u, v)| d.check(u, v).map(|c| (u, v, c)))
+                        .unwrap();
+                    let p = state.propose(&d, u, v, &c, Metric::Vkl);
+                    assert!(p.cost.is_finite() && p.cost >= 0.0);
+                    state.apply(&c, &p);
+                    d.apply(u, v, &c);
+                }
+            }
         }
     }
 }

@@ -142,12 +142,7 @@ impl IndexedMesh {
     /// Surface area.
     #[must_use]
     pub fn area(&self) -> f64 {
-        (0..self.faces.len())
-            .map(|f| {
-                let [a, b, c] = self.corners(f);
-                0.5 * (b - a).cross(c - a).length()
-            })
-            .sum()
+        (0..self.faces.len()).map(|f| triangle_area(&self.corners(f))).sum()
     }
 
     /// Checks that every triangle has three distinct vertices and an area,
@@ -425,6 +420,12 @@ impl IndexedMesh {
         }
         r
     }
+}
+
+/// Area of the triangle with corners `t`.
+#[must_use]
+pub(crate) fn triangle_area(t: &[DVec3; 3]) -> f64 {
+    0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length()
 }
 
 #[cfg(test)]

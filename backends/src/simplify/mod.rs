@@ -9,7 +9,7 @@
 //! * [`cost`]: the channel's weights with running sums, so that a collapse
 //!   is priced and applied by updating the triangles around it only, the
 //!   measures from `itgfx-core` ([`Metric::Vmi`]: `|ΔI(V;O)|`,
-//!   [`Metric::Ve`]: the mean `|ΔH(O|v)|`);
+//!   [`Metric::Ve`]: the mean `|ΔH(O|v)|`, [`Metric::Vkl`]: the mean `|ΔKL_v|`);
 //! * [`metrics`]: what a user checks afterwards: image RMSE over views the
 //!   simplifier did not use, and the symmetric Hausdorff distance.
 //!

@@ -139,7 +139,7 @@ fn rank(kind: &str) -> u32 {
     }
 }
 
-/// Every Vulkan device, and the index of the one [`Gpu::open`] would use
+/// Every Vulkan device, and the index of the one `Gpu::open` would use
 /// (the most capable kind with 64-bit float support and a compute queue).
 ///
 /// # Errors

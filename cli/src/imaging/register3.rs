@@ -1,6 +1,6 @@
 //! `itgfx register FIXED.nrrd MOVING.nrrd`: rigid registration of volumes
 //! (6 parameters) by mutual information, over
-//! [`itgfx_backends::imaging::register3`].
+//! [`itgfx_backends::imaging::register3()`].
 
 use std::path::Path;
 use std::time::Instant;

@@ -61,12 +61,13 @@ pub struct RenderOptions {
     /// adaptive criterion of the tutorial: cc (classic contrast), ct
     /// (confidence test), kl cs hl (f-divergences), kl-sqrt cs-sqrt hl-sqrt (their square roots), ec
     /// (entropy refinement tree, Part IV §6), ic (importance-weighted classic contrast tree), cc-tree
-    /// (classic contrast tree), ec-batch (entropy contrast in batches), rel (relative confidence
+    /// (classic contrast tree), ec-binary (the entropy tree with binary contrasts in colour and
+    /// geometry, Part IV eqs. 19, 21), ec-batch (entropy contrast in batches), rel (relative confidence
     /// half-width, beyond the tutorial), es (entropy-based supersampling, Part IV §5: a contrast map
     /// of 8 spp decides where the rest of the budget goes); see docs/RENDER.md
     #[arg(long, value_name = "NAME", default_value = "uniform", value_parser = sampler_name)]
     pub sampler: String,
-    /// ec, ic, cc-tree, es: weight of the colour contrast against the geometry contrast of the
+    /// ec, ic, cc-tree, ec-binary, es: weight of the colour contrast against the geometry contrast of the
     /// rays' first hits (Part IV eqs. (23), (28)); 1 is colour only
     #[arg(long, value_name = "D", value_parser = delta)]
     pub delta: Option<f64>,
@@ -76,7 +77,8 @@ pub struct RenderOptions {
     pub binary_contrast: bool,
     /// Also write the pixel quality and contrast maps of an 8-spp pass (Part IV §3-4, Figs. 1-6):
     /// quality.png, geometry-quality.png, contrast.png, colour-contrast.png, binary-contrast.png,
-    /// geometry-contrast.png, quality.exr, contrast.exr
+    /// geometry-contrast.png, geometry-binary-contrast.png (eq. 21), geometry-log-contrast.png
+    /// (eq. 22), quality.exr, contrast.exr, geometry-contrast.exr
     #[arg(long)]
     pub maps: bool,
     /// Also write variance.exr: each pixel's sample variance per channel (of the samples averaged
@@ -233,7 +235,7 @@ fn memory_check(o: &RenderOptions) -> Result<(), CliError> {
     let (w, h) = (u64::from(o.size.0), u64::from(o.size.1));
     let per_pixel = match o.sampler.as_str() {
         "uniform" => u64::from(o.spp),
-        "ec" | "ic" | "cc-tree" => 680,
+        "ec" | "ic" | "cc-tree" | "ec-binary" => 680,
         _ => u64::from(o.max_spp.unwrap_or(o.spp.saturating_mul(16).min(MAX_SPP))),
     };
     let workers = o.tracing.threads.unwrap_or_else(rayon::current_num_threads) as u64;
@@ -313,7 +315,9 @@ pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
     }
     let oracle_maps = o.sampler == "es" || o.maps;
     if o.delta.is_some() && !(is_tree || oracle_maps) {
-        return Err(CliError::usage("--delta is for the contrast samplers (--sampler ec, ic, cc-tree, es) and --maps"));
+        return Err(CliError::usage(
+            "--delta is for the contrast samplers (--sampler ec, ic, cc-tree, ec-binary, es) and --maps",
+        ));
     }
     if o.binary_contrast && !oracle_maps {
         return Err(CliError::usage("--binary-contrast is for --sampler es and --maps"));

@@ -563,21 +563,26 @@ mod tests {
         IndexedMesh { positions, faces: faces.iter().map(|t| t.map(|i| i as u32)).collect() }
     }
 
+    /// The tests' settings: 12 views at distance 3 on the CPU backend.
+    fn test_settings(metric: Metric, background: bool) -> Settings {
+        Settings {
+            metric,
+            directions: crate::viewpoint::icosphere(0),
+            distance: 3.0,
+            backend: BackendChoice::Cpu,
+            refresh: 0.5,
+            tolerance: 0.05,
+            max_subdivision: 4,
+            background,
+        }
+    }
+
     #[test]
     fn running_sums_match_a_recount_after_collapses() {
         for (metric, background) in
             [(Metric::Vmi, true), (Metric::Ve, false), (Metric::Ivo, true), (Metric::Vkl, true), (Metric::Vkl, false)]
         {
-            let s = Settings {
-                metric,
-                directions: crate::viewpoint::icosphere(0),
-                distance: 3.0,
-                backend: BackendChoice::Cpu,
-                refresh: 0.5,
-                tolerance: 0.05,
-                max_subdivision: 4,
-                background,
-            };
+            let s = test_settings(metric, background);
             let mut d = Dynamic::new(&bumpy());
             let mut state = trace(&d, &s).unwrap();
             for _ in 0..60 {
@@ -627,16 +632,7 @@ mod tests {
     fn viewpoint_kl_is_eq3_by_the_core() {
         use itgfx_core::kl_divergence;
         for background in [false, true] {
-            let s = Settings {
-                metric: Metric::Vkl,
-                directions: crate::viewpoint::icosphere(0),
-                distance: 3.0,
-                backend: BackendChoice::Cpu,
-                refresh: 0.5,
-                tolerance: 0.05,
-                max_subdivision: 4,
-                background,
-            };
+            let s = test_settings(Metric::Vkl, background);
             let mut d = Dynamic::new(&bumpy());
             let mut state = trace(&d, &s).unwrap();
             let direct = |state: &ViewState, d: &Dynamic| -> Vec<f64> {

@@ -4,8 +4,10 @@
 //! Three ceilings, each read where the system has it (Linux `/proc` and
 //! cgroup v2 files; none elsewhere, and then nothing is refused):
 //! * the address-space limit `RLIMIT_AS` (`ulimit -v`) less the address
-//!   space already mapped (`VmSize`) and a reserve for the allocator's
-//!   per-thread arenas and thread stacks ([`THREAD_RESERVE`] a thread);
+//!   space already mapped (`VmSize`, read after every rayon worker has
+//!   started and allocated, so that their stacks and allocator arenas are
+//!   in it whatever the timing) and a reserve of [`THREAD_RESERVE`] for one
+//!   more thread (the main thread's or a progress reporter's);
 //! * the cgroup's `memory.max` less its `memory.current`, the tightest of
 //!   the process's cgroup and its ancestors;
 //! * `MemAvailable` of `/proc/meminfo` (free memory plus what the kernel
@@ -20,7 +22,7 @@
 
 use std::fmt;
 
-/// Address space reserved per thread (rayon's workers and the main thread)
+/// Address space reserved for a thread not yet running when the budget is read
 /// beyond the estimates: glibc gives each thread's allocations their own
 /// 64 MiB arena of address space, and a thread has a 2 MiB stack and guard.
 pub const THREAD_RESERVE: u64 = 72 << 20;
@@ -64,16 +66,25 @@ impl std::error::Error for OutOfMemory {}
 /// system reports none.
 #[must_use]
 pub fn budget() -> Option<Budget> {
-    let threads = rayon::current_num_threads() as u64 + 1;
-    let address = address_space_limit().map(|limit| Budget {
-        bytes: limit
-            .saturating_sub(address_space_used().unwrap_or(0))
-            .saturating_sub(threads.saturating_mul(THREAD_RESERVE)),
-        source: "the address-space limit (ulimit -v)",
+    let address = address_space_limit().map(|limit| {
+        workers_started();
+        Budget {
+            bytes: limit.saturating_sub(address_space_used().unwrap_or(0)).saturating_sub(THREAD_RESERVE),
+            source: "the address-space limit (ulimit -v)",
+        }
     });
     let cgroup = cgroup_room().map(|bytes| Budget { bytes, source: "the cgroup's memory.max" });
     let free = meminfo("MemAvailable:").map(|bytes| Budget { bytes, source: "the free memory (MemAvailable)" });
     [address, cgroup, free].into_iter().flatten().min_by_key(|b| b.bytes)
+}
+
+/// Makes every worker of the current rayon pool run and allocate once, so
+/// that `VmSize` holds their stacks and the 64 MiB arena glibc gives each
+/// thread's first allocation. Read before they had all started, `VmSize`
+/// varied by up to two arenas between runs of one command under one limit,
+/// and the same run was refused or accepted by chance.
+fn workers_started() {
+    rayon::broadcast(|_| drop(std::hint::black_box(Box::new(0_u8))));
 }
 
 /// Refuses `need` bytes over the [`budget`]; `what` names the work for the

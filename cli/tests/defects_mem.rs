@@ -118,9 +118,12 @@ fn infinite_or_absurd_emission_is_refused_naming_file_line_and_material() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// Runs `itgfx args` under `ulimit -v kib` (address space, KiB).
+/// Runs `itgfx args` under `ulimit -v kib` (address space, KiB), on two
+/// worker threads whatever the machine (each thread maps a stack and a
+/// 64 MiB allocator arena, so the limits below hold for two).
 fn under_ulimit(kib: u64, args: &[&str]) -> std::process::Output {
     let mut cmd = std::process::Command::new("sh");
+    cmd.env("RAYON_NUM_THREADS", "2");
     cmd.arg("-c").arg(format!("ulimit -v {kib} && exec \"$0\" \"$@\"")).arg(env!("CARGO_BIN_EXE_itgfx")).args(args);
     cmd.output().expect("run sh")
 }
@@ -157,15 +160,17 @@ fn the_scene_estimate_bounds_the_address_space_it_uses() {
     // what the run maps, or it would abort for want of address space.
     for spec in ["cube-enclosure:150", "torus:512,256"] {
         let args = ["complexity", spec, "--lines", "1000", "--json"];
-        let mut limit: u64 = 1 << 19; // KiB: 512 MiB, too little for the program and these scenes.
+        let mut limit: u64 = 1 << 18; // KiB: 256 MiB, too little for the program and these scenes.
         let mut accepted = None;
-        for _ in 0..6 {
+        for step in 0..6 {
             let out = under_ulimit(limit, &args);
             if out.status.success() {
+                assert!(step > 0, "{spec}: {limit} KiB is not too little: start lower");
                 accepted = Some(limit);
                 break;
             }
             let (need, left) = refused_for_memory(&out, spec);
+            assert!(left > 0, "{spec}: {limit} KiB leaves nothing: the step would overshoot");
             limit += (need.saturating_sub(left) + 4) << 10;
         }
         let limit = accepted.unwrap_or_else(|| panic!("{spec}: no limit near the estimate was accepted"));

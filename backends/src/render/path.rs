@@ -35,7 +35,7 @@ use std::f32::consts::FRAC_1_PI;
 use glam::{DVec3, Vec3A};
 
 use super::lights::{Lights, Surfaces};
-use crate::lines::{Line, LineRng, cosine_direction32, pcg, permute};
+use crate::lines::{Line, LineRng, cosine_direction32, permute, uniform32_of};
 use crate::tracer::{BackendError, Prepared, Tracer};
 
 /// `a × b` strata of a batch of `n` samples: `a` the largest divisor ≤ √n.
@@ -108,9 +108,17 @@ pub struct Stratum {
 impl Stratum {
     /// Draws `(u, v)` (uniform in the unit square) moved into this sample's
     /// cell of the batch's `a × b` grid under permutation `which`.
-    #[inline]
-    fn place(&self, (a, b): (u32, u32), which: u32, u: f32, v: f32) -> (f32, f32) {
-        let cell = permute(self.index, self.count, pcg(self.key ^ which));
+    #[cfg(test)]
+    fn place(&self, grid: (u32, u32), which: u32, u: f32, v: f32) -> (f32, f32) {
+        self.place_hashed(grid, crate::lines::pcg(self.key ^ which), u, v)
+    }
+
+    /// [`Stratum::place`] with the permutation's key already hashed:
+    /// `hashed = pcg(key ^ which)` (the bounce computes both of its keys
+    /// with its draws, [`LineRng::draws6_keys2`]).
+    #[inline(always)]
+    fn place_hashed(&self, (a, b): (u32, u32), hashed: u32, u: f32, v: f32) -> (f32, f32) {
+        let cell = permute(self.index, self.count, hashed);
         // `cx + u` can round up to `cx + 1`: keep the draw below 1.
         let below_one = 1.0 - f32::EPSILON / 2.0;
         let (x, y) = if a.is_power_of_two() && b.is_power_of_two() {
@@ -126,6 +134,37 @@ impl Stratum {
         };
         (x.min(below_one), y.min(below_one))
     }
+}
+
+/// The first permutation words of a bounce's two stratified pairs (light
+/// point, BSDF direction) at `depth`: `key ^` these, hashed, key them.
+#[inline]
+fn which(depth: u32) -> [u32; 2] {
+    let v = depth.wrapping_mul(0x9E37_79B9);
+    [v ^ 0x4c49_4748, v ^ 0x4449_5245]
+}
+
+/// The wavefront's buffers, kept per thread between calls so that a batch
+/// neither allocates nor touches fresh pages (a chunk's paths are ~0.6 MB,
+/// above the allocator's threshold for returning memory to the system).
+#[derive(Default)]
+struct Scratch {
+    paths: Vec<Path>,
+    next: Vec<Path>,
+    lines: Vec<Line>,
+    next_lines: Vec<Line>,
+    hits: Vec<Option<crate::tracer::Hit>>,
+    shadow: Vec<Line>,
+    shadow_add: Vec<(u32, Vec3A)>,
+    blocked: Vec<bool>,
+    out: Vec<Vec3A>,
+}
+
+thread_local! {
+    /// This thread's [`Scratch`], taken out while a call uses it (a call
+    /// nested through the tracer's own parallelism finds none and makes
+    /// its own), put back after.
+    static SCRATCH: std::cell::Cell<Option<Box<Scratch>>> = const { std::cell::Cell::new(None) };
 }
 
 #[derive(Clone, Copy)]
@@ -204,35 +243,37 @@ impl PathTracer<'_> {
             g.clear();
             g.resize(starts.len(), 0.0);
         }
-        let mut out = vec![Vec3A::ZERO; starts.len()];
-        let mut paths: Vec<Path> = starts
-            .iter()
-            .enumerate()
-            .map(|(slot, s)| Path {
-                origin: s.origin.as_vec3a(),
-                direction: s.direction.as_vec3a(),
-                beta: Vec3A::ONE,
-                pdf: 0.0,
-                rng: s.rng,
-                slot: slot as u32,
-                depth: 0,
-            })
-            .collect();
-        let n = paths.len();
-        let mut next: Vec<Path> = Vec::with_capacity(n);
-        let mut lines: Vec<Line> = Vec::with_capacity(n);
-        let mut hits = Vec::with_capacity(n);
-        let mut shadow: Vec<Line> = Vec::with_capacity(n);
-        let mut shadow_add: Vec<(u32, Vec3A)> = Vec::with_capacity(n);
-        let mut blocked = Vec::with_capacity(n);
+        let mut scratch = SCRATCH.with(std::cell::Cell::take).unwrap_or_default();
+        let result = self.wavefront(starts, strata, geometry, &mut scratch);
+        SCRATCH.with(|c| c.set(Some(scratch)));
+        result
+    }
+
+    /// The wavefront of [`Self::radiance_strata`] in `scratch`'s buffers.
+    fn wavefront(
+        &self,
+        starts: &[Start],
+        strata: Option<&[Stratum]>,
+        mut geometry: Option<&mut Vec<f64>>,
+        scratch: &mut Scratch,
+    ) -> Result<Vec<[f64; 3]>, BackendError> {
+        let Scratch { paths, next, lines, next_lines, hits, shadow, shadow_add, blocked, out } = scratch;
+        out.clear();
+        out.resize(starts.len(), Vec3A::ZERO);
+        paths.clear();
+        lines.clear();
+        for (slot, s) in starts.iter().enumerate() {
+            let (origin, direction) = (s.origin.as_vec3a(), s.direction.as_vec3a());
+            paths.push(Path { origin, direction, beta: Vec3A::ONE, pdf: 0.0, rng: s.rng, slot: slot as u32, depth: 0 });
+            lines.push(Line::ray32(origin, direction, 0.0, FAR));
+        }
         while !paths.is_empty() {
-            lines.clear();
-            lines.extend(paths.iter().map(|p| Line::ray32(p.origin, p.direction, 0.0, FAR)));
-            self.tracer.closest_hit(&lines, &mut hits)?;
+            self.tracer.closest_hit(lines, hits)?;
             shadow.clear();
             shadow_add.clear();
             next.clear();
-            for (p, hit) in paths.iter().zip(&hits) {
+            next_lines.clear();
+            for (p, hit) in paths.iter().zip(hits.iter()) {
                 let Some(h) = hit else { continue };
                 let mut p = *p;
                 let t = h.primitive as usize;
@@ -267,20 +308,26 @@ impl PathTracer<'_> {
                     continue;
                 }
                 let k = CAMERA_DRAWS + DRAWS_PER_BOUNCE * p.depth;
-                let u = |i: u32| p.rng.uniform32(k + i);
                 let o = x + nf * EPSILON;
+                // The roulette's draw (the bounce's sixth), when the path needs it.
+                let roulette;
                 if m.mirror {
                     p.direction = (p.direction - nf * (2.0 * p.direction.dot(nf))).normalize();
                     p.pdf = 0.0;
+                    roulette = (p.depth + 1 >= ROULETTE_FROM).then(|| p.rng.uniform32(k + 5));
                 } else {
+                    // The bounce's six draws and its two permutation keys at once.
+                    let keys = strata.map_or([0; 2], |s| which(p.depth).map(|w| s[p.slot as usize].key ^ w));
+                    let d = p.rng.draws6_keys2(k, keys);
+                    let u = |i: usize| uniform32_of(d[i]);
                     let (mut l1, mut l2, mut d1, mut d2) = (u(1), u(2), u(3), u(4));
                     if let Some(s) = strata {
                         let s = &s[p.slot as usize];
                         let grid = self::strata(s.count);
-                        let v = p.depth.wrapping_mul(0x9E37_79B9);
-                        (l1, l2) = s.place(grid, v ^ 0x4c49_4748, l1, l2);
-                        (d1, d2) = s.place(grid, v ^ 0x4449_5245, d1, d2);
+                        (l1, l2) = s.place_hashed(grid, d[6], l1, l2);
+                        (d1, d2) = s.place_hashed(grid, d[7], d1, d2);
                     }
+                    roulette = Some(u(5));
                     // Next-event estimation.
                     let (li, y) = self.lights.sample32(u(0), l1, l2);
                     let to = y - o;
@@ -307,27 +354,31 @@ impl PathTracer<'_> {
                 }
                 p.beta *= rho;
                 p.depth += 1;
-                if p.depth >= ROULETTE_FROM {
+                if p.depth >= ROULETTE_FROM
+                    && let Some(r) = roulette
+                {
                     let q = p.beta.max_element().min(0.95);
-                    if u(5) >= q {
+                    if r >= q {
                         continue;
                     }
                     p.beta /= q;
                 }
                 p.origin = o;
                 next.push(p);
+                next_lines.push(Line::ray32(o, p.direction, 0.0, FAR));
             }
             if !shadow.is_empty() {
-                self.tracer.occluded(&shadow, &mut blocked)?;
-                for (&(slot, c), &b) in shadow_add.iter().zip(&blocked) {
+                self.tracer.occluded(shadow, blocked)?;
+                for (&(slot, c), &b) in shadow_add.iter().zip(blocked.iter()) {
                     if !b {
                         out[slot as usize] += c;
                     }
                 }
             }
-            std::mem::swap(&mut paths, &mut next);
+            std::mem::swap(paths, next);
+            std::mem::swap(lines, next_lines);
         }
-        Ok(out.into_iter().map(|c| c.as_dvec3().to_array()).collect())
+        Ok(out.iter().map(|c| c.as_dvec3().to_array()).collect())
     }
 }
 

@@ -92,39 +92,7 @@ impl LineRng {
     #[inline]
     #[must_use]
     pub fn uniform32(&self, k: u32) -> f32 {
-        uniform32_of(self.u32(k))
-    }
-
-    /// Draws `k, …, k + 5` ([`LineRng::u32`]) and the hashes [`pcg`] of the
-    /// two words `extra`, in that order: one bounce's draws with the keys of
-    /// its two stratified permutations. With AVX2 all eight hashes run as
-    /// one 8-lane chain (the same 32-bit operations, so the same words).
-    #[inline]
-    #[must_use]
-    pub fn draws6_keys2(&self, k: u32, extra: [u32; 2]) -> [u32; 8] {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: AVX2 was detected just above.
-            return unsafe { self.draws6_keys2_avx2(k, extra) };
-        }
-        let d = |i: u32| self.u32(k.wrapping_add(i));
-        [d(0), d(1), d(2), d(3), d(4), d(5), pcg(extra[0]), pcg(extra[1])]
-    }
-
-    /// [`LineRng::draws6_keys2`] on 8 AVX2 lanes: lanes 0–5 hash
-    /// `w2 + (k + i)·φ` and then `w1 ^ ·`, lanes 6–7 hash `extra` once.
-    ///
-    /// # Safety
-    /// The CPU must support AVX2.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn draws6_keys2_avx2(&self, k: u32, extra: [u32; 2]) -> [u32; 8] {
-        use std::arch::x86_64::_mm256_xor_si256;
-        let step = |i: u32| self.w2.wrapping_add(k.wrapping_add(i).wrapping_mul(0x9E37_79B9));
-        let inner = pcg8(load8(&[step(0), step(1), step(2), step(3), step(4), step(5), extra[0], extra[1]]));
-        let outer = store8(pcg8(_mm256_xor_si256(inner, splat8(self.w1))));
-        let inner = store8(inner);
-        [outer[0], outer[1], outer[2], outer[3], outer[4], outer[5], inner[6], inner[7]]
+        ((self.u32(k) >> 9) as f32 + 0.5) * (1.0 / 8_388_608.0)
     }
 
     /// A uniform point on the unit sphere by Marsaglia's method (no
@@ -152,13 +120,6 @@ impl LineRng {
             draws = [self.u32(k), self.u32(k + 1)];
         }
     }
-}
-
-/// The uniform float in `(0, 1)` of a 32-bit draw ([`LineRng::uniform32`]).
-#[inline]
-#[must_use]
-pub fn uniform32_of(word: u32) -> f32 {
-    ((word >> 9) as f32 + 0.5) * (1.0 / 8_388_608.0)
 }
 
 /// The uniform double in `(0, 1)` of a 32-bit draw.
@@ -449,18 +410,6 @@ mod tests {
             worst = worst.max((f64::from(c) - lc).abs()).max((f64::from(s) - ls).abs());
         }
         assert!(worst < 3e-7, "worst error {worst}");
-    }
-
-    #[test]
-    fn draws6_keys2_are_the_scalar_draws() {
-        for (seed, index, k) in [(1u64, 0u64, 0u32), (7, 12_345, 2), (3, 1 << 40, 50), (9, 5, u32::MAX - 2)] {
-            let r = LineRng::new(seed, index);
-            let extra = [k ^ 0x4c49_4748, k.wrapping_mul(0x9E37_79B9)];
-            let d = r.draws6_keys2(k, extra);
-            let want: Vec<u32> = (0..6).map(|i| r.u32(k.wrapping_add(i))).chain(extra.map(pcg)).collect();
-            assert_eq!(d.to_vec(), want, "seed {seed} index {index} k {k}");
-            assert_eq!(uniform32_of(d[0]), r.uniform32(k));
-        }
     }
 
     #[test]

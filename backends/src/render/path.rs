@@ -35,7 +35,7 @@ use std::f32::consts::FRAC_1_PI;
 use glam::{DVec3, Vec3A};
 
 use super::lights::{Lights, Surfaces};
-use crate::lines::{Line, LineRng, cosine_direction32, permute, uniform32_of};
+use crate::lines::{Line, LineRng, cosine_direction32, pcg, permute};
 use crate::tracer::{BackendError, Prepared, Tracer};
 
 /// `a × b` strata of a batch of `n` samples: `a` the largest divisor ≤ √n.
@@ -110,12 +110,11 @@ impl Stratum {
     /// cell of the batch's `a × b` grid under permutation `which`.
     #[cfg(test)]
     fn place(&self, grid: (u32, u32), which: u32, u: f32, v: f32) -> (f32, f32) {
-        self.place_hashed(grid, crate::lines::pcg(self.key ^ which), u, v)
+        self.place_hashed(grid, pcg(self.key ^ which), u, v)
     }
 
     /// [`Stratum::place`] with the permutation's key already hashed:
-    /// `hashed = pcg(key ^ which)` (the bounce computes both of its keys
-    /// with its draws, [`LineRng::draws6_keys2`]).
+    /// `hashed = pcg(key ^ which)`.
     #[inline(always)]
     fn place_hashed(&self, (a, b): (u32, u32), hashed: u32, u: f32, v: f32) -> (f32, f32) {
         let cell = permute(self.index, self.count, hashed);
@@ -316,16 +315,14 @@ impl PathTracer<'_> {
                     p.pdf = 0.0;
                     roulette = (p.depth + 1 >= ROULETTE_FROM).then(|| p.rng.uniform32(k + 5));
                 } else {
-                    // The bounce's six draws and its two permutation keys at once.
-                    let keys = strata.map_or([0; 2], |s| which(p.depth).map(|w| s[p.slot as usize].key ^ w));
-                    let d = p.rng.draws6_keys2(k, keys);
-                    let u = |i: usize| uniform32_of(d[i]);
+                    let u = |i: u32| p.rng.uniform32(k + i);
                     let (mut l1, mut l2, mut d1, mut d2) = (u(1), u(2), u(3), u(4));
                     if let Some(s) = strata {
                         let s = &s[p.slot as usize];
                         let grid = self::strata(s.count);
-                        (l1, l2) = s.place_hashed(grid, d[6], l1, l2);
-                        (d1, d2) = s.place_hashed(grid, d[7], d1, d2);
+                        let [wl, wd] = which(p.depth);
+                        (l1, l2) = s.place_hashed(grid, pcg(s.key ^ wl), l1, l2);
+                        (d1, d2) = s.place_hashed(grid, pcg(s.key ^ wd), d1, d2);
                     }
                     roulette = Some(u(5));
                     // Next-event estimation.

@@ -88,8 +88,8 @@ pub fn chart(curves: &[Curve], x: Axis, y: Axis, size: (u32, u32), style: &Style
     titled(curves, x, y, size, style, &Titles::default())
 }
 
-/// As [`chart`], with the axis titles and the legend of `titles` (letters
-/// are drawn as capitals).
+/// As [`chart`], with the axis titles and the legend of `titles` (drawn in
+/// capitals).
 #[must_use]
 pub fn titled(curves: &[Curve], x: Axis, y: Axis, size: (u32, u32), style: &Style, titles: &Titles) -> RgbImage {
     let (w, h) = size;
@@ -129,12 +129,14 @@ pub fn titled(curves: &[Curve], x: Axis, y: Axis, size: (u32, u32), style: &Styl
     let (x_lo, x_hi) = (number(x.lo), number(x.hi));
     label(&mut img, left - 4, top + ph + 6, &x_lo, style.frame);
     label(&mut img, left + pw + 4 - ADVANCE * x_hi.len() as i64, top + ph + 6, &x_hi, style.frame);
+    // Capitals throughout: the font's lower-case `e` is the exponent's.
+    let (tx, ty) = (titles.x.to_uppercase(), titles.y.to_uppercase());
     let width = |t: &str| ADVANCE * t.chars().count() as i64;
     if !titles.x.is_empty() {
-        label(&mut img, left + (pw - width(&titles.x)) / 2, top + ph + 6 + LINE, &titles.x, style.frame);
+        label(&mut img, left + (pw - width(&tx)) / 2, top + ph + 6 + LINE, &tx, style.frame);
     }
     if !titles.y.is_empty() {
-        label(&mut img, 4, 6, &titles.y, style.frame);
+        label(&mut img, 4, 6, &ty, style.frame);
     }
     if !titles.legend.is_empty() {
         let n = titles.legend.len() as i64;
@@ -152,7 +154,7 @@ pub fn titled(curves: &[Curve], x: Axis, y: Axis, size: (u32, u32), style: &Styl
             for d in [4, 5] {
                 line(&mut img, ((x0 + 5) as f64, (yy + d) as f64), ((x0 + 19) as f64, (yy + d) as f64), *c);
             }
-            label(&mut img, x0 + 24, yy, t, *c);
+            label(&mut img, x0 + 24, yy, &t.to_uppercase(), *c);
         }
     }
     img
@@ -313,15 +315,24 @@ mod tests {
         let (a, o) = (Axis::linear(0.0, 1.0), Style::LIGHT);
         let img = titled(&curves, a, a, (300, 200), &o, &titles);
         let plain = chart(&curves, a, a, (300, 200), &o);
+        // Counts pixels of `colour` in `rows`, in the middle third of the columns
+        // (the x axis's value labels sit at its ends).
         let ink = |img: &RgbImage, rows: std::ops::Range<u32>, colour: [u8; 3]| {
-            img.enumerate_pixels().filter(|p| rows.contains(&p.1) && p.2.0 == colour).count()
+            img.enumerate_pixels()
+                .filter(|p| (100..200).contains(&p.0) && rows.contains(&p.1) && p.2.0 == colour)
+                .count()
         };
-        assert!(ink(&img, 186..200, o.frame) > 20, "x title under the axis");
-        assert_eq!(ink(&plain, 186..200, o.frame), 0, "nothing there without it");
-        assert!(ink(&img, 0..16, o.frame) > 20, "y title above the frame");
-        // The legend: curve-coloured text in the lower half, where the curves (near the top) are not.
-        assert!(ink(&img, 100..180, red) > 20 && ink(&img, 100..180, blue) > 20);
-        assert_eq!(ink(&plain, 100..180, red), 0);
+        assert!(ink(&img, 182..200, o.frame) > 20, "x title under the axis");
+        assert_eq!(ink(&plain, 180..200, o.frame), 0, "nothing there without it");
+        let corner =
+            |img: &RgbImage| img.enumerate_pixels().filter(|p| p.0 < 80 && p.1 < 8 && p.2.0 == o.frame).count();
+        assert!(corner(&img) > 20 && corner(&plain) == 0, "y title above the frame");
+        // The legend: curve-coloured text at the lower left, where the curves (near the top) are not.
+        let legend = |img: &RgbImage, c: [u8; 3]| {
+            img.enumerate_pixels().filter(|p| p.0 < 100 && (100..180).contains(&p.1) && p.2.0 == c).count()
+        };
+        assert!(legend(&img, red) > 20 && legend(&img, blue) > 20);
+        assert_eq!(legend(&plain, red), 0);
     }
 
     #[test]

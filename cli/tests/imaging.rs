@@ -218,7 +218,7 @@ fn volume_transform_recovered() {
 
 /// Without `--metric`, volumes are registered by NMI, which recovers a pair
 /// that MI misregisters: a noiseless, bias-free 40 × 36 × 32 pair rotated
-/// 6° about x, where MI's overlap bias carries the rotation to about 10°
+/// 6° about x, where MI's overlap bias carries the rotation past 7°
 /// (docs/IMAGING.md). The MI run shows that the pair tells the metrics apart.
 #[test]
 fn volume_default_metric_registers() {
@@ -228,16 +228,21 @@ fn volume_default_metric_registers() {
     json(&itgfx(&[&["phantom", "--dims", "3", "--out", s(&p), "--json"][..], &size[..]].concat()));
     let (f, m, truth) = (p.join("fixed.nrrd"), p.join("moving.nrrd"), p.join("transform.json"));
     let run = |out: &str, extra: &[&str]| {
-        let args = [&["register", s(&f), s(&m), "--truth", s(&truth), "--out", s(&d.join(out)), "--json"][..], extra];
+        let out = d.join(out);
+        let args = [&["register", s(&f), s(&m), "--truth", s(&truth), "--out", s(&out), "--json"][..], extra];
         json(&itgfx(&args.concat()))
     };
     let v = run("default", &[]);
     assert_eq!(v["metric"], "nmi", "{v}");
     assert_eq!(v["success"], true, "{v}");
-    assert!(v["rotation_error_deg"].as_f64().unwrap() < 0.5, "{v}");
+    // Within the success criterion (1°): 0.67° with the volume default's σ 0.5 at the last level,
+    // 0.35° with σ 1 on this small noiseless pair (on the 64³ benchmark pairs σ 0.5 is the better).
+    assert!(v["rotation_error_deg"].as_f64().unwrap() < 1.0, "{v}");
     let mi = run("mi", &["--metric", "mi"]);
     assert_eq!(mi["metric"], "mi");
-    assert!(mi["rotation_error_deg"].as_f64().unwrap() > 2.0, "{mi}");
+    // MI ends 1.7° off (4.3° with σ 1 at the last level): not a success.
+    assert_eq!(mi["success"], false, "{mi}");
+    assert!(mi["rotation_error_deg"].as_f64().unwrap() > 1.0, "{mi}");
     // Images keep MI as their default.
     let q = d.join("image");
     json(&itgfx(&["phantom", "--out", s(&q), "--size", "64,64", "--json"]));

@@ -24,10 +24,10 @@ pub fn check(o: &ComplexityOptions) -> Result<String, CliError> {
         .scene
         .clone()
         .ok_or_else(|| CliError::usage("give a scene: a built-in name (e.g. cube-enclosure:10) or an .obj file"))?;
-    if o.merge.is_empty() {
+    if o.shards.merge.is_empty() {
         line_range(o)?;
     }
-    for (flag, p) in [("--export-ply", &o.export_ply), ("--image", &o.image), ("--save-counts", &o.save_counts)] {
+    for (flag, p) in [("--export-ply", &o.export_ply), ("--image", &o.image), ("--save-counts", &o.shards.save_shard)] {
         if let Some(p) = p {
             crate::output::check(flag, p)?;
         }
@@ -45,7 +45,7 @@ pub const DEFAULT_LINES: u64 = 1_000_000;
 /// A range past the last 64-bit line index, or more shards than lines.
 pub fn line_range(o: &ComplexityOptions) -> Result<(u64, u64), CliError> {
     let lines = o.lines.unwrap_or(DEFAULT_LINES);
-    if let Some(s) = o.shard {
+    if let Some(s) = o.shards.shard {
         if s.count > lines {
             return Err(CliError::usage(format!(
                 "--shard {s}: {} shards of {lines} lines leave some shards empty (give at most {lines} shards)",
@@ -101,8 +101,9 @@ fn check_coverage(ranges: &[(u64, u64)], lines: u64) -> Result<(), CliError> {
 /// # Errors
 /// One-line usage errors naming the file.
 fn plan_merge(o: &ComplexityOptions) -> Result<Option<u64>, CliError> {
-    let mut heads: Vec<itgfx_backends::visibility::counts_binary::CountsHeader> = Vec::with_capacity(o.merge.len());
-    for f in &o.merge {
+    let mut heads: Vec<itgfx_backends::visibility::counts_binary::CountsHeader> =
+        Vec::with_capacity(o.shards.merge.len());
+    for f in &o.shards.merge {
         let fail = |e: itgfx_backends::visibility::CountsError| CliError::usage(format!("{f:?}: {e}"));
         let Some(h) = VisibilityCounts::peek(f).map_err(fail)? else { return Ok(None) };
         if let Some(first) = heads.first() {
@@ -111,15 +112,15 @@ fn plan_merge(o: &ComplexityOptions) -> Result<Option<u64>, CliError> {
         heads.push(h);
     }
     let mut ranges = Vec::new();
-    for (f, h) in o.merge.iter().zip(&heads) {
+    for (f, h) in o.shards.merge.iter().zip(&heads) {
         ranges = join_ranges(&ranges, &h.ranges).map_err(|e| CliError::usage(format!("{f:?}: {e}")))?;
     }
     if let Some(n) = o.lines {
         check_coverage(&ranges, n)?;
     }
-    let need = merge_memory(&heads, o.save_counts.is_some(), !o.counts_only);
+    let need = merge_memory(&heads, o.shards.save_shard.is_some(), !o.counts_only);
     itgfx_backends::memory::check(
-        || format!("--merge of these {} files (estimated from their headers)", o.merge.len()),
+        || format!("--merge of these {} files (estimated from their headers)", o.shards.merge.len()),
         need,
     )
     .map_err(|e| {
@@ -151,13 +152,13 @@ fn counts_report(
         .count("seed", counts.seed);
     let ranges: Vec<String> = counts.ranges.iter().map(|r| format!("{}..{}", r.0, r.1)).collect();
     r.text("ranges", ranges.join(", ")).count("pairs", sum(|b| b.pairs.len() as u64));
-    if let Some(s) = o.shard {
+    if let Some(s) = o.shards.shard {
         r.text("shard", s.to_string());
     }
     if let Some(b) = estimate {
         r.real("merge_memory_estimate_MiB", b as f64 / f64::from(1u32 << 20), None);
     }
-    if let Some(p) = &o.save_counts {
+    if let Some(p) = &o.shards.save_shard {
         r.text("saved", p.display().to_string());
     }
     r.real("seconds", t0.elapsed().as_secs_f64(), Some("s"));
@@ -173,14 +174,14 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
     let base = o.common.base;
     let unit = Some(base.unit());
     let (seed, local) = (o.seed, o.local);
-    let (offset, lines) = if o.merge.is_empty() { line_range(o)? } else { (0, 0) };
+    let (offset, lines) = if o.shards.merge.is_empty() { line_range(o)? } else { (0, 0) };
     let scene = load_scene(&spec, o.subdivide)?;
     let t0 = Instant::now();
     let prepared = Prepared::new(&scene);
     let tracer = open(o.tracing.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
     let opts = LineOptions { lines, seed, local, blocks: o.blocks, offset };
     let mut estimate = None;
-    let counts = if o.merge.is_empty() {
+    let counts = if o.shards.merge.is_empty() {
         let mut progress = Progress::new();
         count_visibility(&scene, &prepared, tracer.as_ref(), &opts, &mut |d, t| progress.update(d, t))
             .map_err(|e| CliError::usage(e.to_string()))?
@@ -188,7 +189,7 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
         // Evaluate saved shards instead of tracing.
         estimate = plan_merge(o)?;
         let mut merged: Option<VisibilityCounts> = None;
-        for f in &o.merge {
+        for f in &o.shards.merge {
             let (_, c) = VisibilityCounts::read(f).map_err(|e| CliError::usage(format!("{f:?}: {e}")))?;
             c.check_scene(&scene).map_err(|e| CliError::usage(format!("{f:?}: {e}")))?;
             match &mut merged {
@@ -202,7 +203,7 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
         }
         merged
     };
-    if let Some(p) = &o.save_counts {
+    if let Some(p) = &o.shards.save_shard {
         // Binary (version 3) unless the name ends in .json (version 2).
         let bytes = if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("json")) {
             let mut bytes = Vec::new();
@@ -235,7 +236,7 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
         .count("lines", c.lines)
         .count("segments", c.segments)
         .count("seed", counts.seed);
-    if let Some(s) = o.shard {
+    if let Some(s) = o.shards.shard {
         r.text("shard", s.to_string()).count("first_line", offset);
     }
     if let Some(b) = estimate {

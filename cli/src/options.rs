@@ -145,7 +145,13 @@ pub fn scene_list() -> String {
 
 /// `itgfx complexity SCENE`.
 #[derive(Debug, Args)]
-#[command(after_help = scene_list(), group(ArgGroup::new("picture").multiple(true).args(["export_ply", "image"])))]
+#[command(after_help = scene_list(), group(ArgGroup::new("picture").multiple(true).args(["export_ply", "image"])),
+          mut_arg("shard", |a| a.help("Shard i of n (0-based) of the --lines run: lines [i*N/n, (i+1)*N/n), for job arrays")
+              .conflicts_with("offset").help_heading(None)),
+          mut_arg("save_shard", |a| a.long("save-counts").help("Write the counts to F (binary; JSON if F ends in .json)")
+              .help_heading(None)),
+          mut_arg("merge", |a| a.help("Evaluate saved shards together instead of tracing: F1,F2,... (with --lines N: they must cover 0..N)")
+              .conflicts_with_all(["offset", "local", "seed", "blocks"]).help_heading(None)))]
 pub struct ComplexityOptions {
     /// A built-in scene name (e.g. cube-enclosure:10) or an .obj file
     #[arg(value_name = "SCENE")]
@@ -179,19 +185,13 @@ pub struct ComplexityOptions {
     /// First line index (shards of one run: same seed, disjoint ranges)
     #[arg(long, value_name = "K", default_value = "0", value_parser = count)]
     pub offset: u64,
-    /// Shard i of n (0-based) of the --lines run: lines [i*N/n, (i+1)*N/n), for job arrays
-    #[arg(long, value_name = "i/n", value_parser = crate::shard::parse, conflicts_with = "offset")]
-    pub shard: Option<crate::shard::Shard>,
     /// Save the counts (--save-counts) and report what they cover, without the measures: the inner
     /// steps of a merge tree (over half a partial merge's time is the measures' evaluation)
-    #[arg(long, requires = "save_counts", conflicts_with_all = ["export_ply", "image"])]
+    #[arg(long, requires = "save_shard", conflicts_with_all = ["export_ply", "image"])]
     pub counts_only: bool,
-    /// Write the counts to F (binary; JSON if F ends in .json)
-    #[arg(long, value_name = "F", value_parser = out_path)]
-    pub save_counts: Option<PathBuf>,
-    /// Evaluate saved shards together instead of tracing: F1,F2,... (with --lines N: they must cover 0..N)
-    #[arg(long, value_name = "F1,F2,...", value_delimiter = ',', conflicts_with_all = ["offset", "local", "shard", "seed", "blocks"])]
-    pub merge: Vec<PathBuf>,
+    /// `--shard`, `--save-counts` (the shard's counts, or any run's) and `--merge`
+    #[command(flatten)]
+    pub shards: crate::shard::ShardArgs,
     #[command(flatten)]
     #[allow(missing_docs)]
     pub tracing: Tracing,
@@ -207,7 +207,10 @@ pub struct ComplexityOptions {
                         Pictures are PNG renders and PLY with vertex colours.",
           group(ArgGroup::new("smoothed").multiple(true).args([
               "out", "importance_image", "ao_image", "saliency_image", "info_image", "export_ply", "saliency_ply",
-          ])))]
+          ])),
+          mut_arg("shard", |a| a.help(crate::viewpoint_shard::SHARD_HELP).requires("save_shard")),
+          mut_arg("save_shard", |a| a.help(crate::viewpoint_shard::SAVE_HELP).requires("shard")),
+          mut_arg("merge", |a| a.help(crate::viewpoint_shard::MERGE_HELP)))]
 pub struct ViewpointsOptions {
     /// An .obj file or a built-in scene name
     #[arg(value_name = "MESH")]
@@ -290,7 +293,12 @@ pub struct ViewpointsOptions {
     pub per_polygon: bool,
     /// --shard, --save-shard, --merge (boxed: the options stay small)
     #[command(flatten)]
-    pub shards: Box<crate::viewpoint_shard::ViewpointShardOptions>,
+    pub shards: Box<crate::shard::ShardArgs>,
+    /// Solid angle: refinement levels a shard saves per viewpoint (default 1: the first pass); the
+    /// merge traces any further level a viewpoint needs. 16 keeps them all: the merge traces nothing
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=16), requires = "shard",
+          help_heading = "Shards")]
+    pub shard_levels: Option<u32>,
     #[command(flatten)]
     #[allow(missing_docs)]
     pub common: Common,

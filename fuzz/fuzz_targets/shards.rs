@@ -3,8 +3,11 @@
 //! are viewpoint shards): any text, and valid files with their numbers
 //! edited, either load into a shard that validates, survives a save/load round
 //! trip unchanged and merges (alone) into an image or is refused in one line —
-//! never a panic, never an allocation a declared size asks for.
+//! never a panic, never an allocation a declared size asks for. Edited
+//! settings no longer match the header's fingerprint, so each edited file is
+//! also tried re-stamped (`Header::stamp`), to reach the rows' checks.
 use itgfx_backends::render::shard_file::{RenderShard, merge};
+use itgfx_backends::shards::{Header, ShardFile};
 use itgfx_backends::viewpoint::shard_file::{ViewpointShard, order_shards};
 use libfuzzer_sys::fuzz_target;
 
@@ -22,9 +25,22 @@ fuzz_target!(|data: &[u8]| {
         render(text);
         viewpoints(text);
     }
-    render(&mutate::edit_numbers(RENDER, data));
-    viewpoints(&mutate::edit_numbers(VIEWPOINTS, data));
+    let edited = mutate::edit_numbers(RENDER, data);
+    render(&edited);
+    render(&restamp::<RenderShard>(&edited));
+    let edited = mutate::edit_numbers(VIEWPOINTS, data);
+    viewpoints(&edited);
+    viewpoints(&restamp::<ViewpointShard>(&edited));
 });
+
+/// `text` with the header's fingerprint recomputed from its scene and
+/// settings (unchanged if the header does not parse).
+fn restamp<T: ShardFile>(text: &str) -> String {
+    let Ok(mut v) = serde_json::from_str::<serde_json::Value>(text) else { return text.to_string() };
+    let Ok(h) = serde_json::from_value::<Header<T::Settings>>(v["header"].clone()) else { return text.to_string() };
+    v["header"]["fingerprint"] = Header::stamp(&h.scene, &h.settings).into();
+    v.to_string()
+}
 
 fn one_line(e: &str) {
     assert!(!e.is_empty() && !e.contains('\n'), "{e:?}");
@@ -38,13 +54,13 @@ fn render(text: &str) {
     assert!(s.validate().is_ok());
     let again = RenderShard::from_json(&s.to_json().unwrap()).unwrap();
     assert_eq!(
-        (&again.settings, again.first_row, again.end_row, &again.samples),
-        (&s.settings, s.first_row, s.end_row, &s.samples)
+        (&again.header, again.first_row, again.end_row, &again.samples),
+        (&s.header, s.first_row, s.end_row, &s.samples)
     );
     assert!(again.rgb.iter().flatten().zip(s.rgb.iter().flatten()).all(|(a, b)| (a - b).abs() <= 1e-12 * b.abs()));
     match merge(vec![("a".into(), s.clone())]) {
         Ok((_, frame)) => {
-            assert_eq!(s.shards, 1, "one shard of several merged");
+            assert_eq!(s.header.shards, 1, "one shard of several merged");
             assert!(frame.rgb.iter().flatten().all(|v| v.is_finite()));
         }
         Err(e) => one_line(&e.to_string()),
@@ -60,8 +76,8 @@ fn viewpoints(text: &str) {
     };
     assert!(s.validate().is_ok());
     let again = ViewpointShard::from_json(&s.to_json().unwrap()).unwrap();
-    assert_eq!((&again.scene, &again.settings, again.len()), (&s.scene, &s.settings, s.len()));
-    let (scene, settings) = (s.scene.clone(), s.settings.clone());
+    assert_eq!((&again.header, again.len()), (&s.header, s.len()));
+    let (scene, settings) = (s.header.scene.clone(), s.header.settings.clone());
     match order_shards(vec![("a".into(), s.clone()), ("b".into(), s)], &scene, &settings) {
         Ok(v) => panic!("the same shard twice ordered into {} shards", v.len()),
         Err(e) => one_line(&e.to_string()),

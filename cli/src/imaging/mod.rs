@@ -15,7 +15,12 @@ pub use register::run_register;
 pub use segment::run_segment;
 pub use synth::run_phantom;
 
-use crate::values::out_path;
+use crate::values::{out_path, real, real_in};
+
+/// One of several numbers: [`real`], its refusal naming the text (`"x" is not a finite number`).
+fn finite(v: &str) -> Result<f64, String> {
+    real(v.trim()).map_err(|e| format!("{v:?} {e}"))
+}
 
 /// Largest width or height of a generated phantom.
 pub const MAX_SIDE: usize = 8192;
@@ -47,10 +52,7 @@ pub struct Numbers(pub Vec<f64>);
 /// # Errors
 /// A reason.
 pub fn numbers(s: &str) -> Result<Numbers, String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|x| x.trim().parse::<f64>().ok().filter(|v| v.is_finite()).ok_or(format!("{x:?} is not a finite number")))
-        .collect::<Result<_, _>>()?;
+    let v: Vec<f64> = s.split(',').map(finite).collect::<Result<_, _>>()?;
     if v.len() > 8 { Err("give at most 8 numbers".into()) } else { Ok(Numbers(v)) }
 }
 
@@ -95,15 +97,7 @@ pub fn sizes(s: &str) -> Result<Size, String> {
 /// A reason.
 pub fn pair(s: &str) -> Result<(f64, f64), String> {
     let (a, b) = s.split_once(',').ok_or("is not X,Y (two numbers and a comma)")?;
-    let num =
-        |v: &str| v.trim().parse::<f64>().ok().filter(|x| x.is_finite()).ok_or(format!("{v:?} is not a finite number"));
-    Ok((num(a)?, num(b)?))
-}
-
-/// A finite number in `[lo, hi]`.
-fn ranged(s: &str, lo: f64, hi: f64) -> Result<f64, String> {
-    let v: f64 = s.parse().ok().filter(|x: &f64| x.is_finite()).ok_or("is not a finite number")?;
-    if (lo..=hi).contains(&v) { Ok(v) } else { Err(format!("must be in [{lo}, {hi}]")) }
+    Ok((finite(a)?, finite(b)?))
 }
 
 /// `--angle`: degrees in `[−180, 180]`.
@@ -111,7 +105,7 @@ fn ranged(s: &str, lo: f64, hi: f64) -> Result<f64, String> {
 /// # Errors
 /// A reason.
 pub fn angle(s: &str) -> Result<f64, String> {
-    ranged(s, -180.0, 180.0)
+    real_in(s, -180.0, 180.0)
 }
 
 /// `--noise`: standard deviation in `[0, 1]`.
@@ -119,7 +113,7 @@ pub fn angle(s: &str) -> Result<f64, String> {
 /// # Errors
 /// A reason.
 pub fn unit(s: &str) -> Result<f64, String> {
-    ranged(s, 0.0, 1.0)
+    real_in(s, 0.0, 1.0)
 }
 
 /// `--bias`: in `[0, 0.9]` (the field stays positive).
@@ -127,7 +121,7 @@ pub fn unit(s: &str) -> Result<f64, String> {
 /// # Errors
 /// A reason.
 pub fn bias(s: &str) -> Result<f64, String> {
-    ranged(s, 0.0, 0.9)
+    real_in(s, 0.0, 0.9)
 }
 
 /// `--bins`: 2..=256.

@@ -43,7 +43,7 @@ pub const MEMORY_LIMIT: u64 = 6 << 30;
 #[derive(Debug, Args)]
 #[command(after_help = volume_help(),
           mut_arg("shard", |a| a.help(shard::SHARD_HELP).requires("save_shard")),
-          mut_arg("save_shard", |a| a.help(crate::viewpoint_shard::SAVE_HELP).requires("shard")),
+          mut_arg("save_shard", |a| a.help(crate::viewpoints::shard::SAVE_HELP).requires("shard")),
           mut_arg("merge", |a| a.help(shard::MERGE_HELP)))]
 pub struct VolumeOptions {
     /// A built-in volume (hydrogen:3,2,0,64, phantom:64, cube:32, sphere:32), an .nrrd or a raw file

@@ -8,8 +8,8 @@ use itgfx_backends::tracer::Prepared;
 use itgfx_backends::visibility::merge::{join_ranges, merge_memory};
 use itgfx_backends::visibility::{LineOptions, VisibilityCounts, count_visibility};
 
+use super::ComplexityOptions;
 use crate::CliError;
-use crate::options::ComplexityOptions;
 use crate::progress::Progress;
 use crate::report::Report;
 use crate::scene::load_scene;

@@ -14,8 +14,8 @@ use itgfx_backends::viewpoint::shard_file::{
 };
 use itgfx_backends::viewpoint::solid_angle::{Convergence, Refinement, ladder_levels};
 
+use super::ViewpointsOptions;
 use crate::CliError;
-use crate::options::ViewpointsOptions;
 use crate::progress::Progress;
 use crate::report::Report;
 use crate::shard::{MAX_SHARD_BYTES, Shard};

@@ -9,8 +9,8 @@ use obvhs::ray::Ray;
 
 use super::packet::{self, LANES};
 use super::watertight::{
-    BLOCK, Block, Shear, TriangleLanes, barycentric, before, finish, push_crossing, sphere_crossings, sphere_hit, triangle_hit,
-    walk_direction,
+    BLOCK, Block, Shear, TriangleLanes, barycentric, before, finish, push_crossing, sphere_crossings, sphere_hit,
+    triangle_hit, walk_direction,
 };
 use super::{BackendError, CrossingBuffer, Hit, Prepared, Tracer};
 use super::{interleave, node8};
@@ -630,7 +630,10 @@ mod tests {
         let slow = BvhBuildParams { search_depth_threshold: 0, ..BvhBuildParams::very_slow_build() };
         configs.push(("very slow, sdt 0", slow));
         configs.push(("very slow, no split", BvhBuildParams { pre_split: false, ..slow }));
-        configs.push(("pre_split, reinsert 1.0", BvhBuildParams { pre_split: true, reinsertion_batch_ratio: 1.0, ..base }));
+        configs.push((
+            "pre_split, reinsert 1.0",
+            BvhBuildParams { pre_split: true, reinsertion_batch_ratio: 1.0, ..base },
+        ));
         for spec in ["mirror-room", "cornell-box"] {
             let (p, closest, shadow) = render_rays(spec);
             eprintln!("{spec}: {} closest-hit rays, {} shadow rays", closest.len(), shadow.len());

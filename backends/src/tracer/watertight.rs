@@ -290,7 +290,6 @@ pub(crate) fn barycentric([w1, w2, det]: [f32; 3]) -> [f32; 2] {
 }
 
 impl Block {
-
     /// Lane `i` from the scalar test (its exact-zero re-evaluation included).
     #[inline]
     fn set_scalar(&mut self, i: usize, shear: &Shear, v: &[Vec3A; 3], tmin: f32, tmax: f32) {

@@ -306,7 +306,8 @@ pub fn parse_ply(name: &str, bytes: &[u8]) -> Result<Scene, SceneError> {
     if nv > MAX_VERTICES {
         return Err(err(name, format!("{nv} vertices, more than the {MAX_VERTICES} read")));
     }
-    Limits::check(name, nf, nf)?;
+    let budget = crate::memory::budget();
+    Limits::check_within(budget, name, nf, nf)?;
     let mut warnings = Warnings::default();
     if !ignored.is_empty() {
         warnings.add("ply-property-ignored", || {
@@ -355,7 +356,7 @@ pub fn parse_ply(name: &str, bytes: &[u8]) -> Result<Scene, SceneError> {
                         ));
                     }
                     triangles += len as u64 - 2;
-                    Limits::check(name, triangles, nf)?;
+                    Limits::check_within(budget, name, triangles, nf)?;
                     faces.push((indices.len(), len));
                 }
                 for _ in 0..len {

@@ -201,6 +201,7 @@ pub fn parse_obj(
     let mut materials: Vec<Material> = vec![Material::default()];
     let mut by_name: HashMap<String, usize> = HashMap::new();
     let (mut triangles, mut patches) = (0u64, 0u64);
+    let budget = crate::memory::budget();
     for (ln, raw) in text.lines().enumerate() {
         let line = ln + 1;
         let mut it = raw.split_whitespace();
@@ -250,7 +251,7 @@ pub fn parse_obj(
                 }
                 triangles += idx.len() as u64 - 2;
                 patches += 1;
-                Limits::check(name, triangles, patches)?;
+                Limits::check_within(budget, name, triangles, patches)?;
                 let start = indices.len();
                 for s in &idx {
                     let first = s.split('/').next().unwrap_or("");

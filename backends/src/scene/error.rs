@@ -146,11 +146,25 @@ impl Limits {
     /// [`SceneError::TooLarge`] with the counts and the estimated bytes;
     /// [`SceneError::Memory`] when the estimate is over the budget.
     pub fn check(what: &str, triangles: u64, patches: u64) -> Result<(), SceneError> {
+        Self::check_within(crate::memory::budget(), what, triangles, patches)
+    }
+
+    /// [`Limits::check`] against a `budget` read once before the reader's
+    /// loop ([`crate::memory::check_within`]), for checks made per face.
+    ///
+    /// # Errors
+    /// As [`Limits::check`].
+    pub fn check_within(
+        budget: Option<crate::memory::Budget>,
+        what: &str,
+        triangles: u64,
+        patches: u64,
+    ) -> Result<(), SceneError> {
         let bytes = Self::estimate_bytes(triangles, patches);
         if triangles > Self::MAX_TRIANGLES || patches > Self::MAX_PATCHES {
             return Err(SceneError::TooLarge { what: what.to_string(), triangles, patches, bytes });
         }
-        crate::memory::check(|| format!("{what} ({triangles} triangles, {patches} patches)"), bytes)
+        crate::memory::check_within(budget, || format!("{what} ({triangles} triangles, {patches} patches)"), bytes)
             .map_err(SceneError::Memory)
     }
 }

@@ -196,9 +196,12 @@ impl Shared {
     fn new(p: &Prepared) -> Self {
         let tris: Vec<[DVec3; 3]> = p.triangles.iter().map(as_d).collect();
         let centroids: Vec<DVec3> = tris.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect();
-        let order = morton_order(&centroids);
-        let edges = MeshEdges::new(&p.triangles, &tris);
-        let cuts = cutting(&tris);
+        // Three independent pure functions of the mesh, side by side: run
+        // one after another they were a serial ~2.5% of a bunny run.
+        let ((order, cuts), edges) = rayon::join(
+            || rayon::join(|| morton_order(&centroids), || cutting(&tris)),
+            || MeshEdges::new(&p.triangles, &tris),
+        );
         Self { tris, centroids, order, edges, cuts }
     }
 }

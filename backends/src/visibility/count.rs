@@ -190,9 +190,9 @@ fn process_chunk(
     let mut endpoint = Endpoints::new(p.patches);
     let mut cont = ContinuousSums::default();
     let mut overflow = false;
-    // One sample of eq. (59) from a point-to-point form factor `f`.
-    let mut sample = |f: f64, ends: &[u32], endpoint: &mut Endpoints| {
-        let l = itgfx_core::log_area_form_factor(total_area_norm, f);
+    // One sample of eq. (59) from a point-to-point form factor `f` and its
+    // `l = log_area_form_factor(total_area_norm, f)`.
+    let mut sample = |f: f64, l: f64, ends: &[u32], endpoint: &mut Endpoints| {
         if f > 0.0 && l.is_finite() {
             let fixed = FixedSum::of(l);
             overflow |= !cont.add_fixed(fixed, l);
@@ -204,6 +204,9 @@ fn process_chunk(
     };
     let (mut segments, mut escaped) = (0, 0);
     let mut kept = Vec::new();
+    // A batch's global segments: form factors, their ends, and (once the
+    // batch is paired) their logarithms, taken in one vectorised pass.
+    let (mut factors, mut ends, mut logs) = (Vec::new(), Vec::new(), Vec::new());
     // Batches of the tracer's size: a CPU batch's lines and crossings stay
     // in cache beside the BVH (the chunk's lines alone were 512 KB).
     for b0 in (0..count).step_by(batch as usize) {
@@ -232,7 +235,8 @@ fn process_chunk(
                     Some(h) if h.cos < 0.0 => {
                         keys.push(key(from, h.patch));
                         let r = f64::from(h.t) - BACKOFF;
-                        sample(n.dot(d) * f64::from(-h.cos) / (std::f64::consts::PI * r * r), &[from], &mut endpoint);
+                        let f = n.dot(d) * f64::from(-h.cos) / (std::f64::consts::PI * r * r);
+                        sample(f, itgfx_core::log_area_form_factor(total_area_norm, f), &[from], &mut endpoint);
                         segments += 1;
                     }
                     _ => {
@@ -271,7 +275,8 @@ fn process_chunk(
                             let f = f64::from(h.cos) * f64::from(-g.cos) / (std::f64::consts::PI * r * r);
                             // Both directions (Part III Fig. 8): one unordered key.
                             keys.push(sym_key(h.patch, g.patch));
-                            sample(f, &[h.patch, g.patch], &mut endpoint);
+                            factors.push(f);
+                            ends.push([h.patch, g.patch]);
                             segments += 1;
                             k += 2;
                             continue;
@@ -288,6 +293,12 @@ fn process_chunk(
                 k += 1;
             }
         }
+        log_area_form_factors(total_area_norm, &factors, &mut logs);
+        for ((&f, &l), e) in factors.iter().zip(&logs).zip(&ends) {
+            sample(f, l, e, &mut endpoint);
+        }
+        factors.clear();
+        ends.clear();
     }
     keys.sort_unstable();
     let mut runs: Vec<(u64, u64)> = Vec::new();
@@ -301,6 +312,48 @@ fn process_chunk(
         return Err(CountsError::Overflow("the I_S^c sum of a chunk".into()));
     }
     Ok(ChunkResult { keys: runs, background, cont, endpoint, segments, escaped })
+}
+
+/// `itgfx_core::log_area_form_factor(total_area, f)` (eq. (59)) of each of
+/// `factors` into `out`, bit for bit: the core's branch-free `ln(A·f)` of
+/// every sample in a loop the compiler vectorises (4 lanes with AVX2), then
+/// the rare products outside the normal range taken again by the core's
+/// function. Each sample's logarithm was a scalar call in the pairing loop.
+fn log_area_form_factors(total_area: f64, factors: &[f64], out: &mut Vec<f64>) {
+    out.clear();
+    out.resize(factors.len(), 0.0);
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: AVX2 was detected just above.
+        unsafe { ln_products_avx2(total_area, factors, out) };
+    } else {
+        ln_products(total_area, factors, out);
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    ln_products(total_area, factors, out);
+    for (l, &f) in out.iter_mut().zip(factors) {
+        if !(f64::MIN_POSITIVE..=f64::MAX).contains(&(total_area * f)) {
+            *l = itgfx_core::log_area_form_factor(total_area, f);
+        }
+    }
+}
+
+/// `ln(total_area · f)` of each `f`, the core's [`itgfx_core::ln`].
+#[inline(always)]
+fn ln_products(total_area: f64, factors: &[f64], out: &mut [f64]) {
+    for (l, &f) in out.iter_mut().zip(factors) {
+        *l = itgfx_core::ln(total_area * f);
+    }
+}
+
+/// [`ln_products`] compiled for AVX2.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn ln_products_avx2(total_area: f64, factors: &[f64], out: &mut [f64]) {
+    ln_products(total_area, factors, out);
 }
 
 /// Whether crossing `h` of a local line from patch `from` is where the line
@@ -470,6 +523,32 @@ mod tests {
     use super::*;
     use crate::scene::built_in;
     use crate::tracer::CpuTracer;
+
+    /// The batched logarithms of eq. (59) are the core's, bit for bit, on
+    /// ordinary form factors and on products outside the normal range
+    /// (zero, subnormal, overflowing, infinite, NaN).
+    #[test]
+    fn batched_logarithms_are_the_cores() {
+        let mut s: u64 = 0x9E37_79B9_7F4A_7C15;
+        let mut factors: Vec<f64> = (0..10_007)
+            .map(|_| {
+                s ^= s << 13;
+                s ^= s >> 7;
+                s ^= s << 17;
+                f64::from_bits(s & 0x7fef_ffff_ffff_ffff)
+            })
+            .collect();
+        factors.extend([0.0, 1e-310, 5e-324, 1e300, f64::MAX, f64::INFINITY, f64::NAN, -1.0, 0.3]);
+        for total in [1.0, 12.566_370_614_359_172, 1e-5, 3e7] {
+            let mut out = vec![7.0; 3];
+            log_area_form_factors(total, &factors, &mut out);
+            assert_eq!(out.len(), factors.len());
+            for (&f, &l) in factors.iter().zip(&out) {
+                let core = itgfx_core::log_area_form_factor(total, f);
+                assert_eq!(l.to_bits(), core.to_bits(), "A = {total}, f = {f:e}: {l} vs {core}");
+            }
+        }
+    }
 
     /// The closest-hit query finds, for every local line, the crossing a scan
     /// of all crossings finds (the same patch, `t` and cosine), on scenes with

@@ -35,7 +35,7 @@ pub struct RenderShardOptions {
     /// rendering; no SCENE or sampler options (the shards carry them)
     #[arg(long, value_name = "F1,F2,...", value_delimiter = ',', num_args = 1..,
           conflicts_with_all = ["shard", "scene", "sampler", "spp", "size", "seed", "camera", "threshold", "tutorial_form",
-                                "delta", "binary_contrast", "maps", "max_spp", "export_scene", "backend", "save_shard"],
+                                "delta", "binary_contrast", "node_samples", "maps", "max_spp", "export_scene", "backend", "save_shard"],
           help_heading = "Shards")]
     pub merge: Vec<PathBuf>,
 }
@@ -82,6 +82,7 @@ pub fn settings(o: &RenderOptions, sampling: &Sampling, delta: f64, camera: &Cam
         unbiased: o.sampler != "uniform" && !o.tutorial_form,
         delta,
         binary_contrast: o.binary_contrast,
+        node_samples: if let Sampling::Tree { node_samples, .. } = sampling { *node_samples } else { 0 },
         width: o.size.0,
         height: o.size.1,
         seed: o.seed,

@@ -56,7 +56,7 @@ pub const MAX_LEVEL: u32 = 4;
 /// every quadrant holds a sample; Part IV §6.1), at most [`MAX_NODE_SAMPLES`].
 #[must_use]
 pub fn valid_node_samples(n: u32) -> bool {
-    (REGIONS..=MAX_NODE_SAMPLES).contains(&n) && n % REGIONS == 0
+    (REGIONS..=MAX_NODE_SAMPLES).contains(&n) && n.is_multiple_of(REGIONS)
 }
 
 /// The colour contrast a tree node is judged by (Part IV §6.4).

@@ -133,3 +133,37 @@ fn contrast_options_are_checked() {
     fails(&["render", "cornell-box", "--out", o, "--sampler", "es", "--spp", "12"], "--tutorial-form");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn node_samples_change_the_tree_and_bad_values_are_refused() {
+    // N_s^r (Part IV §6): the default is 8, so `--node-samples 8` is the
+    // default image byte for byte; 4 (Fig. 13's) and 16 give other trees,
+    // every pixel's samples a multiple of N_s^r (the unbiased form: N_s^r
+    // fresh samples a leaf).
+    let dir = temp("nodes");
+    let exr = |sub: &str| std::fs::read(dir.join(sub).join("image.exr")).unwrap();
+    let common = ["--spp", "32", "--sampler", "ec", "--threshold", "0.01"];
+    let base = render(&dir.join("default"), &common);
+    assert_eq!(base["node_samples"].as_u64(), Some(8));
+    for n in [4u64, 8, 16] {
+        let sub = format!("n{n}");
+        let ns = n.to_string();
+        let v = render(&dir.join(&sub), &[&common[..], &["--node-samples", &ns]].concat());
+        assert_eq!(v["node_samples"].as_u64(), Some(n));
+        let (lo, hi) = (v["spp_min"].as_u64().unwrap(), v["spp_max"].as_u64().unwrap());
+        assert!(lo == n && hi > lo && hi % n == 0 && hi <= 85 * n, "N_s^r {n}: {lo}..{hi}");
+        if n == 8 {
+            assert_eq!(exr(&sub), exr("default"), "--node-samples 8 is the default");
+        } else {
+            assert_ne!(exr(&sub), exr("default"), "--node-samples {n} changes nothing");
+        }
+    }
+    let o = dir.join("bad");
+    let o = s(&o);
+    for bad in ["0", "2", "6", "1028", "4096", "x"] {
+        fails(&["render", "cornell-box", "--out", o, "--sampler", "ec", "--node-samples", bad], "--node-samples");
+    }
+    fails(&["render", "cornell-box", "--out", o, "--sampler", "es", "--node-samples", "4"], "refinement trees");
+    fails(&["render", "cornell-box", "--out", o, "--node-samples", "4"], "refinement trees");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -90,3 +90,32 @@ fn missing_duplicate_and_foreign_shards_are_refused() {
     fails(&["render", "--merge", s(&f[0]), s(&f[1]), "--sampler", "kl", "--out", o], "--merge");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_tree_s_samples_per_node_are_a_shard_setting() {
+    // `--node-samples` (N_s^r) changes every tree pixel: the shards of a run
+    // must agree on it, and shards that do merge to the single run's EXR.
+    let dir = temp("nodes");
+    let run = |name: &str, extra: &[&str]| {
+        let mut args = BASE.to_vec();
+        args.extend(["--sampler", "ec", "--threshold", "0.01"]);
+        args.extend_from_slice(extra);
+        let f = dir.join(name);
+        args.extend(["--save-shard", s(&f), "--json"]);
+        ok(&itgfx(&args));
+        f
+    };
+    let a = run("a.json", &["--node-samples", "4", "--shard", "0/2"]);
+    let b = run("b.json", &["--node-samples", "4", "--shard", "1/2"]);
+    let c = run("c.json", &["--shard", "1/2"]);
+    let out = dir.join("out");
+    fails(&["render", "--merge", s(&a), s(&c), "--out", s(&out)], "4 samples a node");
+    let single = dir.join("single");
+    let mut args = BASE.to_vec();
+    args.extend(["--sampler", "ec", "--threshold", "0.01", "--node-samples", "4", "--out", s(&single), "--json"]);
+    ok(&itgfx(&args));
+    ok(&itgfx(&["render", "--merge", s(&a), s(&b), "--out", s(&out), "--json"]));
+    let (x, y) = (std::fs::read(single.join("image.exr")).unwrap(), std::fs::read(out.join("image.exr")).unwrap());
+    assert!(x == y, "the merged EXR differs from the single run's");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

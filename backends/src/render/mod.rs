@@ -140,6 +140,8 @@ pub enum Sampling {
         unbiased: bool,
         /// A given threshold instead of tuning one.
         threshold: Option<f64>,
+        /// Samples per node `N_s^r` ([`tree::valid_node_samples`]).
+        node_samples: u32,
     },
     /// Entropy-based supersampling of Part IV §5.
     Supersample(Supersampling),
@@ -289,8 +291,8 @@ fn with_threshold(sampling: &Sampling, t: Option<f64>) -> Sampling {
         Sampling::Adaptive { criterion, spp, max, unbiased, threshold } => {
             Sampling::Adaptive { criterion, spp, max, unbiased, threshold: threshold.or(t) }
         }
-        Sampling::Tree { contrast, delta, spp, unbiased, threshold } => {
-            Sampling::Tree { contrast, delta, spp, unbiased, threshold: threshold.or(t) }
+        Sampling::Tree { contrast, delta, spp, unbiased, threshold, node_samples } => {
+            Sampling::Tree { contrast, delta, spp, unbiased, threshold: threshold.or(t), node_samples }
         }
         other => other,
     }
@@ -366,15 +368,16 @@ fn trace(
                 passes: 1,
             })
         }
-        Sampling::Tree { contrast, delta, spp, unbiased, threshold } => {
+        Sampling::Tree { contrast, delta, spp, unbiased, threshold, node_samples } => {
             let tuned = match threshold {
                 Some(_) => None,
                 None => Some(tune::tune_policy(pt, &view, f64::from(spp), &|eps| {
-                    Box::new(Tree { threshold: eps, unbiased, contrast, delta })
+                    Box::new(Tree { threshold: eps, unbiased, contrast, delta, node_samples })
                 })?),
             };
             let threshold = threshold.or(tuned.map(|t| t.threshold)).unwrap_or(0.0);
-            let frame = frame::render(pt, &view, &Tree { threshold, unbiased, contrast, delta }, progress)?;
+            let frame =
+                frame::render(pt, &view, &Tree { threshold, unbiased, contrast, delta, node_samples }, progress)?;
             Ok(Rendered { frame, threshold: Some(threshold), tuned, map: None, passes: 1 })
         }
         Sampling::Supersample(es) => {

@@ -52,6 +52,9 @@ pub struct RenderSettings {
     pub delta: f64,
     /// `--binary-contrast`.
     pub binary_contrast: bool,
+    /// Samples per tree node `N_s^r` (`--node-samples`; 0 for the other samplers).
+    #[serde(default)]
+    pub node_samples: u32,
     /// Image width.
     pub width: u32,
     /// Image height.
@@ -68,7 +71,12 @@ impl crate::shards::Settings for RenderSettings {
     /// The first setting that differs from `other`'s.
     fn difference(&self, other: &Self) -> Option<Difference> {
         let d = |s: Setting, a: String, b: String| Difference::of(s, a, b, "there");
-        d(Setting::Sampler, self.sampler.clone(), other.sampler.clone())
+        // A tree's samples per node are part of its sampler.
+        let sampler = |s: &Self| match s.node_samples {
+            0 => s.sampler.clone(),
+            n => format!("{} with {n} samples a node", s.sampler),
+        };
+        d(Setting::Sampler, sampler(self), sampler(other))
             .or_else(|| d(Setting::SamplesPerPixel, self.spp.to_string(), other.spp.to_string()))
             .or_else(|| d(Setting::MaxSamplesPerPixel, self.max_spp.to_string(), other.max_spp.to_string()))
             .or_else(|| d(Setting::Threshold, format!("{:?}", self.threshold), format!("{:?}", other.threshold)))
@@ -238,6 +246,7 @@ mod tests {
             unbiased: false,
             delta: 1.0,
             binary_contrast: false,
+            node_samples: 0,
             width: 2,
             height: 5,
             seed,

@@ -1,7 +1,8 @@
 //! Adaptive sampling with the refinement tree of Part IV §6.
 //!
-//! Every pixel is a 1-node; an `n`-node takes `N_s = 8` stratified samples
-//! (2 in each of its `N_r = 4` quadrants). While its contrast is `≥ ε` and
+//! Every pixel is a 1-node; an `n`-node takes `N_s^r` stratified samples
+//! (`N_s^r / N_r` in each of its `N_r = 4` quadrants; `N_s^r` a multiple of
+//! `N_r`, Part IV §6.1's notation table; default 8, `--node-samples`). While its contrast is `≥ ε` and
 //! `n` is below the deepest level (4, as the tutorial's trees), the node
 //! splits into its quadrants, each sampled anew. The node contrast is one
 //! of the three compared in §6.4 ([`TreeContrast`]):
@@ -27,8 +28,8 @@
 //!
 //! The tree is built level by level for all pixels of a row at once (one
 //! wavefront per level through the tracing seam). Node `k` (breadth-first
-//! within its pixel) uses sample indices `8k..8k+8`, so the image does not
-//! depend on the thread count.
+//! within its pixel) uses sample indices `k N_s^r..(k + 1) N_s^r`, so the
+//! image does not depend on the thread count.
 
 use itgfx_core::pixel::{
     ChannelContrast, MITCHELL_WEIGHTS, SRGB_LUMINANCE_WEIGHTS, binary_contrast, importance_weighted_contrast,
@@ -36,16 +37,27 @@ use itgfx_core::pixel::{
 };
 
 use super::frame::{OwnPixel, PILOT, PixelSamples, Policy, View};
-use super::path::{PathTracer, Start};
+use super::path::{PathTracer, Start, strata};
 use crate::lines::LineRng;
 use crate::tracer::BackendError;
 
-/// Samples per node, `N_s`.
+/// Samples per node `N_s^r` by default (the tutorial's Table 2; Fig. 13 used 4).
 pub const NODE_SAMPLES: u32 = 8;
+/// Most samples per node `--node-samples` takes (a pixel's 85 nodes of 4
+/// levels then trace at most 87,040 pilot samples, far below the 2^23
+/// sample indices).
+pub const MAX_NODE_SAMPLES: u32 = 1024;
 /// Regions per node, `N_r` (quadrants).
 pub const REGIONS: u32 = 4;
 /// Deepest level of the tree (the pixel is level 1).
 pub const MAX_LEVEL: u32 = 4;
+
+/// Whether `n` can be `N_s^r`: a multiple of `N_r` (at least `N_r`, so
+/// every quadrant holds a sample; Part IV §6.1), at most [`MAX_NODE_SAMPLES`].
+#[must_use]
+pub fn valid_node_samples(n: u32) -> bool {
+    (REGIONS..=MAX_NODE_SAMPLES).contains(&n) && n.is_multiple_of(REGIONS)
+}
 
 /// The colour contrast a tree node is judged by (Part IV §6.4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -91,11 +103,13 @@ pub struct Tree {
     pub contrast: TreeContrast,
     /// Weight `δ` of colour against geometry in eq. (28); 1 is colour only.
     pub delta: f64,
+    /// Samples per node `N_s^r` ([`valid_node_samples`]).
+    pub node_samples: u32,
 }
 
 impl Policy for Tree {
     fn first(&self) -> u32 {
-        NODE_SAMPLES
+        self.node_samples
     }
     fn more(&self, _: &PixelSamples) -> u32 {
         0
@@ -201,20 +215,21 @@ pub(crate) fn render_tree(
             children: None,
         })
         .collect();
+    let ns = tree.node_samples as usize;
     let mut serials = vec![1u32; ids.len()];
     let mut counts = vec![0u32; ids.len()];
     let mut level_start = 0;
     while level_start < nodes.len() {
         let level_end = nodes.len();
         let mut g = Vec::new();
-        let starts = node_starts(view, &nodes[level_start..level_end], tree.unbiased);
+        let starts = node_starts(view, &nodes[level_start..level_end], tree.unbiased, tree.node_samples);
         let rgb = pt.radiance_geometry(&starts, (tree.delta < 1.0).then_some(&mut g))?;
         for k in level_start..level_end {
-            let span = (k - level_start) * NODE_SAMPLES as usize..(k - level_start + 1) * NODE_SAMPLES as usize;
+            let span = (k - level_start) * ns..(k - level_start + 1) * ns;
             let s = &rgb[span.clone()];
             let gs = g.get(span).unwrap_or(&[]);
             let (slot, level) = (nodes[k].slot, nodes[k].level);
-            counts[slot] += NODE_SAMPLES;
+            counts[slot] += tree.node_samples;
             nodes[k].colour = reconstruct(s);
             if level < MAX_LEVEL && node_contrast(s, gs, level, tree.contrast, tree.delta) >= tree.threshold {
                 nodes[k].children = Some(nodes.len());
@@ -247,17 +262,17 @@ pub(crate) fn render_tree(
         let leaves: Vec<usize> = (0..nodes.len()).filter(|&k| nodes[k].children.is_none()).collect();
         if !estimate {
             for &k in &leaves {
-                counts[nodes[k].slot] += NODE_SAMPLES;
+                counts[nodes[k].slot] += tree.node_samples;
             }
             return Ok((0..ids.len()).map(|slot| (nodes[slot].colour, counts[slot], pilot[slot])).collect());
         }
         let chosen: Vec<&Node> = leaves.iter().map(|&k| &nodes[k]).collect();
         let starts: Vec<Start> =
-            chosen.iter().flat_map(|n| node_starts(view, std::slice::from_ref(*n), false)).collect();
+            chosen.iter().flat_map(|n| node_starts(view, std::slice::from_ref(*n), false, tree.node_samples)).collect();
         let rgb = pt.radiance(&starts)?;
         for (j, &k) in leaves.iter().enumerate() {
-            nodes[k].colour = reconstruct(&rgb[j * NODE_SAMPLES as usize..(j + 1) * NODE_SAMPLES as usize]);
-            counts[nodes[k].slot] += NODE_SAMPLES;
+            nodes[k].colour = reconstruct(&rgb[j * ns..(j + 1) * ns]);
+            counts[nodes[k].slot] += tree.node_samples;
         }
     }
     // Ascent: children were pushed after their parents, so go backwards.
@@ -270,18 +285,21 @@ pub(crate) fn render_tree(
     Ok((0..ids.len()).map(|slot| (nodes[slot].colour, counts[slot], pilot[slot])).collect())
 }
 
-/// The camera rays of `nodes`: 8 each on a 4 × 2 jittered grid of the
-/// node's square (quadrant `(cx / 2, cy)` holds 2 of them); pilot
-/// samples take the [`PILOT`] bit in their index.
-fn node_starts(view: &View, nodes: &[Node], pilot: bool) -> Vec<Start> {
-    let mut starts = Vec::with_capacity(nodes.len() * NODE_SAMPLES as usize);
+/// The camera rays of `nodes`: `ns` each on a jittered grid of the node's
+/// square, `ns / 4` in each quadrant: each quadrant is `b × a` cells
+/// (`(a, b)` = [`strata`]`(ns / 4)`), so 8 a node is a 4 × 2 grid with 2 a
+/// quadrant. Pilot samples take the [`PILOT`] bit in their index.
+fn node_starts(view: &View, nodes: &[Node], pilot: bool, ns: u32) -> Vec<Start> {
+    let (a, b) = strata(ns / REGIONS);
+    let (columns, rows) = (2 * b, 2 * a);
+    let mut starts = Vec::with_capacity(nodes.len() * ns as usize);
     for n in nodes {
-        for i in 0..NODE_SAMPLES {
-            let index = (n.serial * NODE_SAMPLES + i) | if pilot { PILOT } else { 0 };
+        for i in 0..ns {
+            let index = (n.serial * ns + i) | if pilot { PILOT } else { 0 };
             let rng = LineRng::new(view.seed, (u64::from(n.pixel) << 24) | u64::from(index));
-            let (cx, cy) = (f64::from(i % 4), f64::from(i / 4));
-            let sx = n.x + (cx + rng.uniform(0)) / 4.0 * n.size;
-            let sy = n.y + (cy + rng.uniform(1)) / 2.0 * n.size;
+            let (cx, cy) = (f64::from(i % columns), f64::from(i / columns));
+            let sx = n.x + (cx + rng.uniform(0)) / f64::from(columns) * n.size;
+            let sy = n.y + (cy + rng.uniform(1)) / f64::from(rows) * n.size;
             let direction = view.camera.direction(sx, sy, view.width, view.height);
             starts.push(Start { origin: view.camera.eye, direction, rng });
         }

@@ -75,6 +75,10 @@ pub struct RenderOptions {
     /// weight (eq. (4); 0.9 when not given)
     #[arg(long, value_name = "D", value_parser = delta)]
     pub delta: Option<f64>,
+    /// ec, ic, cc-tree, ec-binary: samples per tree node, N_s^r (Part IV §6): a multiple of 4 (the
+    /// node's quadrants) in 4..=1024; default 8 (Table 2), Fig. 13 used 4
+    #[arg(long, value_name = "N", value_parser = node_samples)]
+    pub node_samples: Option<u32>,
     /// es and --maps: the binary colour contrast C_b (Part IV eq. (19)) instead of the entropy
     /// contrast (eq. (18)) in the oracle's contrast
     #[arg(long)]
@@ -193,6 +197,13 @@ fn time_budget(s: &str) -> Result<f64, String> {
     }
 }
 
+fn node_samples(s: &str) -> Result<u32, String> {
+    match u32::try_from(count(s)?) {
+        Ok(n) if tree::valid_node_samples(n) => Ok(n),
+        _ => Err(format!("must be a multiple of {} in {}..={}", tree::REGIONS, tree::REGIONS, tree::MAX_NODE_SAMPLES)),
+    }
+}
+
 fn delta(s: &str) -> Result<f64, String> {
     let x = finite(s)?;
     if (0.0..=1.0).contains(&x) { Ok(x) } else { Err("must be in 0..=1".into()) }
@@ -231,17 +242,21 @@ pub(crate) fn camera(s: &str) -> Result<Camera, String> {
     Camera::look_at(d(0), d(3), d(6), v[9]).map_err(|e| e.to_string())
 }
 
+/// Nodes of a full refinement tree of `MAX_LEVEL` = 4 levels (1 + 4 + 16 + 64).
+const TREE_NODES: u64 = 85;
+
 /// Most memory a run may plan to use.
 const MEMORY_LIMIT: u64 = 4 << 30;
 
 /// Refuses a run whose image or per-row sample buffers would pass
 /// [`MEMORY_LIMIT`]: about 120 bytes a pixel (radiance, counts, display
-/// values, PNG; 200 for `adaptive`), and 48 bytes a sample of the row each worker holds.
+/// values, PNG; 200 for `adaptive`), and 48 bytes a sample of the row each
+/// worker holds (a tree's pixel: its 85 nodes of `N_s^r` samples).
 fn memory_check(o: &RenderOptions) -> Result<(), CliError> {
     let (w, h) = (u64::from(o.size.0), u64::from(o.size.1));
     let per_pixel = match o.sampler.as_str() {
         "uniform" => u64::from(o.spp),
-        "ec" | "ic" | "cc-tree" | "ec-binary" => 680,
+        "ec" | "ic" | "cc-tree" | "ec-binary" => TREE_NODES * u64::from(o.node_samples.unwrap_or(tree::NODE_SAMPLES)),
         _ => u64::from(o.max_spp.unwrap_or(o.spp.saturating_mul(16).min(MAX_SPP))),
     };
     let workers = o.tracing.threads.unwrap_or_else(rayon::current_num_threads) as u64;
@@ -318,6 +333,11 @@ pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
             "--sampler {}: the refinement tree is capped by its depth (4 levels), not --max-spp",
             o.sampler
         )));
+    }
+    if o.node_samples.is_some() && !is_tree {
+        return Err(CliError::usage(
+            "--node-samples is for the refinement trees (--sampler ec, ic, cc-tree, ec-binary)",
+        ));
     }
     let oracle_maps = o.sampler == "es" || o.maps;
     if o.delta.is_some() && !(is_tree || oracle_maps) {
@@ -457,9 +477,14 @@ fn render_into(o: &RenderOptions, spec: &str, dir: Option<&Path>) -> Result<Repo
     let camera = o.camera.unwrap_or_else(|| views::default_camera(&scene));
     let delta = o.delta.unwrap_or(1.0);
     let sampling = match (Criterion::from_name(&o.sampler), TreeContrast::from_name(&o.sampler)) {
-        (None, Some(contrast)) => {
-            Sampling::Tree { contrast, delta, spp: o.spp, unbiased: !o.tutorial_form, threshold: o.threshold }
-        }
+        (None, Some(contrast)) => Sampling::Tree {
+            contrast,
+            delta,
+            spp: o.spp,
+            unbiased: !o.tutorial_form,
+            threshold: o.threshold,
+            node_samples: o.node_samples.unwrap_or(tree::NODE_SAMPLES),
+        },
         (None, None) if o.sampler == "es" => Sampling::Supersample(Supersampling {
             oracle: Oracle { delta, binary: o.binary_contrast },
             spp: o.spp,
@@ -555,6 +580,9 @@ fn render_into(o: &RenderOptions, spec: &str, dir: Option<&Path>) -> Result<Repo
     }
     if matches!(sampling, Sampling::Tree { .. } | Sampling::Supersample(_)) || o.maps {
         r.real("delta", delta, None);
+    }
+    if let Sampling::Tree { node_samples, .. } = sampling {
+        r.count("node_samples", u64::from(node_samples));
     }
     if let Some(map) = &rendered.map {
         let mean = |g: fn(&render::PixelMeasures) -> f64| {

@@ -25,7 +25,7 @@ pub const SHARD_HELP: &str =
 pub const MERGE_HELP: &str = "Write the images of the saved shards F1,F2,... (all n of one run) to --out instead of \
                               rendering; no SCENE or sampler options (the shards carry them)";
 /// What `--merge` takes from the shards, so refuses.
-pub const MERGE_CONFLICTS: [&str; 16] = [
+pub const MERGE_CONFLICTS: [&str; 17] = [
     "shard",
     "scene",
     "sampler",
@@ -37,6 +37,7 @@ pub const MERGE_CONFLICTS: [&str; 16] = [
     "tutorial_form",
     "delta",
     "binary_contrast",
+    "node_samples",
     "maps",
     "max_spp",
     "export_scene",
@@ -86,6 +87,7 @@ pub fn settings(o: &RenderOptions, sampling: &Sampling, delta: f64, camera: &Cam
         unbiased: o.sampler != "uniform" && !o.tutorial_form,
         delta,
         binary_contrast: o.binary_contrast,
+        node_samples: if let Sampling::Tree { node_samples, .. } = sampling { *node_samples } else { 0 },
         width: o.size.0,
         height: o.size.1,
         seed: o.seed,

@@ -3,27 +3,21 @@
 
 pub mod clap_error;
 pub mod commands;
-pub mod complexity;
 pub mod devices;
 pub mod export;
 pub mod imaging;
 pub mod input;
-pub mod measure;
-pub mod measure_options;
 pub mod options;
 pub mod output;
 pub mod plot;
 pub mod progress;
-pub use commands::radiosity;
+pub use commands::{complexity, measure, radiosity, viewpoints, volume};
 pub mod render;
 pub mod report;
 pub mod scene;
 pub mod shard;
 pub mod simplify;
 pub mod values;
-pub mod viewpoint_shard;
-pub mod viewpoints;
-pub mod volume;
 
 use std::fmt;
 

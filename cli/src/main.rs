@@ -4,8 +4,9 @@ use std::io::Write;
 use std::process::ExitCode;
 
 use clap::error::ErrorKind;
+use itgfx_cli::commands::{phantom, register, segment};
 use itgfx_cli::options::{Cli, Command};
-use itgfx_cli::{CliError, complexity, devices, imaging, measure, simplify, viewpoints, volume};
+use itgfx_cli::{CliError, complexity, devices, measure, simplify, viewpoints, volume};
 
 /// One JSON object, or the readable table.
 fn render(report: &itgfx_cli::report::Report, json: bool) -> String {
@@ -46,9 +47,9 @@ fn run(cli: Cli) -> Result<String, CliError> {
             Ok(render(&volume::run(&o)?, o.common.json))
         }
         Command::Devices(c) => Ok(render(&devices::run()?, c.json)),
-        Command::Phantom(o) => Ok(render(&imaging::run_phantom(&o)?, o.json)),
-        Command::Register(o) => Ok(render(&imaging::run_register(&o)?, o.common.json)),
-        Command::Segment(o) => Ok(render(&imaging::run_segment(&o)?, o.common.json)),
+        Command::Phantom(o) => Ok(render(&phantom::run_phantom(&o)?, o.json)),
+        Command::Register(o) => Ok(render(&register::run_register(&o)?, o.common.json)),
+        Command::Segment(o) => Ok(render(&segment::run_segment(&o)?, o.common.json)),
         Command::Render(o) => {
             threads(o.tracing.threads)?;
             Ok(render(&itgfx_cli::render::run(&o)?, o.common.json))

@@ -182,6 +182,13 @@ pub fn out_dir(dir: &Path) -> Result<Option<PathBuf>, CliError> {
     if dir.exists() {
         return Ok(None);
     }
+    if let Ok(link) = fs::read_link(dir) {
+        // A dangling link: creating the directory would fail with "File
+        // exists", and creating its target would write where `--out` does not say.
+        return Err(CliError::usage(format!(
+            "--out {dir:?}: a symbolic link to {link:?}, which does not exist: give a directory, or make the link's target first"
+        )));
+    }
     fs::create_dir_all(dir).map_err(|e| CliError::usage(format!("--out {dir:?}: {e}")))?;
     if let Some(s) = stage().as_mut() {
         s.dirs.push(dir.to_path_buf());

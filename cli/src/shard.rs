@@ -2,63 +2,52 @@
 //! ranges of `complexity`, viewpoint ranges of `viewpoints`), so that a job
 //! array's task `i` runs `--shard $i/$n` and never computes offsets.
 
-use std::fmt;
-use std::ops::Range;
+use std::path::PathBuf;
 
-/// Shard `index` of `count` (0-based: `0/4`, `1/4`, `2/4`, `3/4`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Shard {
-    /// Which shard, `0..count`.
-    pub index: u64,
-    /// How many shards the run is split into, at least 1.
-    pub count: u64,
-}
+use clap::Args;
+pub use itgfx_backends::shards::{MAX_SHARDS, Place as Shard, PlaceError};
 
-impl Shard {
-    /// The range `[⌊i·total/n⌋, ⌊(i+1)·total/n⌋)` of `0..total` this shard
-    /// covers: the `n` ranges are disjoint, contiguous, cover `0..total`,
-    /// and their lengths differ by at most one.
-    #[must_use]
-    pub fn range(self, total: u64) -> Range<u64> {
-        let at = |k: u64| (u128::from(k) * u128::from(total) / u128::from(self.count)) as u64;
-        at(self.index)..at(self.index + 1)
-    }
-}
-
-impl fmt::Display for Shard {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}/{}", self.index, self.count)
-    }
-}
-
-/// Most shards a run may be split into.
-pub const MAX_SHARDS: u64 = 1 << 32;
+use crate::values::out_path;
 
 /// `--shard i/n`: `0 <= i < n <= 2^32`.
 ///
 /// # Errors
-/// A reason, for clap to show beside the option.
-pub fn parse(s: &str) -> Result<Shard, String> {
-    let (i, n) = s.split_once('/').ok_or_else(|| "expected i/n, e.g. 0/16 (shard i of n, 0-based)".to_string())?;
-    let num = |t: &str| t.trim().parse::<u64>().map_err(|_| format!("{t:?} is not a non-negative integer"));
-    let (index, count) = (num(i)?, num(n)?);
-    if count == 0 || count > MAX_SHARDS {
-        return Err(format!("the shard count must be in 1..={MAX_SHARDS}"));
-    }
-    if index >= count {
-        return Err(format!("{index}/{count}: shards of {count} are numbered 0..={}", count - 1));
-    }
-    Ok(Shard { index, count })
+/// A [`PlaceError`], for clap to show beside the option.
+pub fn parse(s: &str) -> Result<Shard, PlaceError> {
+    s.parse()
 }
+
+/// The shard options every sharded command flattens: `--shard i/n`,
+/// `--save-shard F` and `--merge F1,F2,...`. What a shard holds differs, so
+/// each command words the help and adds its own rules with `mut_arg`
+/// (`render`, `viewpoints` and `volume`: `--shard` and `--save-shard`
+/// require each other; `complexity` calls `--save-shard` `--save-counts`,
+/// which any run may give).
+#[derive(Debug, Args)]
+pub struct ShardArgs {
+    /// Shard i of n (0-based): one contiguous part of the run
+    #[arg(long, value_name = "i/n", value_parser = parse, help_heading = "Shards")]
+    pub shard: Option<Shard>,
+    /// Write the shard to F (for --merge)
+    #[arg(long, value_name = "F", value_parser = out_path, help_heading = "Shards")]
+    pub save_shard: Option<PathBuf>,
+    /// Merge the saved shards F1,F2,... of one run (all n of them) instead of computing
+    #[arg(long, value_name = "F1,F2,...", value_delimiter = ',', conflicts_with = "shard", help_heading = "Shards")]
+    pub merge: Vec<PathBuf>,
+}
+
+/// Largest shard file read by `--merge`.
+pub const MAX_SHARD_BYTES: u64 = 4 << 30;
 
 /// A shard-file error in the CLI's words: each run setting named by the flag
 /// that sets it, and the merge's own refusals prefixed with `--merge`.
 #[must_use]
 pub fn describe(e: &itgfx_backends::shards::ShardError) -> String {
     use itgfx_backends::shards::ShardError;
-    let line = e.describe(|s| flag(s).to_string());
+    let line = e.describe(&|s| flag(s).to_string());
     match e {
         ShardError::NoShards | ShardError::Missing { .. } => format!("--merge: {line}"),
+        ShardError::InFile { .. } => format!("--merge {line}"),
         _ => line,
     }
 }
@@ -83,40 +72,5 @@ fn flag(s: itgfx_backends::shards::Setting) -> &'static str {
         Setting::Distance => "--distance",
         Setting::Levels => "subdivision levels",
         Setting::Resolution => "--resolution",
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn ranges_tile_the_run() {
-        for total in [1u64, 7, 100, 1_000_000_007, u64::MAX] {
-            for count in [1u64, 2, 3, 16, 97] {
-                if count > total {
-                    continue;
-                }
-                let mut next = 0;
-                let (mut lo, mut hi) = (u64::MAX, 0);
-                for index in 0..count {
-                    let r = Shard { index, count }.range(total);
-                    assert_eq!(r.start, next);
-                    next = r.end;
-                    lo = lo.min(r.end - r.start);
-                    hi = hi.max(r.end - r.start);
-                }
-                assert_eq!(next, total);
-                assert!(hi - lo <= 1 && lo >= 1);
-            }
-        }
-    }
-
-    #[test]
-    fn parse_refuses_what_is_not_a_shard() {
-        assert_eq!(parse("3/16"), Ok(Shard { index: 3, count: 16 }));
-        for bad in ["3", "16/16", "1/0", "-1/4", "a/4", "1/4/5", "0/4294967297"] {
-            assert!(parse(bad).is_err(), "{bad}");
-        }
     }
 }

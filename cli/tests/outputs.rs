@@ -129,3 +129,22 @@ fn a_refused_run_leaves_no_out_directory() {
     one_line_exit_2(&out);
     assert!(!out_dir.exists(), "the --out directory made for the run is removed again");
 }
+
+/// A dangling symbolic link as `--out DIR` is refused in one line saying
+/// what it is (it was "File exists (os error 17)"), and nothing is created
+/// at its target.
+#[test]
+fn a_dangling_link_as_out_is_refused_plainly() {
+    let d = dir("dangling");
+    let link = d.join("out");
+    let target = d.join("missing");
+    std::os::unix::fs::symlink(&target, &link).unwrap();
+    for args in
+        [vec!["phantom", "--out", s(&link)], vec!["viewpoints", "tetrahedron", "--viewpoints", "12", "--out", s(&link)]]
+    {
+        let err = one_line_exit_2(&itgfx(&args));
+        assert!(err.contains(&format!("--out {link:?}: a symbolic link to {target:?}, which does not exist")), "{err}");
+        assert!(!err.contains("os error 17"), "{err}");
+        assert!(!target.exists());
+    }
+}

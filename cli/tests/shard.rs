@@ -244,10 +244,23 @@ fn viewpoint_merge_refuses_missing_duplicate_and_foreign_shards() {
     // Broken and tampered files.
     let text = std::fs::read_to_string(&s[1]).unwrap();
     let mut v: Value = serde_json::from_str(&text).unwrap();
-    v["version"] = 9.into();
+    v["header"]["version"] = 9.into();
     let bad = path("version.json");
     std::fs::write(&bad, v.to_string()).unwrap();
     refused(&strs(&m(&[&s[0], &bad, &s[2]], &[])), "viewpoint shard file version 9");
+    // A file of the format before the one shard header: its name and version at the top.
+    let mut old: Value = serde_json::from_str(&text).unwrap();
+    let header = old["header"].take();
+    old["format"] = header["format"].clone();
+    old["version"] = 1.into();
+    std::fs::write(&bad, old.to_string()).unwrap();
+    let older = format!("--merge {bad:?}: viewpoint shard file written by an older itgfx (format 1); re-run the shard");
+    refused(&strs(&m(&[&s[0], &bad, &s[2]], &[])), &older);
+    // Settings edited by hand no longer match the fingerprint.
+    let mut v: Value = serde_json::from_str(&text).unwrap();
+    v["header"]["settings"]["distance"] = 4.0.into();
+    std::fs::write(&bad, v.to_string()).unwrap();
+    refused(&strs(&m(&[&s[0], &bad, &s[2]], &[])), "does not match the scene and settings");
     let mut v: Value = serde_json::from_str(&text).unwrap();
     v["first"] = 3.into();
     std::fs::write(&bad, v.to_string()).unwrap();

@@ -11,26 +11,27 @@
 //! the merge checks), and `es` traces the whole 8-spp oracle in every shard
 //! (its shares depend on every pixel's contrast).
 //!
-//! Version 2 (version 1 is refused: there `--spp` of an unbiased run
-//! counted its image samples only, and the tutorial's form was the default)
-//! holds the format name and version, the scene's fingerprint
-//! ([`MeshFingerprint`]), the settings the pixels depend on
-//! ([`RenderSettings`]), the shard `i/n`, its rows, the threshold used, and
-//! per pixel the mean radiance (f64, written so it reads back exactly), the
-//! samples in the image and the pilot samples. Everything is checked on
-//! reading; foreign, duplicate and missing shards are refused with one line
-//! (see [`crate::shards::order`]).
+//! Version 3 (earlier versions are refused as "written by an older itgfx":
+//! version 2 had its own header, and in version 1 `--spp` of an unbiased
+//! run counted its image samples only) holds the shard header of
+//! [`crate::shards::header`] (format, version, place `i/n`, fingerprint, the
+//! scene's [`MeshFingerprint`] and the settings the pixels depend on,
+//! [`RenderSettings`]), then its rows, the threshold used, and per pixel
+//! the mean radiance (f64, written so it reads back exactly), the samples
+//! in the image and the pilot samples. Everything is checked on reading;
+//! foreign, duplicate and missing shards are refused with one line (see
+//! [`crate::shards::order`]).
 
 use serde::{Deserialize, Serialize};
 
 use super::frame::Frame;
-use crate::shards::{Difference, Foreign, Setting, ShardError};
-pub use crate::viewpoint::shard_file::MeshFingerprint;
+pub use crate::shards::MeshFingerprint;
+use crate::shards::{Difference, Foreign, Header, Kind, Place, Setting, ShardError, ShardFile};
 
 /// The `format` field of a render shard file.
 pub const FORMAT_NAME: &str = "itgfx-render-shard";
 /// The version written and read.
-pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 3;
 
 /// The settings a shard's pixels depend on: every shard of a run must agree on all of them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -63,10 +64,9 @@ pub struct RenderSettings {
     pub backend: String,
 }
 
-impl RenderSettings {
+impl crate::shards::Settings for RenderSettings {
     /// The first setting that differs from `other`'s.
-    #[must_use]
-    pub fn difference(&self, other: &Self) -> Option<Difference> {
+    fn difference(&self, other: &Self) -> Option<Difference> {
         let d = |s: Setting, a: String, b: String| Difference::of(s, a, b, "there");
         d(Setting::Sampler, self.sampler.clone(), other.sampler.clone())
             .or_else(|| d(Setting::SamplesPerPixel, self.spp.to_string(), other.spp.to_string()))
@@ -89,18 +89,8 @@ impl RenderSettings {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RenderShard {
-    /// [`FORMAT_NAME`].
-    pub format: String,
-    /// [`FORMAT_VERSION`].
-    pub version: u32,
-    /// The scene.
-    pub scene: MeshFingerprint,
-    /// The settings.
-    pub settings: RenderSettings,
-    /// `i` of `i/n`.
-    pub shard: u64,
-    /// `n` of `i/n`.
-    pub shards: u64,
+    /// Format, version, place, fingerprint, scene and settings.
+    pub header: Header<RenderSettings>,
     /// First row.
     pub first_row: u32,
     /// One past the last row.
@@ -115,11 +105,44 @@ pub struct RenderShard {
     pub pilot_samples: Vec<u32>,
 }
 
-/// Rows `[⌊i·H/n⌋, ⌊(i+1)·H/n⌋)` of shard `i` of `n`.
+/// Rows `[⌊i·H/n⌋, ⌊(i+1)·H/n⌋)` of shard `i` of `n` ([`crate::shards::range`]).
 #[must_use]
 pub fn shard_rows(i: u64, n: u64, height: u32) -> (u32, u32) {
-    let at = |k: u64| (u128::from(k) * u128::from(height) / u128::from(n.max(1))) as u32;
-    (at(i), at(i + 1))
+    let r = crate::shards::range(i, n, u64::from(height));
+    (r.start as u32, r.end as u32)
+}
+
+/// The kind of file.
+const KIND: Kind = Kind { format: FORMAT_NAME, version: FORMAT_VERSION, noun: "render shard file" };
+
+impl ShardFile for RenderShard {
+    type Settings = RenderSettings;
+    const KIND: Kind = KIND;
+
+    fn header(&self) -> &Header<RenderSettings> {
+        &self.header
+    }
+
+    fn violation(&self) -> Option<String> {
+        let (h, st) = (&self.header, &self.header.settings);
+        if st.width == 0 || st.height == 0 {
+            return Some("an empty image".into());
+        }
+        if h.shards > u64::from(st.height) {
+            return Some(format!("shard {}/{} of {} rows is not a shard", h.shard, h.shards, st.height));
+        }
+        if (self.first_row, self.end_row) != shard_rows(h.shard, h.shards, st.height) {
+            return Some(format!("shard {}/{} holds the wrong rows", h.shard, h.shards));
+        }
+        let pixels = u64::from(self.end_row - self.first_row) * u64::from(st.width);
+        if [self.rgb.len(), self.samples.len(), self.pilot_samples.len()].iter().any(|&l| l as u64 != pixels) {
+            return Some(format!("not {pixels} pixels for rows {}..{}", self.first_row, self.end_row));
+        }
+        if !self.rgb.iter().flatten().all(|v| v.is_finite() && *v >= 0.0) {
+            return Some("a pixel's radiance is not finite and non-negative".into());
+        }
+        None
+    }
 }
 
 impl RenderShard {
@@ -134,12 +157,7 @@ impl RenderShard {
     ) -> Self {
         let (first_row, end_row) = shard_rows(shard, shards, settings.height);
         Self {
-            format: FORMAT_NAME.into(),
-            version: FORMAT_VERSION,
-            scene,
-            settings,
-            shard,
-            shards,
+            header: Header::new(KIND, Place { index: shard, count: shards }, scene, settings),
             first_row,
             end_row,
             threshold_used,
@@ -152,19 +170,17 @@ impl RenderShard {
     /// The file's text.
     ///
     /// # Errors
-    /// Serialisation errors (none for finite values).
-    pub fn to_json(&self) -> Result<String, String> {
-        serde_json::to_string(self).map_err(|e| e.to_string())
+    /// As [`crate::shards::to_json`].
+    pub fn to_json(&self) -> Result<String, ShardError> {
+        crate::shards::to_json(self)
     }
 
     /// Reads and checks a shard file's text.
     ///
     /// # Errors
-    /// One line naming what is wrong.
+    /// One line naming what is wrong ([`crate::shards::from_json`]).
     pub fn from_json(text: &str) -> Result<Self, ShardError> {
-        let s: Self = crate::shards::read_json(text, "render shard file", FORMAT_NAME, FORMAT_VERSION)?;
-        s.validate()?;
-        Ok(s)
+        crate::shards::from_json(text)
     }
 
     /// Checks the invariants the merge relies on.
@@ -172,28 +188,7 @@ impl RenderShard {
     /// # Errors
     /// [`ShardError::Invalid`] naming the first violation.
     pub fn validate(&self) -> Result<(), ShardError> {
-        self.violation().map_err(ShardError::Invalid)
-    }
-
-    fn violation(&self) -> Result<(), String> {
-        let st = &self.settings;
-        if st.width == 0 || st.height == 0 {
-            return Err("an empty image".into());
-        }
-        if self.shards == 0 || self.shard >= self.shards || self.shards > u64::from(st.height) {
-            return Err(format!("shard {}/{} of {} rows is not a shard", self.shard, self.shards, st.height));
-        }
-        if (self.first_row, self.end_row) != shard_rows(self.shard, self.shards, st.height) {
-            return Err(format!("shard {}/{} holds the wrong rows", self.shard, self.shards));
-        }
-        let pixels = u64::from(self.end_row - self.first_row) * u64::from(st.width);
-        if [self.rgb.len(), self.samples.len(), self.pilot_samples.len()].iter().any(|&l| l as u64 != pixels) {
-            return Err(format!("not {pixels} pixels for rows {}..{}", self.first_row, self.end_row));
-        }
-        if !self.rgb.iter().flatten().all(|v| v.is_finite() && *v >= 0.0) {
-            return Err("a pixel's radiance is not finite and non-negative".into());
-        }
-        Ok(())
+        crate::shards::validate(self)
     }
 }
 
@@ -205,16 +200,7 @@ impl RenderShard {
 /// another threshold), duplicates, missing ones.
 pub fn merge(named: Vec<(String, RenderShard)>) -> Result<(RenderShard, Frame), ShardError> {
     let first = named.first().map(|s| s.1.clone()).ok_or(ShardError::NoShards)?;
-    let foreign = |s: &RenderShard| {
-        if s.scene != first.scene {
-            return Some(Foreign::Other(format!(
-                "a shard of another scene ({:?}, hash {}), not of {:?} (hash {})",
-                s.scene.name, s.scene.hash, first.scene.name, first.scene.hash
-            )));
-        }
-        if let Some(d) = first.settings.difference(&s.settings) {
-            return Some(Foreign::Run(d));
-        }
+    let threshold = |s: &RenderShard| {
         (s.threshold_used != first.threshold_used).then(|| {
             Foreign::Other(format!(
                 "a shard that used threshold {:?}, not {:?}",
@@ -222,10 +208,10 @@ pub fn merge(named: Vec<(String, RenderShard)>) -> Result<(RenderShard, Frame), 
             ))
         })
     };
-    let shards = crate::shards::order(named, |s| (s.shard, s.shards), foreign)?;
+    let shards = crate::shards::order_run(named, &first.header, threshold)?;
     let mut frame = Frame {
-        width: first.settings.width,
-        height: first.settings.height,
+        width: first.header.settings.width,
+        height: first.header.settings.height,
         rgb: Vec::new(),
         samples: Vec::new(),
         pilot_samples: Vec::new(),
@@ -278,7 +264,7 @@ mod tests {
         let back: Vec<(String, RenderShard)> = parts
             .iter()
             .rev()
-            .map(|s| (format!("f{}", s.shard), RenderShard::from_json(&s.to_json().unwrap()).unwrap()))
+            .map(|s| (format!("f{}", s.header.shard), RenderShard::from_json(&s.to_json().unwrap()).unwrap()))
             .collect();
         assert_eq!(back[0].1, parts[2], "floats read back exactly");
         let (_, frame) = merge(back).unwrap();
@@ -293,5 +279,12 @@ mod tests {
         assert!(RenderShard::from_json(&bad.to_json().unwrap()).unwrap_err().to_string().contains("wrong rows"));
         let other = RenderShard::from_json("{\"format\":\"itgfx-counts\"}").unwrap_err();
         assert!(other.to_string().contains("not a render shard"));
+        let mut old = serde_json::to_value(shard(0, 3, 1)).unwrap();
+        old["header"]["version"] = 2.into();
+        let old = RenderShard::from_json(&old.to_string()).unwrap_err();
+        assert_eq!(old.to_string(), "render shard file written by an older itgfx (format 2); re-run the shard");
+        let mut edited = shard(0, 3, 1);
+        edited.header.settings.seed = 7;
+        assert!(RenderShard::from_json(&edited.to_json().unwrap()).unwrap_err().to_string().contains("fingerprint"));
     }
 }

@@ -4,11 +4,13 @@
 //! builds, bit for bit. The measures (VE, VMI, `I(V;O)`, selection, …) are
 //! computed after the merge: they need every row.
 //!
-//! Version 1 holds the format name and version, the scene's fingerprint
-//! (name, patch and triangle counts, an FNV-1a hash of the triangles'
-//! vertex bits and patch ids), the settings the rows depend on (viewpoint
-//! count, estimator, distance, refinement levels or grid resolution,
-//! backend), the shard `i/n` and its viewpoint range
+//! Version 2 (version 1, with its own header, is refused as "written by an
+//! older itgfx") holds the shard header of [`crate::shards::header`]:
+//! format, version, the shard `i/n`, a fingerprint, the scene's
+//! fingerprint (name, patch and triangle counts, an FNV-1a hash of the
+//! triangles' vertex bits and patch ids) and the settings the rows depend
+//! on (viewpoint count, estimator, distance, refinement levels or grid
+//! resolution, backend); then its viewpoint range
 //! `[⌊i·V/n⌋, ⌊(i+1)·V/n⌋)`, and per viewpoint either its ray-grid row
 //! (patches, solid angles, background) or its solid-angle ladder
 //! ([`ViewLadder`]: the visibility at every refinement level, so the merge
@@ -28,81 +30,19 @@ use serde::{Deserialize, Serialize};
 
 use super::ViewpointChannel;
 use super::solid_angle::ViewLadder;
-use crate::shards::{Difference, Foreign, Setting, ShardError};
-use crate::tracer::Prepared;
+use crate::shards::{Difference, Header, Kind, Place, Setting, ShardError, ShardFile};
+pub use crate::shards::{Fnv, MeshFingerprint};
 
 /// The `format` field of a viewpoint shard file.
 pub const FORMAT_NAME: &str = "itgfx-viewpoint-shard";
 /// The version written and read.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
+
+/// The kind of file.
+const KIND: Kind = Kind { format: FORMAT_NAME, version: FORMAT_VERSION, noun: "viewpoint shard file" };
 
 /// The estimator name of volume shards (ray-cast rows over voxels).
 pub const VOLUME_ESTIMATOR: &str = "volume";
-
-/// FNV-1a, 64 bits: the fingerprints' hash.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Fnv(u64);
-
-impl Default for Fnv {
-    fn default() -> Self {
-        Self(0xcbf2_9ce4_8422_2325)
-    }
-}
-
-impl Fnv {
-    /// Hashes `bytes` in.
-    pub fn eat(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
-        }
-    }
-
-    /// The hash as 16 hexadecimal digits.
-    #[must_use]
-    pub fn hex(self) -> String {
-        format!("{:016x}", self.0)
-    }
-}
-
-/// What identifies the scene: a shard of another mesh is refused.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct MeshFingerprint {
-    /// The scene's name.
-    pub name: String,
-    /// Patches (polygons).
-    pub patches: u64,
-    /// Triangles traced.
-    pub triangles: u64,
-    /// FNV-1a (64 bits, 16 hexadecimal digits) of every triangle's vertex
-    /// bits (f32, little-endian) and patch id, in order.
-    pub hash: String,
-}
-
-impl MeshFingerprint {
-    /// The fingerprint of a prepared scene named `name`.
-    #[must_use]
-    pub fn of(name: &str, p: &Prepared) -> Self {
-        let mut h = Fnv::default();
-        for (t, &patch) in p.triangles.iter().zip(&p.triangle_patch) {
-            for v in t {
-                for c in v.to_array() {
-                    h.eat(&c.to_bits().to_le_bytes());
-                }
-            }
-            h.eat(&patch.to_le_bytes());
-        }
-        Self { name: name.to_string(), patches: p.patches as u64, triangles: p.triangles.len() as u64, hash: h.hex() }
-    }
-
-    /// A volume's fingerprint: `voxels` outputs, no triangles, and `hash`
-    /// of everything its rows depend on besides the viewpoints (the voxels,
-    /// the transfer function and the sample step: `volume::raycast::Caster::fingerprint`).
-    #[must_use]
-    pub fn volume(name: &str, voxels: usize, hash: Fnv) -> Self {
-        Self { name: name.to_string(), patches: voxels as u64, triangles: 0, hash: hash.hex() }
-    }
-}
 
 /// The settings a shard's rows depend on: every shard of a run, and the
 /// merging command, must agree on all of them.
@@ -123,10 +63,9 @@ pub struct ShardSettings {
     pub backend: String,
 }
 
-impl ShardSettings {
+impl crate::shards::Settings for ShardSettings {
     /// The first setting that differs from `other`'s (a shard's).
-    #[must_use]
-    pub fn difference(&self, other: &Self) -> Option<Difference> {
+    fn difference(&self, other: &Self) -> Option<Difference> {
         let d = |s: Setting, a: String, b: String| Difference::of(s, a, b, "in the shard");
         let resolution =
             if self.estimator == VOLUME_ESTIMATOR { Setting::ImageResolution } else { Setting::Resolution };
@@ -181,18 +120,8 @@ pub struct SavedLadder {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ViewpointShard {
-    /// [`FORMAT_NAME`].
-    pub format: String,
-    /// [`FORMAT_VERSION`].
-    pub version: u32,
-    /// The scene.
-    pub scene: MeshFingerprint,
-    /// The settings.
-    pub settings: ShardSettings,
-    /// `i` of `i/n`.
-    pub shard: u64,
-    /// `n` of `i/n`.
-    pub shards: u64,
+    /// Format, version, place, fingerprint, scene and settings.
+    pub header: Header<ShardSettings>,
     /// First viewpoint.
     pub first: u64,
     /// One past the last viewpoint.
@@ -201,11 +130,11 @@ pub struct ViewpointShard {
     pub rows: ShardRows,
 }
 
-/// Viewpoints `[⌊i·V/n⌋, ⌊(i+1)·V/n⌋)` of shard `i` of `n`.
+/// Viewpoints `[⌊i·V/n⌋, ⌊(i+1)·V/n⌋)` of shard `i` of `n` ([`crate::shards::range`]).
 #[must_use]
 pub fn shard_range(i: u64, n: u64, viewpoints: u64) -> (u64, u64) {
-    let at = |k: u64| (u128::from(k) * u128::from(viewpoints) / u128::from(n.max(1))) as u64;
-    (at(i), at(i + 1))
+    let r = crate::shards::range(i, n, viewpoints);
+    (r.start, r.end)
 }
 
 impl ViewpointShard {
@@ -244,7 +173,7 @@ impl ViewpointShard {
 
     fn new(scene: MeshFingerprint, settings: ShardSettings, (shard, shards): (u64, u64), rows: ShardRows) -> Self {
         let (first, end) = shard_range(shard, shards, settings.viewpoints);
-        Self { format: FORMAT_NAME.into(), version: FORMAT_VERSION, scene, settings, shard, shards, first, end, rows }
+        Self { header: Header::new(KIND, Place { index: shard, count: shards }, scene, settings), first, end, rows }
     }
 
     /// Viewpoints held.
@@ -265,19 +194,17 @@ impl ViewpointShard {
     /// The file's text.
     ///
     /// # Errors
-    /// Serialisation errors (none for finite values).
-    pub fn to_json(&self) -> Result<String, String> {
-        serde_json::to_string(self).map_err(|e| e.to_string())
+    /// As [`crate::shards::to_json`].
+    pub fn to_json(&self) -> Result<String, ShardError> {
+        crate::shards::to_json(self)
     }
 
     /// Reads and checks a shard file's text.
     ///
     /// # Errors
-    /// One line naming what is wrong.
+    /// One line naming what is wrong ([`crate::shards::from_json`]).
     pub fn from_json(text: &str) -> Result<Self, ShardError> {
-        let s: Self = crate::shards::read_json(text, "viewpoint shard file", FORMAT_NAME, FORMAT_VERSION)?;
-        s.validate()?;
-        Ok(s)
+        crate::shards::from_json(text)
     }
 
     /// Checks the invariants the merge relies on.
@@ -285,65 +212,7 @@ impl ViewpointShard {
     /// # Errors
     /// [`ShardError::Invalid`] naming the first violation.
     pub fn validate(&self) -> Result<(), ShardError> {
-        self.violation().map_err(ShardError::Invalid)
-    }
-
-    fn violation(&self) -> Result<(), String> {
-        let st = &self.settings;
-        if self.shards == 0 || self.shard >= self.shards || self.shards > st.viewpoints {
-            return Err(format!("shard {}/{} of {} viewpoints is not a shard", self.shard, self.shards, st.viewpoints));
-        }
-        if (self.first, self.end) != shard_range(self.shard, self.shards, st.viewpoints) {
-            return Err(format!("shard {}/{} holds the wrong viewpoint range", self.shard, self.shards));
-        }
-        if self.len() as u64 != self.end - self.first {
-            return Err(format!("{} rows for viewpoints {}..{}", self.len(), self.first, self.end));
-        }
-        let patches = self.scene.patches;
-        let finite = |x: f64| x.is_finite() && x >= 0.0;
-        match &self.rows {
-            ShardRows::Grid(rows) => {
-                let grid = st.estimator == "grid" || st.estimator == VOLUME_ESTIMATOR;
-                if !grid || st.resolution == 0 || !st.levels.is_empty() {
-                    return Err("grid rows with solid-angle settings".into());
-                }
-                for r in rows {
-                    let sorted = r.patches.windows(2).all(|w| w[0] < w[1]);
-                    if !sorted || r.patches.iter().any(|&p| u64::from(p) >= patches) {
-                        return Err("a grid row's patches are out of range or not increasing".into());
-                    }
-                    if r.patches.len() != r.solid_angles.len()
-                        || !r.solid_angles.iter().all(|&a| finite(a))
-                        || !finite(r.background)
-                    {
-                        return Err("a grid row's solid angles are not finite and non-negative".into());
-                    }
-                }
-            }
-            ShardRows::SolidAngle(rows) => {
-                if st.estimator != "solid-angle" || st.levels.is_empty() || st.resolution != 0 {
-                    return Err("solid-angle rows with grid settings".into());
-                }
-                for r in rows {
-                    if r.whole.iter().any(|&(p, a)| u64::from(p) >= patches || !finite(a))
-                        || r.sampled.iter().any(|&(t, a)| u64::from(t) >= self.scene.triangles || !finite(a))
-                    {
-                        return Err("a ladder's patches or triangles are out of range".into());
-                    }
-                    if !(1..=st.levels.len()).contains(&r.fractions.len())
-                        || r.fractions
-                            .iter()
-                            .any(|f| f.len() != r.sampled.len() || !f.iter().all(|x| (0.0..=1.0).contains(x)))
-                    {
-                        return Err("a ladder's fractions do not match its levels and triangles".into());
-                    }
-                    if !r.eye.iter().all(|x| x.is_finite()) {
-                        return Err("a ladder's eye is not finite".into());
-                    }
-                }
-            }
-        }
-        Ok(())
+        crate::shards::validate(self)
     }
 
     /// Solid-angle ladders, for [`ViewpointChannel::from_ladders`].
@@ -365,6 +234,73 @@ impl ViewpointShard {
     }
 }
 
+impl ShardFile for ViewpointShard {
+    type Settings = ShardSettings;
+    const KIND: Kind = KIND;
+
+    fn header(&self) -> &Header<ShardSettings> {
+        &self.header
+    }
+
+    fn violation(&self) -> Option<String> {
+        let (h, st) = (&self.header, &self.header.settings);
+        if h.shards > st.viewpoints {
+            return Some(format!("shard {}/{} of {} viewpoints is not a shard", h.shard, h.shards, st.viewpoints));
+        }
+        if (self.first, self.end) != shard_range(h.shard, h.shards, st.viewpoints) {
+            return Some(format!("shard {}/{} holds the wrong viewpoint range", h.shard, h.shards));
+        }
+        if self.len() as u64 != self.end - self.first {
+            return Some(format!("{} rows for viewpoints {}..{}", self.len(), self.first, self.end));
+        }
+        let patches = h.scene.patches;
+        let finite = |x: f64| x.is_finite() && x >= 0.0;
+        match &self.rows {
+            ShardRows::Grid(rows) => {
+                let grid = st.estimator == "grid" || st.estimator == VOLUME_ESTIMATOR;
+                if !grid || st.resolution == 0 || !st.levels.is_empty() {
+                    return Some("grid rows with solid-angle settings".into());
+                }
+                for r in rows {
+                    let sorted = r.patches.windows(2).all(|w| w[0] < w[1]);
+                    if !sorted || r.patches.iter().any(|&p| u64::from(p) >= patches) {
+                        return Some("a grid row's patches are out of range or not increasing".into());
+                    }
+                    if r.patches.len() != r.solid_angles.len()
+                        || !r.solid_angles.iter().all(|&a| finite(a))
+                        || !finite(r.background)
+                    {
+                        return Some("a grid row's solid angles are not finite and non-negative".into());
+                    }
+                }
+            }
+            ShardRows::SolidAngle(rows) => {
+                if st.estimator != "solid-angle" || st.levels.is_empty() || st.resolution != 0 {
+                    return Some("solid-angle rows with grid settings".into());
+                }
+                for r in rows {
+                    if r.whole.iter().any(|&(p, a)| u64::from(p) >= patches || !finite(a))
+                        || r.sampled.iter().any(|&(t, a)| u64::from(t) >= h.scene.triangles || !finite(a))
+                    {
+                        return Some("a ladder's patches or triangles are out of range".into());
+                    }
+                    if !(1..=st.levels.len()).contains(&r.fractions.len())
+                        || r.fractions
+                            .iter()
+                            .any(|f| f.len() != r.sampled.len() || !f.iter().all(|x| (0.0..=1.0).contains(x)))
+                    {
+                        return Some("a ladder's fractions do not match its levels and triangles".into());
+                    }
+                    if !r.eye.iter().all(|x| x.is_finite()) {
+                        return Some("a ladder's eye is not finite".into());
+                    }
+                }
+            }
+        }
+        None
+    }
+}
+
 /// Puts shards of one run in viewpoint order, refusing foreign ones
 /// (another scene or settings, or another shard count), duplicates and
 /// missing ones. `named` pairs each shard with the name used in errors.
@@ -376,19 +312,8 @@ pub fn order_shards(
     scene: &MeshFingerprint,
     settings: &ShardSettings,
 ) -> Result<Vec<ViewpointShard>, ShardError> {
-    crate::shards::order(
-        named,
-        |s| (s.shard, s.shards),
-        |s| {
-            if s.scene != *scene {
-                return Some(Foreign::Other(format!(
-                    "a shard of another scene ({:?}, {} patches, hash {}), not of {:?} ({} patches, hash {})",
-                    s.scene.name, s.scene.patches, s.scene.hash, scene.name, scene.patches, scene.hash
-                )));
-            }
-            settings.difference(&s.settings).map(Foreign::Run)
-        },
-    )
+    let run = Header::new(KIND, Place { index: 0, count: 1 }, scene.clone(), settings.clone());
+    crate::shards::order_run(named, &run, |_| None)
 }
 
 /// The ray-grid channel of shards in order (from [`order_shards`]) over

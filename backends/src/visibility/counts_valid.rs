@@ -33,13 +33,11 @@ impl SceneFingerprint {
     /// The fingerprint of a scene given its name and patch areas.
     #[must_use]
     pub fn of(name: &str, areas: &[f64]) -> Self {
-        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        let mut h = crate::shards::Fnv::default();
         for a in areas {
-            for b in a.to_bits().to_le_bytes() {
-                h = (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
-            }
+            h.eat(&a.to_bits().to_le_bytes());
         }
-        Self { name: name.to_string(), patches: areas.len() as u64, areas_hash: h }
+        Self { name: name.to_string(), patches: areas.len() as u64, areas_hash: h.value() }
     }
 }
 

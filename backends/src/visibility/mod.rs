@@ -37,6 +37,7 @@ pub mod counts_file;
 pub mod counts_valid;
 pub mod jackknife;
 pub mod merge;
+pub mod merge_job;
 mod pairs;
 
 use std::fmt;

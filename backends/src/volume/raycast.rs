@@ -17,7 +17,7 @@ use glam::DVec3;
 
 use super::{TransferFunction, Volume};
 use crate::camera::Camera;
-use crate::viewpoint::shard_file::Fnv;
+use crate::shards::Fnv;
 
 /// Transmittance below which a ray stops (early ray termination).
 pub const EARLY_TERMINATION: f64 = 1e-4;

@@ -1,8 +1,16 @@
 //! Commands laid out as `commands/<cmd>/{args,run}.rs`: the options clap
-//! parses, and the run. `radiosity` and `shapes` are here; the others follow
-//! the same layout.
+//! parses, and the run. Every command is here but `render`, `compare` and
+//! `simplify` (still `cli/src/render/` and `cli/src/simplify.rs`) and
+//! `devices`.
 
+pub mod complexity;
+pub mod measure;
+pub mod phantom;
 pub mod radiosity;
+pub mod register;
+pub mod segment;
+pub mod viewpoints;
+pub mod volume;
 
 /// `itgfx shapes`: shape descriptors and retrieval scores.
 pub mod shapes {

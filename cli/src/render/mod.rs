@@ -43,7 +43,10 @@ const MAX_SPP: u32 = 1 << 16;
                         DIR receives image.exr (linear radiance), image.png (sRGB) and density.png \
                         (samples per pixel, log scale); with --variance also variance.exr.\n\
                         Recommended: --sampler adaptive (unbiased; pays on scenes with empty or flat regions, \
-                        about uniform elsewhere).")]
+                        about uniform elsewhere).",
+          mut_arg("shard", |a| a.help(shard::SHARD_HELP).requires("save_shard")),
+          mut_arg("save_shard", |a| a.help("Write the shard's pixels to F (for --merge)").requires("shard")),
+          mut_arg("merge", |a| a.help(shard::MERGE_HELP).num_args(1..).conflicts_with_all(shard::MERGE_CONFLICTS)))]
 pub struct RenderOptions {
     /// A built-in scene name (cornell-box, mirror-room, open-blocks, open-sphere) or a scene file
     /// (.obj, .ply, .gltf, .glb, Mitsuba .xml)
@@ -128,7 +131,7 @@ pub struct RenderOptions {
     pub tracing: Tracing,
     #[command(flatten)]
     #[allow(missing_docs)]
-    pub shards: shard::RenderShardOptions,
+    pub shards: crate::shard::ShardArgs,
     #[command(flatten)]
     #[allow(missing_docs)]
     pub common: Common,

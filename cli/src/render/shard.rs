@@ -5,9 +5,9 @@
 //! its images. See `backends/src/render/shard_file.rs` for why rows.
 
 use std::path::{Path, PathBuf};
+
 use std::time::Instant;
 
-use clap::Args;
 use itgfx_backends::camera::Camera;
 use itgfx_backends::render::shard_file::{MeshFingerprint, RenderSettings, RenderShard, merge, shard_rows};
 use itgfx_backends::render::{Frame, Sampling};
@@ -16,29 +16,33 @@ use itgfx_backends::tracer::Prepared;
 use super::RenderOptions;
 use crate::CliError;
 use crate::report::Report;
-use crate::shard::{Shard, parse};
-use crate::values::out_path;
+use crate::shard::{MAX_SHARD_BYTES, Shard};
 
-/// Largest shard file read.
-const MAX_SHARD_BYTES: u64 = 4 << 30;
-
-/// The shard options of `itgfx render`.
-#[derive(Debug, Args)]
-pub struct RenderShardOptions {
-    /// Shard i of n (0-based): render pixel rows [i*H/n, (i+1)*H/n) only and save them (--save-shard)
-    #[arg(long, value_name = "i/n", value_parser = parse, requires = "save_shard", help_heading = "Shards")]
-    pub shard: Option<Shard>,
-    /// Write the shard's pixels to F (for --merge)
-    #[arg(long, value_name = "F", value_parser = out_path, requires = "shard", help_heading = "Shards")]
-    pub save_shard: Option<PathBuf>,
-    /// Write the images of the saved shards F1,F2,... (all n of one run) to --out instead of
-    /// rendering; no SCENE or sampler options (the shards carry them)
-    #[arg(long, value_name = "F1,F2,...", value_delimiter = ',', num_args = 1..,
-          conflicts_with_all = ["shard", "scene", "sampler", "spp", "size", "seed", "camera", "threshold", "tutorial_form",
-                                "delta", "binary_contrast", "maps", "max_spp", "export_scene", "backend", "save_shard"],
-          help_heading = "Shards")]
-    pub merge: Vec<PathBuf>,
-}
+/// `--shard`'s help.
+pub const SHARD_HELP: &str =
+    "Shard i of n (0-based): render pixel rows [i*H/n, (i+1)*H/n) only and save them (--save-shard)";
+/// `--merge`'s help.
+pub const MERGE_HELP: &str = "Write the images of the saved shards F1,F2,... (all n of one run) to --out instead of \
+                              rendering; no SCENE or sampler options (the shards carry them)";
+/// What `--merge` takes from the shards, so refuses.
+pub const MERGE_CONFLICTS: [&str; 16] = [
+    "shard",
+    "scene",
+    "sampler",
+    "spp",
+    "size",
+    "seed",
+    "camera",
+    "threshold",
+    "tutorial_form",
+    "delta",
+    "binary_contrast",
+    "maps",
+    "max_spp",
+    "export_scene",
+    "backend",
+    "save_shard",
+];
 
 /// Checks the shard options before any work.
 ///
@@ -112,7 +116,7 @@ pub fn save(
     r: &mut Report,
 ) -> Result<(), CliError> {
     let shard = RenderShard::new(MeshFingerprint::of(name, prepared), st, (s.index, s.count), threshold, frame);
-    let text = shard.to_json().map_err(|e| CliError::usage(format!("--save-shard: {e}")))?;
+    let text = shard.to_json().map_err(|e| CliError::runtime(format!("--save-shard: {e}")))?;
     crate::output::write(path, text.as_bytes())?;
     r.text("shard", s.to_string()).count("first_row", u64::from(shard.first_row));
     r.count("end_row", u64::from(shard.end_row));
@@ -127,15 +131,9 @@ pub fn save(
 /// Unreadable, foreign, duplicate or missing shards: one line.
 pub fn merged(files: &[PathBuf]) -> Result<(RenderShard, Frame, f64), CliError> {
     let t0 = Instant::now();
-    let mut named = Vec::with_capacity(files.len());
-    for f in files {
-        let bytes = itgfx_backends::obj::read_limited(f, MAX_SHARD_BYTES)
-            .map_err(|e| CliError::usage(format!("--merge {f:?}: {e}")))?;
-        let text = String::from_utf8(bytes).map_err(|_| CliError::usage(format!("--merge {f:?}: not UTF-8 text")))?;
-        let s = RenderShard::from_json(&text).map_err(|e| CliError::usage(format!("--merge {f:?}: {e}")))?;
-        named.push((format!("{f:?}"), s));
-    }
-    let (first, frame) = merge(named).map_err(|e| CliError::usage(crate::shard::describe(&e)))?;
+    let fail = |e| CliError::usage(crate::shard::describe(&e));
+    let named = itgfx_backends::shards::read_files(files, MAX_SHARD_BYTES).map_err(fail)?;
+    let (first, frame) = merge(named).map_err(fail)?;
     Ok((first, frame, t0.elapsed().as_secs_f64()))
 }
 
@@ -161,13 +159,13 @@ fn merge_into(o: &RenderOptions, dir: &Path) -> Result<Report, CliError> {
         crate::output::check("--out", &f)?;
     }
     let (first, frame, seconds) = merged(&o.shards.merge)?;
-    let st = &first.settings;
+    let (h, st) = (&first.header, &first.header.settings);
     let reference = super::read_reference(o, (st.width, st.height))?;
     let (image, wrote) = super::write_frame(&frame, o.exposure, dir)?;
     let mut r = Report::new();
-    r.text("scene", first.scene.name.clone()).text("backend", st.backend.clone()).text("sampler", st.sampler.clone());
+    r.text("scene", h.scene.name.clone()).text("backend", st.backend.clone()).text("sampler", st.sampler.clone());
     r.count("width", u64::from(st.width)).count("height", u64::from(st.height)).count("seed", st.seed);
-    r.count("shards", first.shards).maybe_real("threshold", first.threshold_used, None);
+    r.count("shards", h.shards).maybe_real("threshold", first.threshold_used, None);
     r.count("spp_requested", u64::from(st.spp));
     super::frame_stats(&mut r, &frame, Some(&image), reference.as_ref(), o.exposure)?;
     r.real("seconds", seconds, Some("s"));

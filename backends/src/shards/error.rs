@@ -1,11 +1,7 @@
-//! Putting the shards of one run in order before an exact merge: every
-//! shard file (viewpoint rows, render rows) names its place `i/n`; the merge
-//! refuses foreign shards (another scene, other settings, another count),
-//! duplicates and missing ones, each with one line naming the file(s).
-//!
-//! Errors are a [`ShardError`]; a setting that differs between two shards is
-//! a [`Setting`], which the engine names in words and a front end may map to
-//! its own option names ([`ShardError::describe`]).
+//! The shard errors: a [`ShardError`] for every refusal of a shard file;
+//! a setting that differs between two shards is a [`Setting`], which the
+//! engine names in words and a front end may map to its own option names
+//! ([`ShardError::describe`]).
 
 use std::fmt;
 
@@ -138,12 +134,29 @@ pub enum ShardError {
     },
     /// A shard file whose contents break an invariant the merge relies on.
     Invalid(String),
+    /// A shard file of this kind in an earlier format, which this itgfx no
+    /// longer reads.
+    Older {
+        /// The kind of file, in words ("render shard file").
+        kind: &'static str,
+        /// The format version it was written in.
+        version: u32,
+    },
+    /// A file that could not be read (I/O, not UTF-8 text, too large).
+    Unreadable(String),
+    /// An error in one file of several: the file and what is wrong with it.
+    InFile {
+        /// The file, as named in errors.
+        file: String,
+        /// What is wrong.
+        error: Box<ShardError>,
+    },
 }
 
 impl ShardError {
     /// The error in one line, with each [`Setting`] named by `name` (a front
     /// end passes its option names; [`fmt::Display`] uses the words).
-    pub fn describe(&self, name: impl Fn(Setting) -> String) -> String {
+    pub fn describe(&self, name: &dyn Fn(Setting) -> String) -> String {
         match self {
             ShardError::NoShards => "no shard files".into(),
             ShardError::Missing { places, more } => {
@@ -161,133 +174,36 @@ impl ShardError {
             }
             ShardError::Duplicate { file, other, place } => format!("{file} and {other} are both shard {place}"),
             ShardError::Foreign { file, why } => format!("{file}: {why}"),
-            ShardError::Format { why } | ShardError::Invalid(why) => why.clone(),
+            ShardError::Format { why } | ShardError::Invalid(why) | ShardError::Unreadable(why) => why.clone(),
+            ShardError::Older { kind, version } => {
+                format!("{kind} written by an older itgfx (format {version}); re-run the shard")
+            }
+            ShardError::InFile { file, error } => format!("{file}: {}", error.describe(name)),
         }
     }
 }
 
 impl fmt::Display for ShardError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.describe(|s| s.words().to_string()))
+        f.write_str(&self.describe(&|s| s.words().to_string()))
     }
 }
 
 impl std::error::Error for ShardError {}
 
-/// Why a shard is not of this run, as [`order`] asks it.
-pub enum Foreign {
-    /// Another run: a setting differs.
-    Run(Difference),
-    /// Anything else, in words.
-    Other(String),
-}
-
-/// Orders `named` shards (each with the name used in errors) by their
-/// place `position(s) = (i, n)`. `foreign(s)` says why a shard is not of
-/// this run (`None` when it is); it is asked before the place is checked.
-///
-/// # Errors
-/// No shards, a foreign shard, a shard of another count, two shards with
-/// one place, or the missing places (the first 8).
-pub fn order<T>(
-    named: Vec<(String, T)>,
-    position: impl Fn(&T) -> (u64, u64),
-    foreign: impl Fn(&T) -> Option<Foreign>,
-) -> Result<Vec<T>, ShardError> {
-    let Some(n) = named.first().map(|s| position(&s.1).1) else {
-        return Err(ShardError::NoShards);
-    };
-    let mut slots: Vec<Option<(String, T)>> = Vec::new();
-    for (name, s) in named {
-        match foreign(&s) {
-            Some(Foreign::Run(difference)) => return Err(ShardError::OtherRun { file: name, difference }),
-            Some(Foreign::Other(why)) => return Err(ShardError::Foreign { file: name, why }),
-            None => {}
-        }
-        let (i, count) = position(&s);
-        if count != n {
-            return Err(ShardError::Foreign { file: name, why: format!("shard {i}/{count} among shards of {n}") });
-        }
-        if slots.is_empty() {
-            slots.resize_with(n as usize, || None);
-        }
-        let i = i as usize;
-        if let Some((other, _)) = &slots[i] {
-            return Err(ShardError::Duplicate { file: name, other: other.clone(), place: format!("{i}/{n}") });
-        }
-        slots[i] = Some((name, s));
-    }
-    let missing: Vec<String> =
-        slots.iter().enumerate().filter(|(_, s)| s.is_none()).map(|(i, _)| format!("{i}/{n}")).collect();
-    if !missing.is_empty() {
-        let more = missing.len().saturating_sub(8);
-        return Err(ShardError::Missing { places: missing[..missing.len().min(8)].to_vec(), more });
-    }
-    Ok(slots.into_iter().flatten().map(|(_, s)| s).collect())
-}
-
-/// Reads a shard file's JSON text: checks its `format` name and `version`
-/// first (so a file of another kind or version gets a line saying so, not a
-/// serde message), then parses it whole. `kind` names the file in errors
-/// ("render shard file").
-///
-/// # Errors
-/// [`ShardError::Format`]: not JSON, another format, another version, or a
-/// field serde rejects.
-pub fn read_json<T: serde::de::DeserializeOwned>(
-    text: &str,
-    kind: &str,
-    format: &str,
-    version: u32,
-) -> Result<T, ShardError> {
-    #[derive(serde::Deserialize)]
-    struct Head {
-        format: Option<String>,
-        version: Option<u32>,
-    }
-    let bad = |why: String| ShardError::Format { why };
-    let head: Head = serde_json::from_str(text).map_err(|_| bad(format!("not a {kind} (JSON)")))?;
-    if head.format.as_deref() != Some(format) {
-        return Err(bad(format!("not a {kind} (format {:?})", head.format.unwrap_or_default())));
-    }
-    if head.version != Some(version) {
-        return Err(bad(format!(
-            "{kind} version {}: this itgfx reads version {version}",
-            head.version.map_or("none".into(), |v| v.to_string())
-        )));
-    }
-    serde_json::from_str(text).map_err(|e| bad(format!("{kind}: {e}")))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn run(v: &[(u64, u64, bool)]) -> Result<Vec<u64>, String> {
-        let named = v.iter().enumerate().map(|(k, &s)| (format!("f{k}"), s)).collect();
-        order(named, |s| (s.0, s.1), |s| (!s.2).then(|| Foreign::Other("foreign".to_string())))
-            .map(|o| o.into_iter().map(|s| s.0).collect())
-            .map_err(|e| e.to_string())
-    }
-
-    #[test]
-    fn orders_and_refuses() {
-        assert_eq!(run(&[(2, 3, true), (0, 3, true), (1, 3, true)]).unwrap(), vec![0, 1, 2]);
-        assert_eq!(run(&[(0, 2, true)]).unwrap_err(), "shard 1/2 missing");
-        assert_eq!(run(&[(0, 2, true), (0, 2, true)]).unwrap_err(), "f1 and f0 are both shard 0/2");
-        assert_eq!(run(&[(0, 2, true), (1, 2, false)]).unwrap_err(), "f1: foreign");
-        assert_eq!(run(&[(0, 2, true), (1, 3, true)]).unwrap_err(), "f1: shard 1/3 among shards of 2");
-        assert_eq!(run(&[]).unwrap_err(), "no shard files");
-        let many: Vec<(u64, u64, bool)> = vec![(0, 12, true)];
-        assert_eq!(run(&many).unwrap_err(), "shard 1/12, 2/12, 3/12, 4/12, 5/12, 6/12, 7/12, 8/12 and 3 more missing");
-    }
 
     #[test]
     fn a_front_end_names_settings_its_own_way() {
         let d = Difference::of(Setting::Seed, "1".into(), "2".into(), "there").unwrap();
         let e = ShardError::OtherRun { file: "b".into(), difference: d };
         assert_eq!(e.to_string(), "b: a shard of another run (seed 1 here, 2 there)");
-        assert_eq!(e.describe(|_| "--seed".into()), "b: a shard of another run (--seed 1 here, 2 there)");
+        assert_eq!(e.describe(&|_| "--seed".into()), "b: a shard of another run (--seed 1 here, 2 there)");
         assert!(Difference::of(Setting::Seed, "1".into(), "1".into(), "there").is_none());
+        let older =
+            ShardError::InFile { file: "f".into(), error: Box::new(ShardError::Older { kind: "k", version: 1 }) };
+        assert_eq!(older.to_string(), "f: k written by an older itgfx (format 1); re-run the shard");
     }
 }

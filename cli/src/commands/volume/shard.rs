@@ -5,10 +5,8 @@
 //! merge concatenates them into the channel one process builds, bit for
 //! bit, and computes every measure from it (they need every row).
 
-use std::path::PathBuf;
 use std::time::Instant;
 
-use clap::Args;
 use glam::DVec3;
 use itgfx_backends::viewpoint::ViewpointChannel;
 use itgfx_backends::viewpoint::shard_file::{
@@ -22,22 +20,14 @@ use super::VolumeOptions;
 use crate::CliError;
 use crate::progress::Progress;
 use crate::report::Report;
-use crate::shard::{Shard, parse};
-use crate::values::out_path;
+use crate::shard::{MAX_SHARD_BYTES, Shard};
 
-/// The shard options of `itgfx volume`.
-#[derive(Debug, Args)]
-pub struct VolumeShardOptions {
-    /// Shard i of n (0-based): ray-cast viewpoints [i*V/n, (i+1)*V/n) only and save their rows (--save-shard)
-    #[arg(long, value_name = "i/n", value_parser = parse, requires = "save_shard", help_heading = "Shards")]
-    pub shard: Option<Shard>,
-    /// Write the shard's channel rows to F (for --merge)
-    #[arg(long, value_name = "F", value_parser = out_path, requires = "shard", help_heading = "Shards")]
-    pub save_shard: Option<PathBuf>,
-    /// Build the channel from the saved shards F1,F2,... of one run (all n of them) instead of ray casting
-    #[arg(long, value_name = "F1,F2,...", value_delimiter = ',', conflicts_with = "shard", help_heading = "Shards")]
-    pub merge: Vec<PathBuf>,
-}
+/// `--shard`'s help.
+pub const SHARD_HELP: &str =
+    "Shard i of n (0-based): ray-cast viewpoints [i*V/n, (i+1)*V/n) only and save their rows (--save-shard)";
+/// `--merge`'s help.
+pub const MERGE_HELP: &str =
+    "Build the channel from the saved shards F1,F2,... of one run (all n of them) instead of ray casting";
 
 /// Checks the shard options before any work: a shard saves rows only, so
 /// pictures, the iso-surface route and the focus belong to the merge; there
@@ -110,7 +100,7 @@ pub(super) fn save(
     let ch = volume_channel(backend, &copts, &mut |d, t| progress.update(d, t))
         .map_err(|e| CliError::usage(e.to_string()))?;
     let shard = ViewpointShard::grid(scene, settings, (s.index, s.count), &ch);
-    let text = shard.to_json().map_err(|e| CliError::usage(format!("--save-shard: {e}")))?;
+    let text = shard.to_json().map_err(|e| CliError::runtime(format!("--save-shard: {e}")))?;
     let path = o.shards.save_shard.as_ref().ok_or_else(|| CliError::usage("--shard needs --save-shard F"))?;
     crate::output::write(path, text.as_bytes())?;
     let mut r = Report::new();
@@ -136,13 +126,8 @@ pub(super) fn merged(
     rays: u32,
 ) -> Result<ViewpointChannel, CliError> {
     let (scene, settings) = identity(o, caster, dirs.len(), rays);
-    let mut named = Vec::with_capacity(o.shards.merge.len());
-    for f in &o.shards.merge {
-        let text = itgfx_backends::files::read_regular_to_string(f)
-            .map_err(|e| CliError::usage(format!("--merge {f:?}: {e}")))?;
-        let s = ViewpointShard::from_json(&text).map_err(|e| CliError::usage(format!("--merge {f:?}: {e}")))?;
-        named.push((format!("{f:?}"), s));
-    }
-    let shards = order_shards(named, &scene, &settings).map_err(|e| CliError::usage(crate::shard::describe(&e)))?;
+    let fail = |e| CliError::usage(crate::shard::describe(&e));
+    let named = itgfx_backends::shards::read_files(&o.shards.merge, MAX_SHARD_BYTES).map_err(fail)?;
+    let shards = order_shards(named, &scene, &settings).map_err(fail)?;
     Ok(grid_channel(caster.volume.voxels(), &shards, dirs, o.distance, rays))
 }

@@ -41,7 +41,10 @@ pub const MEMORY_LIMIT: u64 = 6 << 30;
 
 /// `itgfx volume VOLUME`.
 #[derive(Debug, Args)]
-#[command(after_help = volume_help())]
+#[command(after_help = volume_help(),
+          mut_arg("shard", |a| a.help(shard::SHARD_HELP).requires("save_shard")),
+          mut_arg("save_shard", |a| a.help(crate::viewpoints::shard::SAVE_HELP).requires("shard")),
+          mut_arg("merge", |a| a.help(shard::MERGE_HELP)))]
 pub struct VolumeOptions {
     /// A built-in volume (hydrogen:3,2,0,64, phantom:64, cube:32, sphere:32), an .nrrd or a raw file
     #[arg(value_name = "VOLUME")]
@@ -115,7 +118,7 @@ pub struct VolumeOptions {
     pub backend: BackendChoice,
     /// Shards.
     #[command(flatten)]
-    pub shards: shard::VolumeShardOptions,
+    pub shards: crate::shard::ShardArgs,
     /// Shared options.
     #[command(flatten)]
     pub common: Common,

@@ -10,9 +10,9 @@ use itgfx_backends::viewpoint::selection::{best_views, exploration, importance_i
 use itgfx_backends::viewpoint::solid_angle::Refinement;
 use itgfx_backends::viewpoint::{ViewpointAnalysis, ViewpointChannel, ViewpointWeights, icosphere};
 
+use super::ViewpointsOptions;
 use crate::CliError;
 use crate::export::{Faces, colours, montage, percentile_range, render_image, sphere_image, write_ply_with, write_png};
-use crate::options::ViewpointsOptions;
 use crate::progress::Progress;
 use crate::report::Report;
 use crate::scene::load_scene;
@@ -55,7 +55,7 @@ pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
     if !grid && o.resolution.is_some() {
         return Err(CliError::usage("--resolution sets the ray grid: give it with --estimator grid"));
     }
-    crate::viewpoint_shard::check(o, &pictures(o))?;
+    super::shard::check(o, &pictures(o))?;
     let resolution = o.resolution.unwrap_or(128);
     let (distance, capture, max_views, steps, rounds) =
         (o.distance, o.selection.capture, o.selection.best_n, o.selection.explore, o.smooth);
@@ -86,10 +86,10 @@ pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
         background,
     };
     if let Some(s) = o.shards.shard {
-        return crate::viewpoint_shard::save(o, s, &scene.name, &prepared, tracer.as_ref(), &dirs, &refine);
+        return super::shard::save(o, s, &scene.name, &prepared, tracer.as_ref(), &dirs, &refine);
     }
     let (ch, convergence) = if !o.shards.merge.is_empty() {
-        crate::viewpoint_shard::merged(o, &scene.name, &prepared, tracer.as_ref(), &dirs, &refine)?
+        super::shard::merged(o, &scene.name, &prepared, tracer.as_ref(), &dirs, &refine)?
     } else if grid {
         let ch = ViewpointChannel::build(&prepared, tracer.as_ref(), &dirs, distance, resolution, &mut tick)
             .map_err(|e| CliError::usage(e.to_string()))?;

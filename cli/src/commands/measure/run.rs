@@ -3,7 +3,7 @@
 use itgfx_core as core_;
 use itgfx_core::{Base, Channel};
 
-pub use crate::measure_options::{Measure, MeasureCommand};
+use super::args::Measure;
 use crate::report::Report;
 use crate::{CliError, core_err};
 

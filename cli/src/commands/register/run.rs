@@ -8,8 +8,8 @@ use itgfx_backends::imaging::{HistogramKind, Level, Metric, RegisterOptions as E
 use itgfx_core::JointEntropies;
 
 use super::RegisterOptions;
-use super::pictures::{checkerboard, histogram_image, overlay, plot, read_gray, write_gray, write_rgb};
 use crate::CliError;
+use crate::imaging::pictures::{checkerboard, histogram_image, overlay, plot, read_gray, write_gray, write_rgb};
 use crate::report::Report;
 
 /// The `--levels` pyramid, coarse to fine.
@@ -201,7 +201,7 @@ pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
     let kinds = (sniff(&o.fixed)?, sniff(&o.moving)?);
     match kinds {
         (Kind::Png, Kind::Png) => {}
-        (Kind::Nrrd, Kind::Nrrd) => return super::register3::run_register3(o),
+        (Kind::Nrrd, Kind::Nrrd) => return super::run3::run_register3(o),
         (a, _) => {
             let name = |k| if k == Kind::Png { "a 2D PNG image" } else { "a 3D NRRD volume" };
             return Err(CliError::usage(format!(
@@ -251,7 +251,7 @@ pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
     let t0 = Instant::now();
     let r = register(&fixed, &moving, &engine, |k, n| {
         let l = engine.levels[k];
-        super::say(&format!("register: level {}/{n} (shrink {}, sigma {})", k + 1, l.shrink, l.sigma));
+        crate::imaging::say(&format!("register: level {}/{n} (shrink {}, sigma {})", k + 1, l.shrink, l.sigma));
     })
     .map_err(|e| CliError::usage(e.to_string()))?;
     let seconds = t0.elapsed().as_secs_f64();

@@ -7,8 +7,8 @@ use itgfx_backends::imaging::segment::SegmentOptions as Engine;
 use itgfx_backends::imaging::{Gray, segment};
 
 use super::SegmentOptions;
-use super::pictures::{label_image, plot, read_gray, write_gray, write_rgb};
 use crate::CliError;
+use crate::imaging::pictures::{label_image, plot, read_gray, write_gray, write_rgb};
 use crate::report::Report;
 
 const FILES: [&str; 4] = ["labels.png", "means.png", "curve.png", "result.json"];
@@ -35,9 +35,11 @@ pub fn run_segment(o: &SegmentOptions) -> Result<Report, CliError> {
     let mut next = 1;
     let s = segment(&img, &engine, |d, n| {
         if d == n {
-            super::say(&format!("segment: {n} leaves; merging by the information bottleneck (cost ~ leaves^3)"));
+            crate::imaging::say(&format!(
+                "segment: {n} leaves; merging by the information bottleneck (cost ~ leaves^3)"
+            ));
         } else if d >= next {
-            super::say(&format!("segment: splitting, {d}/{n} leaves"));
+            crate::imaging::say(&format!("segment: splitting, {d}/{n} leaves"));
             next = d * 2;
         }
     })

@@ -14,34 +14,20 @@ use itgfx_backends::viewpoint::shard_file::{
 };
 use itgfx_backends::viewpoint::solid_angle::{Convergence, Refinement, ladder_levels};
 
-use clap::Args;
-
+use super::ViewpointsOptions;
 use crate::CliError;
-use crate::options::ViewpointsOptions;
 use crate::progress::Progress;
 use crate::report::Report;
-use crate::shard::{Shard, parse};
-use crate::values::out_path;
+use crate::shard::{MAX_SHARD_BYTES, Shard};
 
-/// The shard options of `itgfx viewpoints`.
-#[derive(Debug, Args)]
-pub struct ViewpointShardOptions {
-    /// Shard i of n (0-based): trace viewpoints [i*V/n, (i+1)*V/n) only and save their rows (--save-shard)
-    #[arg(long, value_name = "i/n", value_parser = parse, requires = "save_shard",
-          help_heading = "Shards")]
-    pub shard: Option<Shard>,
-    /// Write the shard's channel rows to F (for --merge)
-    #[arg(long, value_name = "F", value_parser = out_path, requires = "shard", help_heading = "Shards")]
-    pub save_shard: Option<PathBuf>,
-    /// Solid angle: refinement levels a shard saves per viewpoint (default 1: the first pass); the
-    /// merge traces any further level a viewpoint needs. 16 keeps them all: the merge traces nothing
-    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=16), requires = "shard",
-          help_heading = "Shards")]
-    pub shard_levels: Option<u32>,
-    /// Build the channel from the saved shards F1,F2,... of one run (all n of them) instead of tracing
-    #[arg(long, value_name = "F1,F2,...", value_delimiter = ',', conflicts_with = "shard", help_heading = "Shards")]
-    pub merge: Vec<PathBuf>,
-}
+/// `--shard`'s help.
+pub const SHARD_HELP: &str =
+    "Shard i of n (0-based): trace viewpoints [i*V/n, (i+1)*V/n) only and save their rows (--save-shard)";
+/// `--save-shard`'s help (`volume`'s too).
+pub const SAVE_HELP: &str = "Write the shard's channel rows to F (for --merge)";
+/// `--merge`'s help.
+pub const MERGE_HELP: &str =
+    "Build the channel from the saved shards F1,F2,... of one run (all n of them) instead of tracing";
 
 /// Checks the shard options before any work: a shard saves rows only, so
 /// pictures and per-polygon output belong to the merge; there are at most
@@ -70,7 +56,7 @@ pub fn check(
             return Err(CliError::usage("--per-polygon: a --shard run saves channel rows only; give it to --merge"));
         }
     }
-    if o.shards.shard_levels.is_some() && o.estimator == "grid" {
+    if o.shard_levels.is_some() && o.estimator == "grid" {
         return Err(CliError::usage("--shard-levels: the grid estimator has no refinement levels"));
     }
     if let Some(p) = &o.shards.save_shard {
@@ -119,13 +105,13 @@ pub fn save(
             .map_err(|e| CliError::usage(e.to_string()))?;
         (ViewpointShard::grid(scene, st, (s.index, s.count), &ch), None)
     } else {
-        let keep = o.shards.shard_levels.map_or(1, |k| k as usize);
+        let keep = o.shard_levels.map_or(1, |k| k as usize);
         let ladders = ViewpointChannel::ladders(prepared, tracer, mine, refine, keep, &mut tick)
             .map_err(|e| CliError::usage(format!("{name}: {e}")))?;
         let kept = ladders.first().map_or(0, |l| l.fractions.len());
         (ViewpointShard::solid_angle(scene, st, (s.index, s.count), ladders), Some(kept))
     };
-    let text = shard.to_json().map_err(|e| CliError::usage(format!("--save-shard: {e}")))?;
+    let text = shard.to_json().map_err(|e| CliError::runtime(format!("--save-shard: {e}")))?;
     let path = o.shards.save_shard.as_ref().ok_or_else(|| CliError::usage("--shard needs --save-shard F"))?;
     crate::output::write(path, text.as_bytes())?;
     let mut r = Report::new();
@@ -155,14 +141,9 @@ pub fn merged(
 ) -> Result<(ViewpointChannel, Option<Convergence>), CliError> {
     let st = settings(o, dirs.len(), refine, tracer.name());
     let scene = MeshFingerprint::of(name, prepared);
-    let mut named = Vec::with_capacity(o.shards.merge.len());
-    for f in &o.shards.merge {
-        let text = itgfx_backends::files::read_regular_to_string(f)
-            .map_err(|e| CliError::usage(format!("--merge {f:?}: {e}")))?;
-        let s = ViewpointShard::from_json(&text).map_err(|e| CliError::usage(format!("--merge {f:?}: {e}")))?;
-        named.push((format!("{f:?}"), s));
-    }
-    let shards = order_shards(named, &scene, &st).map_err(|e| CliError::usage(crate::shard::describe(&e)))?;
+    let fail = |e| CliError::usage(crate::shard::describe(&e));
+    let named = itgfx_backends::shards::read_files(&o.shards.merge, MAX_SHARD_BYTES).map_err(fail)?;
+    let shards = order_shards(named, &scene, &st).map_err(fail)?;
     if o.estimator == "grid" {
         return Ok((grid_channel(prepared.patches, &shards, dirs, o.distance, st.resolution), None));
     }

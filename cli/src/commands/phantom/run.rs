@@ -5,9 +5,10 @@ use itgfx_backends::imaging::phantom::{Phantom3Options, PhantomOptions as Render
 use itgfx_backends::imaging::rigid::centre;
 use itgfx_backends::imaging::{Rigid2, Rigid3};
 
-use super::pictures::{write_gray, write_nrrd};
-use super::{PhantomOptions, Size};
+use super::PhantomOptions;
 use crate::CliError;
+use crate::imaging::Size;
+use crate::imaging::pictures::{write_gray, write_nrrd};
 use crate::report::Report;
 
 /// The rotation convention of 3D transforms, for `transform.json` and `result.json`.
@@ -74,7 +75,7 @@ fn finish(t: Report, paths: &[std::path::PathBuf]) -> Result<Report, CliError> {
 }
 
 /// Three numbers of a 3D option, or its default.
-fn triple(v: Option<&super::Numbers>, default: [f64; 3], flag: &str) -> Result<[f64; 3], CliError> {
+fn triple(v: Option<&crate::imaging::Numbers>, default: [f64; 3], flag: &str) -> Result<[f64; 3], CliError> {
     match v.map(|n| n.0.as_slice()) {
         None => Ok(default),
         Some(&[a, b, c]) => Ok([a, b, c]),

@@ -10,10 +10,10 @@ use itgfx_backends::imaging::{Gray3, RegisterOptions as Engine, Rigid3, register
 use itgfx_backends::volume::nrrd::read_nrrd;
 
 use super::RegisterOptions;
-use super::pictures::{checkerboard, histogram_image, middle_slices, side_by_side, write_nrrd, write_rgb};
-use super::register::{choices, level_report, measures, trace_picture};
-use super::synth::CONVENTION_3D;
+use super::run::{choices, level_report, measures, trace_picture};
 use crate::CliError;
+use crate::commands::phantom::CONVENTION_3D;
+use crate::imaging::pictures::{checkerboard, histogram_image, middle_slices, side_by_side, write_nrrd, write_rgb};
 use crate::report::Report;
 
 const FILES: [&str; 6] =
@@ -125,12 +125,12 @@ pub fn run_register3(o: &RegisterOptions) -> Result<Report, CliError> {
         .iter()
         .map(|l| voxels as f64 / (l.shrink as f64).powi(3) * EVALUATIONS_PER_LEVEL * NS_PER_VOXEL * 1e-9)
         .sum();
-    super::say(&format!("register: {nx}x{ny}x{nz} volumes, about {estimate:.0} s (estimate)"));
+    crate::imaging::say(&format!("register: {nx}x{ny}x{nz} volumes, about {estimate:.0} s (estimate)"));
     let paths = crate::output::out_files(&o.out, &FILES)?;
     let t0 = Instant::now();
     let r = register3(&fixed, &moving, &engine, |k, n| {
         let l = engine.levels[k];
-        super::say(&format!("register: level {}/{n} (shrink {}, sigma {})", k + 1, l.shrink, l.sigma));
+        crate::imaging::say(&format!("register: level {}/{n} (shrink {}, sigma {})", k + 1, l.shrink, l.sigma));
     })
     .map_err(|e| CliError::usage(e.to_string()))?;
     let seconds = t0.elapsed().as_secs_f64();

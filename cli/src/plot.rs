@@ -1,6 +1,7 @@
 //! Line charts as pictures: curves `y(x)` on linear or logarithmic axes in a
 //! frame with a 10 × 10 grid, the ends of both axes labelled with a small
-//! built-in digit font (no font files, no text dependencies). Used by
+//! built-in 3 × 5 font (digits and capitals; no font files, no text
+//! dependencies), optionally with axis titles and a legend ([`titled`]). Used by
 //! `simplify` (error against triangle count) and the imaging commands
 //! (mutual information against regions or iterations).
 
@@ -64,16 +65,40 @@ impl Style {
 /// Pixels per label character (3 × 5 glyphs drawn 2× with a 2-pixel gap).
 const ADVANCE: i64 = 8;
 
+/// Axis titles and a legend for [`titled`].
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Titles {
+    /// Under the x axis, centred.
+    pub x: String,
+    /// Above the y axis, at its top.
+    pub y: String,
+    /// One line per curve: its name in its colour, drawn in a box at the
+    /// plot's lower left.
+    pub legend: Vec<(String, [u8; 3])>,
+}
+
+/// Height of a title line: a glyph (10 pixels) and a gap.
+const LINE: i64 = 14;
+
 /// A `w × h` chart of `curves` over the axes `x` and `y`. Points are joined
 /// and, for curves of at most 64 points, marked; the axis ends carry their
 /// values (three significant digits).
 #[must_use]
 pub fn chart(curves: &[Curve], x: Axis, y: Axis, size: (u32, u32), style: &Style) -> RgbImage {
+    titled(curves, x, y, size, style, &Titles::default())
+}
+
+/// As [`chart`], with the axis titles and the legend of `titles` (drawn in
+/// capitals).
+#[must_use]
+pub fn titled(curves: &[Curve], x: Axis, y: Axis, size: (u32, u32), style: &Style, titles: &Titles) -> RgbImage {
     let (w, h) = size;
     let mut img = RgbImage::from_pixel(w, h, Rgb(style.background));
     let (y_lo, y_hi) = (number(y.lo), number(y.hi));
     let left = 10 + ADVANCE * y_lo.len().max(y_hi.len()) as i64;
-    let (right, top, bottom) = (14i64, 12i64, 22i64);
+    let top = if titles.y.is_empty() { 12i64 } else { 12 + LINE };
+    let bottom = if titles.x.is_empty() { 22i64 } else { 22 + LINE };
+    let right = 14i64;
     let (pw, ph) = ((i64::from(w) - left - right).max(1), (i64::from(h) - top - bottom).max(1));
     for k in 0..=10 {
         let c = if k == 0 || k == 10 { style.frame } else { style.grid };
@@ -104,6 +129,34 @@ pub fn chart(curves: &[Curve], x: Axis, y: Axis, size: (u32, u32), style: &Style
     let (x_lo, x_hi) = (number(x.lo), number(x.hi));
     label(&mut img, left - 4, top + ph + 6, &x_lo, style.frame);
     label(&mut img, left + pw + 4 - ADVANCE * x_hi.len() as i64, top + ph + 6, &x_hi, style.frame);
+    // Capitals throughout: the font's lower-case `e` is the exponent's.
+    let (tx, ty) = (titles.x.to_uppercase(), titles.y.to_uppercase());
+    let width = |t: &str| ADVANCE * t.chars().count() as i64;
+    if !titles.x.is_empty() {
+        label(&mut img, left + (pw - width(&tx)) / 2, top + ph + 6 + LINE, &tx, style.frame);
+    }
+    if !titles.y.is_empty() {
+        label(&mut img, 4, 6, &ty, style.frame);
+    }
+    if !titles.legend.is_empty() {
+        let n = titles.legend.len() as i64;
+        let wide = titles.legend.iter().map(|(t, _)| width(t)).max().unwrap_or(0) + 28;
+        let (x0, y0) = (left + 8, top + ph - 8 - n * LINE - 6);
+        for yy in y0..y0 + n * LINE + 6 {
+            line(&mut img, (x0 as f64, yy as f64), ((x0 + wide) as f64, yy as f64), style.background);
+        }
+        let frame = [(x0, y0), (x0 + wide, y0), (x0 + wide, y0 + n * LINE + 6), (x0, y0 + n * LINE + 6), (x0, y0)];
+        for e in frame.windows(2) {
+            line(&mut img, (e[0].0 as f64, e[0].1 as f64), (e[1].0 as f64, e[1].1 as f64), style.frame);
+        }
+        for (k, (t, c)) in titles.legend.iter().enumerate() {
+            let yy = y0 + 6 + k as i64 * LINE;
+            for d in [4, 5] {
+                line(&mut img, ((x0 + 5) as f64, (yy + d) as f64), ((x0 + 19) as f64, (yy + d) as f64), *c);
+            }
+            label(&mut img, x0 + 24, yy, &t.to_uppercase(), *c);
+        }
+    }
     img
 }
 
@@ -142,12 +195,51 @@ fn glyph(c: char) -> Option<[u8; 5]> {
         '.' => [0, 0, 0, 0, 2],
         '-' => [0, 0, 7, 0, 0],
         'e' => [0, 7, 5, 6, 3],
+        '(' => [2, 4, 4, 4, 2],
+        ')' => [2, 1, 1, 1, 2],
+        ':' => [0, 2, 0, 2, 0],
+        '/' => [1, 1, 2, 4, 4],
+        '_' => [0, 0, 0, 0, 7],
+        '+' => [0, 2, 7, 2, 0],
+        '=' => [0, 7, 0, 7, 0],
+        c if c.is_ascii_alphabetic() => LETTERS[(c.to_ascii_uppercase() as u8 - b'A') as usize],
         _ => return None,
     })
 }
 
-/// Draws `text` (digits, `.`, `-`, `e`) with its top-left corner at `(x, y)`,
-/// pixels doubled; other characters leave a gap.
+/// Capitals A to Z in the 3 × 5 font of [`glyph`].
+const LETTERS: [[u8; 5]; 26] = [
+    [2, 5, 7, 5, 5],
+    [6, 5, 6, 5, 6],
+    [3, 4, 4, 4, 3],
+    [6, 5, 5, 5, 6],
+    [7, 4, 6, 4, 7],
+    [7, 4, 6, 4, 4],
+    [3, 4, 5, 5, 3],
+    [5, 5, 7, 5, 5],
+    [7, 2, 2, 2, 7],
+    [1, 1, 1, 5, 2],
+    [5, 5, 6, 5, 5],
+    [4, 4, 4, 4, 7],
+    [5, 7, 7, 5, 5],
+    [6, 5, 5, 5, 5],
+    [2, 5, 5, 5, 2],
+    [6, 5, 6, 4, 4],
+    [2, 5, 5, 6, 3],
+    [6, 5, 6, 5, 5],
+    [3, 4, 2, 1, 6],
+    [7, 2, 2, 2, 2],
+    [5, 5, 5, 5, 7],
+    [5, 5, 5, 5, 2],
+    [5, 5, 7, 7, 5],
+    [5, 5, 2, 5, 5],
+    [5, 5, 2, 2, 2],
+    [7, 1, 2, 4, 7],
+];
+
+/// Draws `text` (digits, letters as capitals except the exponent's `e`,
+/// `. - ( ) : / _ + =`) with its top-left corner at `(x, y)`, pixels
+/// doubled; other characters (a space) leave a gap.
 pub fn label(img: &mut RgbImage, x: i64, y: i64, text: &str, colour: [u8; 3]) {
     for (i, c) in text.chars().enumerate() {
         let Some(g) = glyph(c) else { continue };
@@ -205,6 +297,42 @@ mod tests {
         for v in [0.0, 1e9, -7.25, 3.3e-9, 123_456.7] {
             assert!(number(v).chars().all(|c| glyph(c).is_some()), "{v}: {}", number(v));
         }
+    }
+
+    /// Titles sit outside the plot (the x title below the axis labels, the
+    /// y title above the frame), the legend inside its lower left, each
+    /// entry in its curve's colour; letters have glyphs.
+    #[test]
+    fn titles_and_legend_are_drawn_where_they_belong() {
+        assert!("RECALL precision (mAP)".chars().filter(|c| *c != ' ').all(|c| glyph(c).is_some()));
+        let (red, blue) = ([200, 0, 0], [0, 0, 200]);
+        let titles = Titles {
+            x: "recall".into(),
+            y: "precision".into(),
+            legend: vec![("one".into(), red), ("two".into(), blue)],
+        };
+        let curves = [(vec![(0.0, 1.0), (1.0, 0.9)], red), (vec![(0.0, 1.0), (1.0, 0.8)], blue)];
+        let (a, o) = (Axis::linear(0.0, 1.0), Style::LIGHT);
+        let img = titled(&curves, a, a, (300, 200), &o, &titles);
+        let plain = chart(&curves, a, a, (300, 200), &o);
+        // Counts pixels of `colour` in `rows`, in the middle third of the columns
+        // (the x axis's value labels sit at its ends).
+        let ink = |img: &RgbImage, rows: std::ops::Range<u32>, colour: [u8; 3]| {
+            img.enumerate_pixels()
+                .filter(|p| (100..200).contains(&p.0) && rows.contains(&p.1) && p.2.0 == colour)
+                .count()
+        };
+        assert!(ink(&img, 182..200, o.frame) > 20, "x title under the axis");
+        assert_eq!(ink(&plain, 180..200, o.frame), 0, "nothing there without it");
+        let corner =
+            |img: &RgbImage| img.enumerate_pixels().filter(|p| p.0 < 80 && p.1 < 8 && p.2.0 == o.frame).count();
+        assert!(corner(&img) > 20 && corner(&plain) == 0, "y title above the frame");
+        // The legend: curve-coloured text at the lower left, where the curves (near the top) are not.
+        let legend = |img: &RgbImage, c: [u8; 3]| {
+            img.enumerate_pixels().filter(|p| p.0 < 100 && (100..180).contains(&p.1) && p.2.0 == c).count()
+        };
+        assert!(legend(&img, red) > 20 && legend(&img, blue) > 20);
+        assert_eq!(legend(&plain, red), 0);
     }
 
     #[test]

@@ -89,9 +89,16 @@ fn maps_are_written_and_mark_edges() {
         "colour-contrast.png",
         "binary-contrast.png",
         "geometry-contrast.png",
+        "priority-colour.png",
+        "depth-difference.png",
+        "priority-value.png",
     ] {
         assert_eq!(&std::fs::read(out.join(f)).unwrap()[1..4], b"PNG", "{f}");
     }
+    // Simmons' p_c, p_d, p_v (Part IV eqs. (2)-(4)) beside them: their own values.
+    let pri = out.join("priority.exr");
+    let pc = json(&itgfx(&["compare", s(&pri), s(&out.join("contrast.exr")), "--json"]));
+    assert!(pc["RMSE_a"].as_f64().unwrap() > 0.0);
     let q = v["mean_colour_quality"].as_f64().unwrap();
     let g = v["mean_geometry_quality"].as_f64().unwrap();
     let c = v["mean_contrast"].as_f64().unwrap();

@@ -18,6 +18,7 @@
 
 pub mod adaptive;
 pub mod criteria;
+pub mod first_hit;
 pub mod frame;
 pub mod lights;
 pub mod open;
@@ -36,6 +37,7 @@ use crate::scene::Scene;
 use crate::tracer::{BackendError, Prepared, Tracer};
 pub use adaptive::AdaptiveSampling;
 pub use criteria::{Adaptive, Criterion};
+pub use first_hit::{Priority, PriorityMap};
 pub use frame::{Frame, Policy, Uniform, View};
 pub use lights::{Lights, Surfaces};
 pub use path::PathTracer;
@@ -229,17 +231,7 @@ pub fn pass_seed(seed: u64, k: u64) -> u64 {
 /// # Errors
 /// [`RenderError`].
 pub fn render(job: &Job, progress: &(dyn Fn(u64, u64) + Sync)) -> Result<Rendered, RenderError> {
-    let camera = views::check_camera(job.tracer, job.scene, job.prepared, job.camera)?;
-    let sh = job.shading;
-    let pt = PathTracer {
-        tracer: job.tracer,
-        prepared: job.prepared,
-        surfaces: &sh.surfaces,
-        lights: &sh.lights,
-        max_depth: 256,
-    };
-    let (w, h) = job.size;
-    let view = View { camera, width: w, height: h, seed: job.seed, rows: job.rows.unwrap_or((0, h)) };
+    let (pt, view) = tracer_and_view(job)?;
     let start = std::time::Instant::now();
     let mut rendered = trace(&pt, &view, job.sampling, progress)?;
     if let Some(budget) = job.time_budget {
@@ -263,6 +255,32 @@ pub fn render(job: &Job, progress: &(dyn Fn(u64, u64) + Sync)) -> Result<Rendere
         rendered.map = Some(supersample::contrast_map(&pt, &view, oracle, &|_, _| {})?);
     }
     Ok(rendered)
+}
+
+/// The path tracer and the first pass's view of `job`, its camera checked.
+fn tracer_and_view<'a>(job: &Job<'a>) -> Result<(PathTracer<'a>, View), RenderError> {
+    let camera = views::check_camera(job.tracer, job.scene, job.prepared, job.camera)?;
+    let sh = job.shading;
+    let pt = PathTracer {
+        tracer: job.tracer,
+        prepared: job.prepared,
+        surfaces: &sh.surfaces,
+        lights: &sh.lights,
+        max_depth: 256,
+    };
+    let (w, h) = job.size;
+    Ok((pt, View { camera, width: w, height: h, seed: job.seed, rows: job.rows.unwrap_or((0, h)) }))
+}
+
+/// Simmons' priority values `p_c`, `p_d`, `p_v` (Part IV eqs. (2)–(4),
+/// colour weight `delta`) of the 8-spp oracle pass that [`render`]'s maps
+/// come from (`job.seed`, every row): see [`first_hit`].
+///
+/// # Errors
+/// [`RenderError`].
+pub fn priority_map(job: &Job, delta: f64) -> Result<PriorityMap, RenderError> {
+    let (pt, view) = tracer_and_view(job)?;
+    Ok(first_hit::priority_map(&pt, &view, delta, &|_, _| {})?)
 }
 
 /// `sampling` with its threshold fixed to `t` (samplers that tune one).

@@ -1,5 +1,6 @@
 //! The pixel quality and contrast maps of Part IV §3–§4 (Figs. 1–6), from
-//! the 8-spp oracle pass: PNG pictures and EXR values.
+//! the 8-spp oracle pass: PNG pictures and EXR values; beside them Simmons'
+//! priorities `p_c`, `p_d`, `p_v` (§2 eqs. (2)–(4)) of the same samples.
 //!
 //! As in the tutorial, each picture's scale is the values' mean `± k σ`
 //! (`k = 2`; outliers go to the ends), intersected with `[0, 1]`; the
@@ -7,11 +8,13 @@
 //! values, and its infinite pixels (a ray that met nothing beside one that
 //! met a surface) are drawn at the top. Colour
 //! quality and the contrasts use a thermal scale (blue lowest, red highest);
-//! geometry quality a grey scale (dark lowest), as Fig. 1.c.
+//! geometry quality a grey scale (dark lowest), as Fig. 1.c. `p_c` and
+//! `p_v` weigh contrasts by mean radiance, so they are not bounded by 1:
+//! their scale is the mean `± k σ` cut at 0 only.
 
 use std::path::{Path, PathBuf};
 
-use itgfx_backends::render::ContrastMap;
+use itgfx_backends::render::{ContrastMap, PriorityMap};
 
 use super::images::{Radiance, write_exr};
 use crate::CliError;
@@ -35,6 +38,10 @@ pub fn files(dir: &Path) -> Vec<PathBuf> {
         "quality.exr",
         "contrast.exr",
         "geometry-contrast.exr",
+        "priority-colour.png",
+        "depth-difference.png",
+        "priority-value.png",
+        "priority.exr",
     ]
     .iter()
     .map(|f| dir.join(f))
@@ -102,11 +109,14 @@ fn grey(x: f64) -> [u8; 3] {
 /// `geometry-log-contrast.png` `C_log^g` in bits (eq. (22), Fig. 4.c);
 /// `quality.exr` holds `(Q^c, Q^g, 0)`, `contrast.exr` `(C^c, C_b^c, C^g)`
 /// and `geometry-contrast.exr` `(C^g, C_b^g, C_log^g)` per pixel, unscaled
-/// (`C_log^g` may be `+∞`).
+/// (`C_log^g` may be `+∞`); from `priority`, `priority-colour.png` `p_c`
+/// (eq. (2), Fig. 2.b), `depth-difference.png` `p_d` (eq. (3), Figs. 4.d
+/// and 5.d), `priority-value.png` `p_v` (eq. (4), Fig. 6.a) and
+/// `priority.exr` `(p_c, p_d, p_v)`.
 ///
 /// # Errors
 /// A one-line error naming the path.
-pub fn write_maps(map: &ContrastMap, dir: &Path) -> Result<(), CliError> {
+pub fn write_maps(map: &ContrastMap, priority: &PriorityMap, dir: &Path) -> Result<(), CliError> {
     let f = files(dir);
     let (w, h) = (map.width, map.height);
     let col = |g: fn(&itgfx_backends::render::PixelMeasures) -> f64| map.measures.iter().map(g).collect::<Vec<f64>>();
@@ -129,7 +139,13 @@ pub fn write_maps(map: &ContrastMap, dir: &Path) -> Result<(), CliError> {
             .map(|m| [m.geometry_contrast, m.geometry_binary_contrast, m.geometry_log_contrast])
             .collect(),
         &f[10],
-    )
+    )?;
+    let pri = |g: fn(&itgfx_backends::render::Priority) -> f64| priority.pixels.iter().map(g).collect::<Vec<f64>>();
+    let unbounded = |v: &[f64], path: &Path| picture_scaled(v, scale_within(v, f64::INFINITY), w, h, thermal, path);
+    unbounded(&pri(|p| p.colour), &f[11])?;
+    picture(&pri(|p| p.depth), w, h, thermal, &f[12])?;
+    unbounded(&pri(|p| p.value), &f[13])?;
+    exr(priority.pixels.iter().map(|p| [p.colour, p.depth, p.value]).collect(), &f[14])
 }
 
 #[cfg(test)]

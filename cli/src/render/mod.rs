@@ -71,7 +71,8 @@ pub struct RenderOptions {
     #[arg(long, value_name = "NAME", default_value = "uniform", value_parser = sampler_name)]
     pub sampler: String,
     /// ec, ic, cc-tree, ec-binary, es: weight of the colour contrast against the geometry contrast of the
-    /// rays' first hits (Part IV eqs. (23), (28)); 1 is colour only
+    /// rays' first hits (Part IV eqs. (23), (28)); 1 is colour only. With --maps, also p_v's colour
+    /// weight (eq. (4); 0.9 when not given)
     #[arg(long, value_name = "D", value_parser = delta)]
     pub delta: Option<f64>,
     /// es and --maps: the binary colour contrast C_b (Part IV eq. (19)) instead of the entropy
@@ -81,7 +82,9 @@ pub struct RenderOptions {
     /// Also write the pixel quality and contrast maps of an 8-spp pass (Part IV §3-4, Figs. 1-6):
     /// quality.png, geometry-quality.png, contrast.png, colour-contrast.png, binary-contrast.png,
     /// geometry-contrast.png, geometry-binary-contrast.png (eq. 21), geometry-log-contrast.png
-    /// (eq. 22), quality.exr, contrast.exr, geometry-contrast.exr
+    /// (eq. 22), quality.exr, contrast.exr, geometry-contrast.exr; and Simmons' priorities of the
+    /// same samples (§2 eqs. 2-4, a second trace of the pass): priority-colour.png,
+    /// depth-difference.png, priority-value.png, priority.exr
     #[arg(long)]
     pub maps: bool,
     /// Also write variance.exr: each pixel's sample variance per channel (of the samples averaged
@@ -511,7 +514,10 @@ fn render_into(o: &RenderOptions, spec: &str, dir: Option<&Path>) -> Result<Repo
             if o.maps
                 && let Some(map) = &rendered.map
             {
-                maps::write_maps(map, dir)?;
+                // p_v's colour weight: --delta, else Simmons' 0.9 (eq. (4)).
+                let priority = render::priority_map(&job, o.delta.unwrap_or(0.9))
+                    .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
+                maps::write_maps(map, &priority, dir)?;
                 wrote.extend(maps::files(dir));
             }
             if o.export_scene {

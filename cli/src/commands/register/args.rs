@@ -31,12 +31,15 @@ pub struct RegisterOptions {
     /// (partial-volume interpolation, Maes)
     #[arg(long, value_name = "KIND", default_value = "parzen", value_parser = ["parzen", "binned", "pv"])]
     pub histogram: String,
-    /// Metric maximised: mi, nmi (Studholme), ecc (entropy correlation), mi-over-joint
-    #[arg(long, value_name = "M", default_value = "mi", value_parser = ["mi", "nmi", "ecc", "mi-over-joint"])]
-    pub metric: String,
-    /// Pyramid, coarse to fine: shrink:sigma per level (sigma in full-resolution pixels)
-    #[arg(long, value_name = "S:SIGMA,...", default_value = "4:2,2:1,1:1", value_parser = register::levels)]
-    pub levels: register::Levels,
+    /// Metric maximised: mi, nmi (Studholme), ecc (entropy correlation), mi-over-joint [default: mi for
+    /// images, nmi for volumes (MI's overlap bias misregisters volumes: docs/IMAGING.md)]
+    #[arg(long, value_name = "M", value_parser = ["mi", "nmi", "ecc", "mi-over-joint"])]
+    pub metric: Option<String>,
+    /// Pyramid, coarse to fine: shrink:sigma per level (sigma in full-resolution pixels) [default:
+    /// 4:2,2:1,1:1 for images, 4:2,2:1,1:0.5 for volumes (less smoothing at the last level lowers the
+    /// median rotation error: docs/IMAGING.md)]
+    #[arg(long, value_name = "S:SIGMA,...", value_parser = register::levels)]
+    pub levels: Option<register::Levels>,
     /// Starting transform: DEG,X,Y (angle in degrees, shifts in pixels), or for volumes AX,AY,AZ,X,Y,Z
     /// (degrees about x, y, z as in --rotation of phantom, shifts in physical units) [default: identity]
     #[arg(long, value_name = "DEG,X,Y", value_parser = numbers, allow_hyphen_values = true)]

@@ -110,12 +110,12 @@ pub fn run_register3(o: &RegisterOptions) -> Result<Report, CliError> {
     let [nx, ny, nz] = fixed.dims;
     itgfx_backends::memory::check(|| format!("registering {nx}x{ny}x{nz} volumes"), working_bytes(voxels))
         .map_err(|e| CliError::usage(e.to_string()))?;
-    let (kind, metric) = choices(o);
+    let (kind, metric) = choices(o, true);
     let engine = Engine::<Rigid3> {
         bins: o.bins,
         kind,
         metric,
-        levels: o.levels.0.clone(),
+        levels: super::run::pyramid(o, true),
         initial,
         max_iterations: o.max_iterations as usize,
         ..Engine::default()

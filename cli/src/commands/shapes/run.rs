@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use super::args::ShapesOptions;
 use crate::CliError;
-use crate::plot::{Axis, Curve, Style, chart};
+use crate::plot::{Axis, Curve, Style, Titles, titled};
 use crate::report::Report;
 use crate::scene::load_scene;
 use crate::values::viewpoint_level;
@@ -212,16 +212,19 @@ fn write_outputs(paths: &[PathBuf], o: &ShapesOptions, outcomes: &[Outcome], plo
         crate::output::write(&paths[2 + k], t.as_bytes())?;
     }
     if plot {
+        let mut titles = Titles { x: "recall".into(), y: "precision".into(), legend: Vec::new() };
         let curves: Vec<Curve> = outcomes
             .iter()
             .zip(COLOURS.iter().cycle())
-            .filter_map(|((_, _, _, _, s), c)| {
+            .filter_map(|((kind, _, _, _, s), c)| {
                 let s = s.as_ref()?;
+                titles.legend.push((format!("{} (map {:.3})", kind.name(), s.mean_average_precision), *c));
                 let n = s.precision_at_recall.len().saturating_sub(1).max(1) as f64;
                 Some((s.precision_at_recall.iter().enumerate().map(|(i, &p)| (i as f64 / n, p)).collect(), *c))
             })
             .collect();
-        let img = chart(&curves, Axis::linear(0.0, 1.0), Axis::linear(0.0, 1.0), (480, 360), &Style::LIGHT);
+        let unit = Axis::linear(0.0, 1.0);
+        let img = titled(&curves, unit, unit, (480, 360), &Style::LIGHT, &titles);
         crate::export::write_png(&img, &paths[paths.len() - 1])?;
     }
     Ok(())

@@ -9,8 +9,8 @@ use obvhs::ray::Ray;
 
 use super::packet::{self, LANES};
 use super::watertight::{
-    BLOCK, Block, Shear, TriangleLanes, before, finish, push_crossing, sphere_crossings, sphere_hit, triangle_hit,
-    walk_direction,
+    BLOCK, Block, Shear, TriangleLanes, barycentric, before, finish, push_crossing, sphere_crossings, sphere_hit,
+    triangle_hit, walk_direction,
 };
 use super::{BackendError, CrossingBuffer, Hit, Prepared, Tracer};
 use super::{interleave, node8};
@@ -32,6 +32,60 @@ pub(crate) fn bvh_input(scene: &Prepared) -> (Vec<Aabb>, obvhs::BvhBuildParams) 
     let mut params = obvhs::BvhBuildParams::medium_build();
     params.search_depth_threshold = 0;
     (aabbs, params)
+}
+
+/// The CPU backend's BVH over `scene`'s triangles with `params`. With
+/// `params.pre_split`, large triangles are first split into several boxes
+/// fitted to their parts (obvhs's `split_aabbs_preset`, the spatial split
+/// of pbrt's SBVH and Embree's high-quality builder, done before the
+/// build): a triangle may then sit in several leaves, and the walks meet
+/// it once per leaf (the same `t` each time, so closest hits, occlusion
+/// and `trace_all`'s merged crossings are unchanged). Every box, split or
+/// not, is padded as [`bvh_input`]'s.
+pub(crate) fn build_bvh(scene: &Prepared, params: obvhs::BvhBuildParams) -> CwBvh {
+    use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
+    use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
+    use obvhs::ploc::PlocBuilder;
+    let (mut aabbs, _) = bvh_input(scene);
+    if !params.pre_split {
+        return build_cwbvh(&aabbs, params, &mut std::time::Duration::default());
+    }
+    let tris: Vec<obvhs::triangle::Triangle> =
+        scene.triangles.iter().map(|&[v0, v1, v2]| obvhs::triangle::Triangle { v0, v1, v2 }).collect();
+    // Split the unpadded boxes (as obvhs's own `build_cwbvh_from_tris`), then pad every part.
+    let mut boxes: Vec<Aabb> = tris.iter().map(|t| t.aabb()).collect();
+    let (largest, sum) = boxes.iter().fold((0.0f32, 0.0f32), |(m, s), b| (m.max(b.half_area()), s + b.half_area()));
+    let mut indices: Vec<u32> = (0..tris.len() as u32).collect();
+    obvhs::splits::split_aabbs_preset(&mut boxes, &mut indices, &tris, sum / tris.len() as f32, largest);
+    aabbs.clear();
+    let pad = Vec3A::splat(1e-5);
+    aabbs.extend(boxes.iter().map(|b| Aabb { min: b.min - pad, max: b.max + pad }));
+    let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
+        params.ploc_search_distance,
+        &aabbs,
+        indices,
+        params.sort_precision,
+        params.search_depth_threshold,
+    );
+    bvh2.uses_spatial_splits = true;
+    ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
+    bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false)
+}
+
+/// Counts of a walk: nodes tested and triangles tested
+/// (`docs/TRACING.md`'s per-ray statistics); `()` counts nothing.
+pub(crate) trait Tally {
+    /// A node's children were tested.
+    fn node(&self);
+    /// The triangles of `mask` were tested.
+    fn triangles(&self, mask: u32);
+}
+
+impl Tally for () {
+    #[inline(always)]
+    fn node(&self) {}
+    #[inline(always)]
+    fn triangles(&self, _: u32) {}
 }
 
 /// The CPU backend.
@@ -80,10 +134,12 @@ impl CpuTracer {
     /// Builds the BVH over the scene's triangles.
     #[must_use]
     pub fn new(scene: &Prepared) -> Self {
-        let bvh = (!scene.triangles.is_empty()).then(|| {
-            let (aabbs, params) = bvh_input(scene);
-            build_cwbvh(&aabbs, params, &mut std::time::Duration::default())
-        });
+        Self::with_params(scene, bvh_input(scene).1)
+    }
+
+    /// [`CpuTracer::new`] with the BVH built with `params` ([`build_bvh`]).
+    pub(crate) fn with_params(scene: &Prepared, params: obvhs::BvhBuildParams) -> Self {
+        let bvh = (!scene.triangles.is_empty()).then(|| build_bvh(scene, params));
         let ordered: Vec<[Vec3A; 3]> = bvh
             .as_ref()
             .map(|b| b.primitive_indices.iter().map(|&i| scene.triangles[i as usize]).collect())
@@ -104,15 +160,16 @@ impl CpuTracer {
     /// are found, and ties in `t` go to the smaller triangle. Each node's
     /// leaf triangles are tested eight at a time ([`TriangleLanes::block`],
     /// [`Shear::hit`]'s arithmetic per lane), and the best one's
-    /// barycentrics are kept from its block, not recomputed (the same
-    /// [`Hit`] as [`triangle_hit`]'s, to the bit).
+    /// barycentric numerators are kept from its block, not recomputed, and
+    /// divided once the walk ends (the same [`Hit`] as [`triangle_hit`]'s,
+    /// to the bit).
     pub(crate) fn closest(&self, l: &Line) -> Option<Hit> {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: `self.avx2` came from `has_avx2()`.
             return unsafe { self.closest_avx2(l) };
         }
-        self.closest_with::<false>(l)
+        self.closest_with::<false>(l, &())
     }
 
     /// [`CpuTracer::closest`] compiled for AVX2, the walk, the triangle
@@ -123,21 +180,21 @@ impl CpuTracer {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     unsafe fn closest_avx2(&self, l: &Line) -> Option<Hit> {
-        self.closest_with::<true>(l)
+        self.closest_with::<true>(l, &())
     }
 
     #[inline(always)]
-    fn closest_with<const AVX2: bool>(&self, l: &Line) -> Option<Hit> {
+    fn closest_with<const AVX2: bool>(&self, l: &Line, tally: &impl Tally) -> Option<Hit> {
         if let Some(s) = &self.scene.sphere {
             return sphere_hit(s, l);
         }
         let bvh = self.bvh.as_ref()?;
         let (shear, dir) = Shear::of(l);
         let mut best: Option<(f32, u32)> = None;
-        let mut barycentric = [0.0f32; 2];
+        let mut numerators = [0.0f32; 3];
         let ray = Ray::new(Vec3A::from(l.origin), dir, l.tmin, l.tmax);
         let group = |first, mask, tmax: &mut f32| {
-            self.blocks::<AVX2>(&shear, l, first, mask, |block, base| {
+            self.blocks::<AVX2>(&shear, l, first, mask, tally, |block, base| {
                 let mut h = block.hit;
                 while h != 0 {
                     let i = h.trailing_zeros() as usize;
@@ -146,7 +203,7 @@ impl CpuTracer {
                     let tri = bvh.primitive_indices[base + i];
                     if before(t, tri, best) {
                         best = Some((t, tri));
-                        barycentric = block.barycentric(i);
+                        numerators = block.numerators(i);
                     }
                     if t < *tmax {
                         *tmax = t;
@@ -156,7 +213,7 @@ impl CpuTracer {
             })
         };
         // SAFETY: `AVX2` is true only in `closest_avx2`, entered after `has_avx2()`.
-        unsafe { node8::walk_groups::<AVX2, _>(bvh, &ray, group) };
+        unsafe { node8::walk_groups::<AVX2, _>(bvh, &ray, tally, group) };
         best.map(|(t, tri)| {
             let n = self.scene.normals[tri as usize];
             Hit {
@@ -164,7 +221,7 @@ impl CpuTracer {
                 patch: self.scene.triangle_patch[tri as usize],
                 primitive: tri,
                 cos: n.dot(dir),
-                barycentric,
+                barycentric: barycentric(numerators),
                 normal: n.into(),
             }
         })
@@ -178,7 +235,7 @@ impl CpuTracer {
             // SAFETY: `self.avx2` came from `has_avx2()`.
             return unsafe { self.any_avx2(l) };
         }
-        self.any_with::<false>(l)
+        self.any_with::<false>(l, &())
     }
 
     /// [`CpuTracer::any`] compiled for AVX2.
@@ -188,11 +245,11 @@ impl CpuTracer {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     unsafe fn any_avx2(&self, l: &Line) -> bool {
-        self.any_with::<true>(l)
+        self.any_with::<true>(l, &())
     }
 
     #[inline(always)]
-    fn any_with<const AVX2: bool>(&self, l: &Line) -> bool {
+    fn any_with<const AVX2: bool>(&self, l: &Line, tally: &impl Tally) -> bool {
         if let Some(s) = &self.scene.sphere {
             return sphere_hit(s, l).is_some();
         }
@@ -201,11 +258,11 @@ impl CpuTracer {
         let mut hit = false;
         let ray = Ray::new(Vec3A::from(l.origin), dir, l.tmin, l.tmax);
         let group = |first, mask, _: &mut f32| {
-            hit = self.blocks::<AVX2>(&shear, l, first, mask, |block, _| block.hit != 0);
+            hit = self.blocks::<AVX2>(&shear, l, first, mask, tally, |block, _| block.hit != 0);
             hit
         };
         // SAFETY: `AVX2` is true only in `any_avx2`, entered after `has_avx2()`.
-        unsafe { node8::walk_groups::<AVX2, _>(bvh, &ray, group) };
+        unsafe { node8::walk_groups::<AVX2, _>(bvh, &ray, tally, group) };
         hit
     }
 
@@ -220,6 +277,7 @@ impl CpuTracer {
         l: &Line,
         first: u32,
         mask: u32,
+        tally: &impl Tally,
         mut each: impl FnMut(&Block, usize) -> bool,
     ) -> bool {
         let mut m = mask;
@@ -228,6 +286,7 @@ impl CpuTracer {
             let lanes = (m >> (b * BLOCK as u32)) & 0xff;
             m &= !(0xff << (b * BLOCK as u32));
             let base = first as usize + (b as usize) * BLOCK;
+            tally.triangles(lanes);
             // SAFETY: `AVX2` is true only in the `*_avx2` callers, entered after `has_avx2()`.
             let block = unsafe { self.lanes.block::<AVX2>(&self.ordered, shear, base, lanes, l.tmin, l.tmax) };
             if each(&block, base) {
@@ -480,6 +539,155 @@ mod tests {
             }
             let ns = |s: f64| s / n as f64 * 1e9;
             eprintln!("{spec}: single walk {:.1} ns/line, interleaved {:.1} ns/line", ns(single), ns(interleaved));
+        }
+    }
+
+    /// A [`Tally`] that counts.
+    #[derive(Default)]
+    struct Counts {
+        nodes: std::cell::Cell<u64>,
+        triangles: std::cell::Cell<u64>,
+    }
+
+    impl Tally for Counts {
+        fn node(&self) {
+            self.nodes.set(self.nodes.get() + 1);
+        }
+        fn triangles(&self, mask: u32) {
+            self.triangles.set(self.triangles.get() + u64::from(mask.count_ones()));
+        }
+    }
+
+    /// A tracer that records the lines a render asks about.
+    struct Recorder {
+        inner: CpuTracer,
+        closest: std::sync::Mutex<Vec<Line>>,
+        shadow: std::sync::Mutex<Vec<Line>>,
+    }
+
+    impl Tracer for Recorder {
+        fn name(&self) -> &'static str {
+            "recorder"
+        }
+        fn trace_all(&self, lines: &[Line], out: &mut CrossingBuffer) -> Result<(), BackendError> {
+            self.inner.trace_all(lines, out)
+        }
+        fn closest_hit(&self, lines: &[Line], out: &mut Vec<Option<Hit>>) -> Result<(), BackendError> {
+            self.closest.lock().unwrap().extend_from_slice(lines);
+            self.inner.closest_hit(lines, out)
+        }
+        fn occluded(&self, lines: &[Line], out: &mut Vec<bool>) -> Result<(), BackendError> {
+            self.shadow.lock().unwrap().extend_from_slice(lines);
+            self.inner.occluded(lines, out)
+        }
+    }
+
+    /// The rays of a 64², 16-spp render of `spec` (seed 1, one thread):
+    /// closest-hit and shadow rays, in the order the renderer asks.
+    fn render_rays(spec: &str) -> (Prepared, Vec<Line>, Vec<Line>) {
+        use crate::render::{Job, Sampling, Shading, render, views};
+        let scene = built_in(spec).unwrap();
+        let p = Prepared::new(&scene);
+        let shading = Shading::new(&scene, &p).unwrap();
+        let camera = views::default_camera(&scene);
+        let rec = Recorder { inner: CpuTracer::new(&p), closest: Default::default(), shadow: Default::default() };
+        let job = Job {
+            tracer: &rec,
+            scene: &scene,
+            prepared: &p,
+            shading: &shading,
+            camera: &camera,
+            size: (64, 64),
+            seed: 1,
+            sampling: &Sampling::Uniform(16),
+            maps: None,
+            rows: None,
+            time_budget: None,
+        };
+        rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| render(&job, &|_, _| {})).unwrap();
+        (p, rec.closest.into_inner().unwrap(), rec.shadow.into_inner().unwrap())
+    }
+
+    /// Per-ray statistics (nodes and triangles tested by the single-ray
+    /// walks) and trace times of a render's rays for BVHs built with
+    /// several obvhs parameter sets, whose answers must all be the
+    /// default's: the table of `docs/TRACING.md`, run with `--release
+    /// --ignored --nocapture`.
+    #[test]
+    #[ignore = "timing"]
+    fn walk_statistics() {
+        use obvhs::BvhBuildParams;
+        use obvhs::ploc::{PlocSearchDistance, SortPrecision};
+        let base = bvh_input(&Prepared::new(&built_in("cube-enclosure:1").unwrap())).1;
+        let mut configs: Vec<(&str, BvhBuildParams)> = vec![("default", base)];
+        configs.push(("pre_split", BvhBuildParams { pre_split: true, ..base }));
+        configs.push(("leaf 1", BvhBuildParams { max_prims_per_leaf: 1, ..base }));
+        configs.push(("leaf 2", BvhBuildParams { max_prims_per_leaf: 2, ..base }));
+        configs.push(("reinsert 1.0", BvhBuildParams { reinsertion_batch_ratio: 1.0, ..base }));
+        configs.push(("ploc high", BvhBuildParams { ploc_search_distance: PlocSearchDistance::High, ..base }));
+        configs.push(("ploc very high", BvhBuildParams { ploc_search_distance: PlocSearchDistance::VeryHigh, ..base }));
+        configs.push(("sort u128", BvhBuildParams { sort_precision: SortPrecision::U128, ..base }));
+        let slow = BvhBuildParams { search_depth_threshold: 0, ..BvhBuildParams::very_slow_build() };
+        configs.push(("very slow, sdt 0", slow));
+        configs.push(("very slow, no split", BvhBuildParams { pre_split: false, ..slow }));
+        configs.push((
+            "pre_split, reinsert 1.0",
+            BvhBuildParams { pre_split: true, reinsertion_batch_ratio: 1.0, ..base },
+        ));
+        for spec in ["mirror-room", "cornell-box"] {
+            let (p, closest, shadow) = render_rays(spec);
+            eprintln!("{spec}: {} closest-hit rays, {} shadow rays", closest.len(), shadow.len());
+            let mut expect: Option<(Vec<Option<Hit>>, Vec<bool>)> = None;
+            for (name, params) in &configs {
+                let clock = std::time::Instant::now();
+                let t = CpuTracer::with_params(&p, *params);
+                let build = clock.elapsed().as_secs_f64();
+                let (c, s) = (Counts::default(), Counts::default());
+                let mut hits: Vec<Option<Hit>> = closest.iter().map(|l| t.closest_with::<false>(l, &c)).collect();
+                let blocked: Vec<bool> = shadow.iter().map(|l| t.any_with::<false>(l, &s)).collect();
+                // The batch calls, as the renderer makes them (packets included): best of 5.
+                let (mut tc, mut ts) = (f64::MAX, f64::MAX);
+                for _ in 0..5 {
+                    let clock = std::time::Instant::now();
+                    for chunk in closest.chunks(1024) {
+                        t.closest_hit(chunk, &mut Vec::new()).unwrap();
+                    }
+                    tc = tc.min(clock.elapsed().as_secs_f64());
+                    let clock = std::time::Instant::now();
+                    for chunk in shadow.chunks(1024) {
+                        t.occluded(chunk, &mut Vec::new()).unwrap();
+                    }
+                    ts = ts.min(clock.elapsed().as_secs_f64());
+                }
+                let mut batch = Vec::new();
+                for chunk in closest.chunks(1024) {
+                    let mut out = Vec::new();
+                    t.closest_hit(chunk, &mut out).unwrap();
+                    batch.extend(out);
+                }
+                assert_eq!(batch, hits, "{spec} {name}: batch and single walks differ");
+                let bvh = t.bvh.as_ref().unwrap();
+                let per = |x: &std::cell::Cell<u64>, n: usize| x.get() as f64 / n as f64;
+                eprintln!(
+                    "{spec} | {name} | build {:.1} ms, {} nodes, {} prims | closest {:.2} nodes {:.2} tris {:.1} ns | shadow {:.2} nodes {:.2} tris {:.1} ns",
+                    build * 1e3,
+                    bvh.nodes.len(),
+                    bvh.primitive_indices.len(),
+                    per(&c.nodes, closest.len()),
+                    per(&c.triangles, closest.len()),
+                    tc / closest.len() as f64 * 1e9,
+                    per(&s.nodes, shadow.len()),
+                    per(&s.triangles, shadow.len()),
+                    ts / shadow.len() as f64 * 1e9,
+                );
+                match &expect {
+                    None => expect = Some((std::mem::take(&mut hits), blocked)),
+                    Some((h, b)) => {
+                        assert!(*h == hits, "{spec} {name}: closest hits differ");
+                        assert!(*b == blocked, "{spec} {name}: occlusion differs");
+                    }
+                }
+            }
         }
     }
 

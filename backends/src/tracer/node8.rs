@@ -20,6 +20,13 @@ use glam::{UVec2, Vec3A};
 use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::ray::Ray;
+use std::mem::MaybeUninit;
+
+use super::cpu::Tally;
+
+/// Depth of the traversal stack: obvhs's (`TRAVERSAL_STACK_SIZE`, private
+/// there; its BVH validation keeps trees shallower).
+const STACK: usize = 32;
 
 /// obvhs's near cut-off: children nearer than this along the ray are culled
 /// (`obvhs::cwbvh::node::EPSILON`, private there; see `docs/TRACING.md`).
@@ -140,11 +147,28 @@ pub(crate) fn traverse<F: FnMut(u32, &mut f32) -> bool>(bvh: &CwBvh, ray: &Ray, 
     walk::<false, F>(bvh, ray, prim);
 }
 
+/// Asks for the cache lines of `node`'s internal children (adjacent in
+/// `bvh.nodes`): the walk visits one next and pushes the others, whose
+/// loads would otherwise wait until they are popped.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn prefetch_children(bvh: &CwBvh, node: &CwBvhNode) {
+    use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+    let first = bvh.nodes.as_ptr().wrapping_add(node.child_base_idx as usize).cast::<i8>();
+    let bytes = node.imask.count_ones() as usize * size_of::<CwBvhNode>();
+    for offset in (0..bytes).step_by(64) {
+        // SAFETY: a prefetch is only a hint and never faults, whatever the
+        // address; the pointer is formed with `wrapping_add`, never read.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>(first.wrapping_add(offset)) };
+    }
+}
+
 /// [`walk`] by primitive groups: `group(first, mask, &mut tmax)` gets all
 /// the candidates a node's leaf children hold at once (primitive
 /// `first + i` for each bit `i` of `mask`, below 24), in the order obvhs's
 /// `traverse!` reaches them; the same nodes as [`walk`] for the same
-/// `tmax` updates. Returns `true` from `group` to end the walk.
+/// `tmax` updates. Returns `true` from `group` to end the walk. `tally`
+/// counts the nodes tested.
 ///
 /// # Safety
 /// `AVX2` (the 8-lane node test) only where the CPU has AVX2 ([`has_avx2`]).
@@ -152,49 +176,66 @@ pub(crate) fn traverse<F: FnMut(u32, &mut f32) -> bool>(bvh: &CwBvh, ray: &Ray, 
 pub(super) unsafe fn walk_groups<const AVX2: bool, F: FnMut(u32, u32, &mut f32) -> bool>(
     bvh: &CwBvh,
     ray: &Ray,
+    tally: &impl Tally,
     mut group: F,
 ) {
-    use obvhs::faststack::FastStack;
     let mut r = *ray;
-    let mut state = bvh.new_traversal(ray.direction);
+    let oct_inv4 = bvh.new_traversal(ray.direction).oct_inv4;
     // obvhs's `traverse!`, with its inner loop over one primitive group
-    // handed to `group` whole.
+    // handed to `group` whole, and its traversal stack (`StackStack`, the
+    // same depth and the same overflow rule) left uninitialised instead of
+    // zeroing its 256 bytes for every ray.
+    let mut stack = [MaybeUninit::<UVec2>::uninit(); STACK];
+    let mut depth = 0usize;
+    let mut current_group = if bvh.nodes.is_empty() { UVec2::ZERO } else { UVec2::new(0, 0x8000_0000) };
+    let mut primitive_group = UVec2::ZERO;
     loop {
-        if state.primitive_group.y != 0 && group(state.primitive_group.x, state.primitive_group.y, &mut r.tmax) {
+        if primitive_group.y != 0 && group(primitive_group.x, primitive_group.y, &mut r.tmax) {
             return;
         }
-        state.primitive_group = UVec2::ZERO;
-        if state.current_group.y & 0xff00_0000 != 0 {
-            let hits_imask = state.current_group.y;
+        primitive_group = UVec2::ZERO;
+        if current_group.y & 0xff00_0000 != 0 {
+            let hits_imask = current_group.y;
             let child_index_offset = obvhs::cwbvh::firstbithigh(hits_imask);
-            let child_index_base = state.current_group.x;
-            state.current_group.y &= !(1u32 << child_index_offset);
-            if state.current_group.y & 0xff00_0000 != 0 {
-                state.stack.push(state.current_group);
+            let child_index_base = current_group.x;
+            current_group.y &= !(1u32 << child_index_offset);
+            if current_group.y & 0xff00_0000 != 0 {
+                // As `StackStack::push`: a full stack overwrites its top.
+                stack[depth] = MaybeUninit::new(current_group);
+                depth = (depth + 1).min(STACK - 1);
             }
-            let slot_index = (child_index_offset - 24) ^ (state.oct_inv4 & 0xff);
+            let slot_index = (child_index_offset - 24) ^ (oct_inv4 & 0xff);
             let relative_index = (hits_imask & !(0xffff_ffffu32 << slot_index)).count_ones();
             let node = &bvh.nodes[(child_index_base + relative_index) as usize];
             #[cfg(target_arch = "x86_64")]
             let hitmask = if AVX2 {
                 // SAFETY: `AVX2` is true only where the CPU has AVX2
                 // (this function's contract).
-                unsafe { intersect8(node, &r, state.oct_inv4) }
+                unsafe { intersect8(node, &r, oct_inv4) }
             } else {
-                node.intersect_ray(&r, state.oct_inv4)
+                node.intersect_ray(&r, oct_inv4)
             };
             #[cfg(not(target_arch = "x86_64"))]
-            let hitmask = node.intersect_ray(&r, state.oct_inv4);
-            state.current_group = UVec2::new(node.child_base_idx, (hitmask & 0xff00_0000) | u32::from(node.imask));
-            state.primitive_group = UVec2::new(node.primitive_base_idx, hitmask & 0x00ff_ffff);
+            let hitmask = node.intersect_ray(&r, oct_inv4);
+            tally.node();
+            #[cfg(target_arch = "x86_64")]
+            if AVX2 && (hitmask >> 24).count_ones() > 1 {
+                prefetch_children(bvh, node);
+            }
+            current_group = UVec2::new(node.child_base_idx, (hitmask & 0xff00_0000) | u32::from(node.imask));
+            primitive_group = UVec2::new(node.primitive_base_idx, hitmask & 0x00ff_ffff);
         } else {
-            state.current_group = UVec2::ZERO;
+            current_group = UVec2::ZERO;
         }
-        if state.primitive_group.y == 0 && (state.current_group.y & 0xff00_0000) == 0 {
-            if state.stack.is_empty() {
+        if primitive_group.y == 0 && (current_group.y & 0xff00_0000) == 0 {
+            if depth == 0 {
                 return;
             }
-            state.current_group = state.stack.pop_fast();
+            depth -= 1;
+            // SAFETY: every slot below `depth` was written by a push since
+            // this walk began (a push writes `stack[depth]` before raising
+            // `depth`, and a pop lowers it first).
+            current_group = unsafe { stack[depth].assume_init() };
         }
     }
 }

@@ -274,13 +274,22 @@ pub(crate) struct Block {
 }
 
 impl Block {
-    /// Barycentric weights of vertices 1 and 2 of lane `i`'s triangle:
-    /// [`Shear::hit_barycentric`]'s, to the bit.
+    /// Lane `i`'s barycentric numerators and determinant: [`barycentric`]
+    /// of them is [`Shear::hit_barycentric`]'s weights, to the bit (a
+    /// closest-hit walk divides only for its final hit).
     #[inline]
-    pub(crate) fn barycentric(&self, i: usize) -> [f32; 2] {
-        [self.w1[i] / self.det[i], self.w2[i] / self.det[i]]
+    pub(crate) fn numerators(&self, i: usize) -> [f32; 3] {
+        [self.w1[i], self.w2[i], self.det[i]]
     }
+}
 
+/// Barycentric weights of vertices 1 and 2 from [`Block::numerators`].
+#[inline]
+pub(crate) fn barycentric([w1, w2, det]: [f32; 3]) -> [f32; 2] {
+    [w1 / det, w2 / det]
+}
+
+impl Block {
     /// Lane `i` from the scalar test (its exact-zero re-evaluation included).
     #[inline]
     fn set_scalar(&mut self, i: usize, shear: &Shear, v: &[Vec3A; 3], tmin: f32, tmax: f32) {
@@ -493,7 +502,7 @@ mod tests {
                                 crossed += 1;
                                 assert_eq!(b.t[k].to_bits(), t.to_bits());
                                 let (_, bary) = shear.hit_barycentric(&tris[first + k]).unwrap();
-                                assert_eq!(b.barycentric(k).map(f32::to_bits), bary.map(f32::to_bits));
+                                assert_eq!(barycentric(b.numerators(k)).map(f32::to_bits), bary.map(f32::to_bits));
                             }
                         }
                     }

@@ -9,16 +9,18 @@ dependencies. Needs `pip install meshoptimizer fast-simplification numpy`
 (bench/simplify_table.sh makes a virtual environment) and a built `itgfx`
 (release recommended).
 
-For every mesh and target: itgfx simplifies by each metric (one --sweep
-run each, so the time of a target is the time to reach it), writes the
-welded and repaired input it started from (input.obj); meshoptimizer
-simplifies that same input.obj to the same triangle count (target_error 1,
-no error bound: the count decides), and `itgfx simplify --evaluate` measures
-QEM's result with the same code as the others: image RMSE over 24 views
+For every mesh and target: itgfx simplifies by each metric and placement
+(one --sweep run each, so the time of a target is the time to reach it),
+writes the welded and repaired input it started from (input.obj);
+meshoptimizer simplifies that same input.obj to the same triangle count
+(target_error 1, no error bound: the count decides), fast-simplification
+too (target_reduction from the count), and `itgfx simplify --evaluate`
+measures the peers' results (faces with no area left out by its reader)
+with the same code as the others: image RMSE over 24 views
 none of the channel's viewpoints, silhouette RMSE, symmetric Hausdorff and
 mean distance (units of the bounding box's half diagonal).
 
-Usage: simplify_table.py ITGFX OUTDIR MESH.obj... [--targets 10%,2%] [--viewpoints 42]
+Usage: simplify_table.py ITGFX OUTDIR MESH.obj... [--targets 10%,2%] [--viewpoints 42] [--runs vmi/quadric,...]
 Prints a Markdown table and writes OUTDIR/simplify_table.json.
 """
 
@@ -33,9 +35,11 @@ import numpy as np
 import meshoptimizer
 import fast_simplification
 
-# itgfx's collapse costs: per-view VMI, viewpoint entropy, the channel's
-# I(V;O), per-view KL distance to the actual areas.
-METRICS = ["vmi", "ve", "ivo", "vkl"]
+# itgfx's runs, METRIC/PLACEMENT: collapse costs per-view VMI, viewpoint
+# entropy, the channel's I(V;O), per-view KL distance to the actual areas;
+# placements quadric (the quadric's minimiser), best (least viewpoint cost
+# of a few positions), blend, endpoint (half-edge collapses, the paper's).
+RUNS = "vmi/blend,vkl/blend,vmi/quadric,vmi/endpoint,ve/endpoint"
 PEERS = ["qem", "fqms"]
 
 
@@ -52,20 +56,20 @@ def read_obj(path):
     return np.array(vs, dtype=np.float32), np.array(fs, dtype=np.uint32).reshape(-1)
 
 
-def write_obj(path, v, idx):
-    """Writes QEM's triangles, leaving out those with no area (itgfx's
-    reader refuses them); returns how many were left out."""
+def write_obj(path, v, idx, what):
+    """Writes a peer's triangles as they are (`itgfx simplify --evaluate`
+    leaves out those with no area, with a warning); returns how many have
+    no area."""
     tris = idx.reshape(-1, 3)
     p = v.astype(np.float64)
     area2 = np.linalg.norm(np.cross(p[tris[:, 1]] - p[tris[:, 0]], p[tris[:, 2]] - p[tris[:, 0]]), axis=1)
-    keep = area2 > 0.0
     with open(path, "w") as f:
-        f.write("# meshoptimizer simplify (QEM)\n")
+        f.write(f"# {what}\n")
         for q in v:
             f.write(f"v {float(q[0])!r} {float(q[1])!r} {float(q[2])!r}\n")
-        for t in tris[keep]:
+        for t in tris:
             f.write(f"f {t[0] + 1} {t[1] + 1} {t[2] + 1}\n")
-    return int((~keep).sum())
+    return int((area2 <= 0.0).sum())
 
 
 def itgfx(exe, args, cache=None):
@@ -115,41 +119,44 @@ def main():
     ap.add_argument("meshes", nargs="+")
     ap.add_argument("--targets", default="10%,2%")
     ap.add_argument("--viewpoints", default="42")
+    ap.add_argument("--runs", default=RUNS, help="itgfx runs, METRIC/PLACEMENT,... (default %(default)s)")
     a = ap.parse_args()
+    methods = a.runs.split(",")
     os.makedirs(a.out, exist_ok=True)
     rows = []
     for mesh in a.meshes:
         name = os.path.splitext(os.path.basename(mesh))[0]
         runs = {}
-        for metric in METRICS:
-            d = os.path.join(a.out, name, metric)
-            runs[metric] = itgfx(
+        for m in methods:
+            metric, placement = m.split("/")
+            d = os.path.join(a.out, name, f"{metric}-{placement}")
+            runs[m] = itgfx(
                 a.itgfx,
-                ["simplify", mesh, "--sweep", a.targets, "--metric", metric, "--viewpoints", a.viewpoints,
-                 "--out", d, "--json"],
+                ["simplify", mesh, "--sweep", a.targets, "--metric", metric, "--placement", placement,
+                 "--viewpoints", a.viewpoints, "--out", d, "--json"],
                 cache=os.path.join(d, "run.json"),
             )
-        n = runs["vmi"]["triangles"]
-        inp = os.path.join(a.out, name, "vmi", "input.obj")
+        first = methods[0]
+        n = runs[first]["triangles"]
+        inp = os.path.join(a.out, name, first.replace("/", "-"), "input.obj")
         v, idx = read_obj(inp)
-        for k, res in enumerate(runs["vmi"]["results"]):
+        for k, res in enumerate(runs[first]["results"]):
             target = int(res["name"])
             q_idx, q_sec, q_cpu, q_err = qem(v, idx, target)
             qobj = os.path.join(a.out, name, f"qem_{target}.obj")
-            dropped = write_obj(qobj, v, q_idx)
+            zero = write_obj(qobj, v, q_idx, "meshoptimizer simplify (QEM)")
             q = itgfx(a.itgfx, ["simplify", mesh, "--evaluate", qobj, "--out", os.path.join(a.out, name, "qem"),
                                 "--json"])["results"][0]
             row = {"mesh": name, "triangles_in": n, "target": target}
-            for metric in METRICS:
-                row[metric] = runs[metric]["results"][k]
-            row["qem"] = {**q, "seconds": q_sec, "cpu_seconds": q_cpu, "meshopt_error": q_err,
-                          "zero_area_dropped": dropped}
+            for m in methods:
+                row[m] = runs[m]["results"][k]
+            row["qem"] = {**q, "seconds": q_sec, "cpu_seconds": q_cpu, "meshopt_error": q_err, "zero_area": zero}
             f_v, f_idx, f_sec, f_cpu = fqms(v, idx, target)
             fobj = os.path.join(a.out, name, f"fqms_{target}.obj")
-            f_dropped = write_obj(fobj, f_v, f_idx)
+            f_zero = write_obj(fobj, f_v, f_idx, "fast-simplification (FQMS)")
             fq = itgfx(a.itgfx, ["simplify", mesh, "--evaluate", fobj, "--out", os.path.join(a.out, name, "fqms"),
                                  "--json"])["results"][0]
-            row["fqms"] = {**fq, "seconds": f_sec, "cpu_seconds": f_cpu, "zero_area_dropped": f_dropped}
+            row["fqms"] = {**fq, "seconds": f_sec, "cpu_seconds": f_cpu, "zero_area": f_zero}
             rows.append(row)
     with open(os.path.join(a.out, "simplify_table.json"), "w") as f:
         json.dump(rows, f, indent=1)
@@ -157,9 +164,9 @@ def main():
           "| mean distance | wall s | CPU s |")
     print("|---|---|---|---:|---:|---:|---:|---:|---:|---:|")
     for r in rows:
-        for method in METRICS + PEERS:
+        for method in methods + PEERS:
             x = r[method]
-            best = min(r[m]["image_rmse"] for m in METRICS + PEERS)
+            best = min(r[m]["image_rmse"] for m in methods + PEERS)
             rmse = f"{x['image_rmse']:.4f}"
             if x["image_rmse"] == best:
                 rmse = f"**{rmse}**"

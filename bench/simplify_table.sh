@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Viewpoint-driven simplification (VMI, VE, IVO, VKL) against QEM (meshoptimizer
+# Viewpoint-driven simplification (VMI, VE, VKL; placed vertex or half-edge) against QEM (meshoptimizer
 # and fast-simplification) on the shared meshes: builds itgfx (release), installs
 # the peers into a virtual environment outside the workspace, runs
 # bench/simplify_table.py.

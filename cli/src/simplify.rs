@@ -7,7 +7,7 @@ use std::time::Instant;
 use clap::Args;
 use glam::DVec3;
 use itgfx_backends::simplify::metrics::{Render, evaluation_directions, image_error, render, surface_distance};
-use itgfx_backends::simplify::{IndexedMesh, Metric, Settings, check_memory, simplify};
+use itgfx_backends::simplify::{IndexedMesh, Metric, Placement, Settings, check_memory, simplify};
 use itgfx_backends::tracer::Prepared;
 use itgfx_backends::viewpoint::icosphere;
 
@@ -44,6 +44,18 @@ pub struct SimplifyOptions {
     #[arg(long, value_name = "vmi|ve|ivo|vkl", default_value = "vmi", value_parser = ["vmi", "ve", "ivo", "vkl"],
           conflicts_with = "evaluate")]
     pub metric: String,
+    /// Where a collapse puts the vertex it keeps: blend = at the quadric error's minimiser
+    /// (Garland-Heckbert), collapses ordered by the viewpoint cost + LAMBDA x the quadric error
+    /// per unit of surface area; quadric = the same vertex, ordered by the viewpoint cost alone;
+    /// best = the position of least viewpoint cost among that minimiser, the midpoint and the two
+    /// ends; endpoint = half-edge collapses (the vertex stays where it was, the papers' form)
+    #[arg(long, value_name = "blend|quadric|best|endpoint", default_value = "blend",
+          value_parser = ["blend", "quadric", "best", "endpoint"], conflicts_with = "evaluate")]
+    pub placement: String,
+    /// Weight of the quadric error in --placement blend's order (chosen on a torus and a
+    /// reduced bunny, docs/SIMPLIFY.md)
+    #[arg(long, value_name = "LAMBDA", default_value = "10000", value_parser = lambda, conflicts_with = "evaluate")]
+    pub lambda: f64,
     /// Viewpoints of the channel: 12, 42, 162, 642 or 2562 (a subdivided icosahedron)
     #[arg(long, value_name = "N", default_value = "42", value_parser = viewpoint_count)]
     pub viewpoints: u32,
@@ -78,6 +90,13 @@ pub struct SimplifyOptions {
     #[command(flatten)]
     #[allow(missing_docs)]
     pub common: Common,
+}
+
+fn lambda(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
+        _ => Err("must be a finite number >= 0".into()),
+    }
 }
 
 fn eval_views(s: &str) -> Result<usize, String> {
@@ -142,6 +161,34 @@ fn targets(o: &SimplifyOptions, n: usize) -> Result<Vec<usize>, CliError> {
     t.sort_unstable_by(|a, b| b.cmp(a));
     t.dedup();
     Ok(t)
+}
+
+/// The mesh `--evaluate` measures, in the input's frame, repaired as the
+/// input is ([`IndexedMesh::repair`]); an OBJ's faces with no area (other
+/// simplifiers leave some) are left out by the reader instead of refused.
+/// What was dropped or repaired is said in one line on stderr.
+fn load_evaluated(f: &str, centre: DVec3, scale: f64) -> Result<IndexedMesh, CliError> {
+    let path = Path::new(f);
+    let is_obj = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    let scene = if is_obj && path.is_file() {
+        let s = itgfx_backends::obj::load_obj_dropping_degenerate(path).map_err(|e| CliError::usage(e.to_string()))?;
+        for w in &s.warnings {
+            eprintln!("itgfx: warning: {w}");
+        }
+        s
+    } else {
+        load_scene(f, 1)?
+    };
+    let mut mesh = IndexedMesh::weld_any(&scene.triangles, centre, scale)
+        .map_err(|e| CliError::usage(format!("--evaluate {f}: {e}")))?;
+    let repairs = mesh.repair();
+    if mesh.faces.is_empty() {
+        return Err(CliError::usage(format!("--evaluate {f}: no triangle with an area")));
+    }
+    if repairs.any() {
+        eprintln!("itgfx: warning: --evaluate {f}: repaired: {repairs}");
+    }
+    Ok(mesh)
 }
 
 /// A grey picture of one render.
@@ -230,6 +277,12 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
         "vkl" => Metric::Vkl,
         _ => Metric::Vmi,
     };
+    let placement = match o.placement.as_str() {
+        "endpoint" => Placement::Endpoint,
+        "best" => Placement::Best,
+        "quadric" => Placement::Quadric,
+        _ => Placement::Blend(o.lambda),
+    };
     // Syntax first, before any file is read; the counts once the mesh is known.
     targets(o, usize::MAX)?;
     let scene = load_scene(&spec, 1)?;
@@ -245,10 +298,7 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
     let n = original.triangles();
     let wanted = targets(o, n)?;
     let evaluated = match &o.evaluate {
-        Some(f) => Some(
-            IndexedMesh::weld_any(&load_scene(f, 1)?.triangles, centre, scale)
-                .map_err(|e| CliError::usage(format!("--evaluate {f}: {e}")))?,
-        ),
+        Some(f) => Some(load_evaluated(f, centre, scale)?),
         None => None,
     };
     if o.evaluate.is_none() {
@@ -285,6 +335,7 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
         let dirs = icosphere(viewpoint_level(o.viewpoints));
         let settings = Settings {
             metric,
+            placement,
             directions: dirs,
             distance: o.distance,
             backend: o.tracing.backend,
@@ -292,12 +343,15 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
             tolerance: o.tolerance,
             max_subdivision: o.max_subdivision,
             background: !o.no_background,
+            lazy: true,
         };
         let mut progress = Collapses::new();
         let outcome = simplify(&original, &wanted, &settings, &mut |d, t| progress.update(d, t))
             .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
         r.text("mode", "simplify")
             .text("metric", o.metric.clone())
+            .text("placement", o.placement.clone())
+            .maybe_real("lambda", matches!(placement, Placement::Blend(_)).then_some(o.lambda), None)
             .flag("background", !o.no_background)
             .count("viewpoints", u64::from(o.viewpoints));
         r.real("I_VO", in_base(outcome.initial_mutual_information), unit);
@@ -358,8 +412,9 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
         if o.evaluate.is_none() {
             let obj = out.join(format!("{stem}.obj"));
             let comment = format!(
-                "itgfx simplify --metric {} --viewpoints {}: {} of {} triangles",
+                "itgfx simplify --metric {} --placement {} --viewpoints {}: {} of {} triangles",
                 o.metric,
+                o.placement,
                 o.viewpoints,
                 mesh.triangles(),
                 n

@@ -101,15 +101,18 @@ pub fn read_limited(path: &Path, limit: u64) -> Result<Vec<u8>, SceneError> {
 pub fn load_obj(path: &Path) -> Result<Scene, SceneError> {
     let bytes = read_limited(path, MAX_OBJ_BYTES)?;
     let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
-    parse_obj(&path.display().to_string(), &bytes, |name| {
-        let p = dir.join(name);
-        let shown = p.display().to_string();
-        let bytes = read_limited(&p, MAX_MTL_BYTES).map_err(|e| match e {
-            SceneError::Obj { message, .. } => err(&shown, format!("mtllib {name}: {message}")),
-            other => other,
-        })?;
-        Ok((shown, bytes))
-    })
+    parse_obj(&path.display().to_string(), &bytes, |lib| mtl_file(&dir, lib))
+}
+
+/// The shown path and bytes of `mtllib` file `name` next to the OBJ in `dir`.
+fn mtl_file(dir: &Path, name: &str) -> Result<(String, Vec<u8>), SceneError> {
+    let p = dir.join(name);
+    let shown = p.display().to_string();
+    let bytes = read_limited(&p, MAX_MTL_BYTES).map_err(|e| match e {
+        SceneError::Obj { message, .. } => err(&shown, format!("mtllib {name}: {message}")),
+        other => other,
+    })?;
+    Ok((shown, bytes))
 }
 
 /// Most vertices read: three per triangle of the [`Limits::MAX_TRIANGLES`]
@@ -180,11 +183,36 @@ fn decode<'a>(path: &str, bytes: &'a [u8]) -> Result<&'a str, SceneError> {
 ///
 /// # Errors
 /// As [`load_obj`].
-#[allow(clippy::too_many_lines)]
 pub fn parse_obj(
     name: &str,
     bytes: &[u8],
+    mtl: impl FnMut(&str) -> Result<(String, Vec<u8>), SceneError>,
+) -> Result<Scene, SceneError> {
+    parse(name, bytes, mtl, false)
+}
+
+/// As [`load_obj`], but a face with no area is left out with a warning
+/// (`degenerate-face-dropped`, counted) instead of refusing the file, and
+/// the scene is not [validated](Scene::validate) for tiny triangles: for
+/// measuring another program's output as it is (`itgfx simplify
+/// --evaluate`; meshoptimizer's simplified meshes have such faces).
+///
+/// # Errors
+/// As [`load_obj`], faces with no area apart.
+pub fn load_obj_dropping_degenerate(path: &Path) -> Result<Scene, SceneError> {
+    let bytes = read_limited(path, MAX_OBJ_BYTES)?;
+    let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
+    parse(&path.display().to_string(), &bytes, |lib| mtl_file(&dir, lib), true)
+}
+
+/// [`parse_obj`], leaving faces with no area out where `drop_degenerate`
+/// (see [`load_obj_dropping_degenerate`]).
+#[allow(clippy::too_many_lines)]
+fn parse(
+    name: &str,
+    bytes: &[u8],
     mut mtl: impl FnMut(&str) -> Result<(String, Vec<u8>), SceneError>,
+    drop_degenerate: bool,
 ) -> Result<Scene, SceneError> {
     let text = decode(name, bytes)?;
     let mut warnings = Warnings::default();
@@ -311,6 +339,7 @@ pub fn parse_obj(
     if faces.is_empty() {
         return Err(err(name, "no faces (f lines) found".into()));
     }
+    Limits::check(name, triangles, patches)?;
     // From the vertices faces use: unused ones do not count for the scene's size.
     let k = rescale_exponent(indices.iter().map(|&i| verts[i as usize]));
     if k != 0 {
@@ -333,8 +362,15 @@ pub fn parse_obj(
                 .ok_or_else(|| err(name, format!("line {l}: usemtl {m:?}: no such material in the mtllib files")))?,
         };
         let poly: Vec<DVec3> = indices[face.start..face.start + face.len].iter().map(|&i| verts[i as usize]).collect();
-        let t =
-            polygon::triangulate(&poly).map_err(|m| err(name, format!("line {}: face {} {m}", face.line, f + 1)))?;
+        let t = match polygon::triangulate(&poly) {
+            Err(m) if drop_degenerate && m == polygon::DEGENERATE => {
+                warnings.add("degenerate-face-dropped", || {
+                    format!("{name}: line {}: face {} has no area: left out", face.line, f + 1)
+                });
+                continue;
+            }
+            t => t.map_err(|m| err(name, format!("line {}: face {} {m}", face.line, f + 1)))?,
+        };
         if t.deviation > polygon::PLANAR_TOLERANCE {
             warnings.add("non-planar-face", || {
                 format!(
@@ -351,7 +387,9 @@ pub fn parse_obj(
         *g += 1;
     }
     scene.warnings = warnings.finish();
-    scene.validate()?;
+    if !drop_degenerate {
+        scene.validate()?;
+    }
     Ok(scene)
 }
 

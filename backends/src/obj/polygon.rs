@@ -49,6 +49,9 @@ fn segments_meet(p1: DVec2, p2: DVec2, q1: DVec2, q2: DVec2) -> bool {
     on(q1, q2, p1, d1) || on(q1, q2, p2, d2) || on(p1, p2, q1, d3) || on(p1, p2, q2, d4)
 }
 
+/// The message of a polygon with no area.
+pub const DEGENERATE: &str = "is degenerate (zero area)";
+
 /// Triangulates `poly` (at least 3 vertices, finite coordinates).
 ///
 /// # Errors
@@ -62,13 +65,13 @@ pub fn triangulate(poly: &[DVec3]) -> Result<Triangulated, String> {
     let centre = poly.iter().copied().sum::<DVec3>() / n as f64;
     let radius = poly.iter().map(|p| (*p - centre).abs().max_element()).fold(0.0, f64::max);
     if !(radius > 0.0 && radius.is_finite()) {
-        return Err("is degenerate (zero area)".into());
+        return Err(DEGENERATE.into());
     }
     let q: Vec<DVec3> = poly.iter().map(|p| (*p - centre) / radius).collect();
     // Newell's normal: twice the vector area, exact for planar polygons.
     let newell: DVec3 = (0..n).map(|i| q[i].cross(q[(i + 1) % n])).sum();
     if !(newell.length() > 1e-12) {
-        return Err("is degenerate (zero area)".into());
+        return Err(DEGENERATE.into());
     }
     let normal = newell.normalize();
     let deviation = q.iter().map(|p| p.dot(normal).abs()).fold(0.0, f64::max);

@@ -1,11 +1,13 @@
-//! Half-edge collapses `u → v` on a manifold triangle mesh: the triangles
-//! around every vertex, the link condition, boundary rules and the
-//! fold-over test that keep the surface manifold and its triangles facing
-//! the way they did.
+//! Edge collapses `u → v` on a manifold triangle mesh, the kept vertex `v`
+//! left where it is (half-edge) or moved to a new position (full-edge):
+//! the triangles around every vertex, the link condition, boundary rules
+//! and the fold-over test that keep the surface manifold and its triangles
+//! facing the way they did, and each vertex's quadric ([`Quadric`]).
 
 use glam::DVec3;
 
 use super::mesh::IndexedMesh;
+use super::place::Quadric;
 
 /// Smallest cosine between a triangle's normal before and after a
 /// collapse: 0 refuses any triangle turned by more than 90°.
@@ -15,7 +17,7 @@ pub const MIN_NORMAL_COSINE: f64 = 0.0;
 /// per-triangle data can be updated in place.
 #[derive(Clone, Debug)]
 pub struct Dynamic {
-    /// Vertex positions (collapses move none).
+    /// Vertex positions (a full-edge collapse moves the vertex it keeps).
     pub positions: Vec<DVec3>,
     /// Triangles (a dead one keeps its last vertices).
     pub faces: Vec<[u32; 3]>,
@@ -25,15 +27,21 @@ pub struct Dynamic {
     pub around: Vec<Vec<u32>>,
     /// Living triangles.
     pub live: usize,
+    /// Quadric of each vertex: the area-weighted planes of the input's
+    /// triangles around it, summed over the vertices merged into it.
+    pub quadrics: Vec<Quadric>,
 }
 
-/// What a collapse `u → v` does to the triangles around `u`.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+/// What a collapse `u → v` does to the triangles around `u` and `v`.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Change {
     /// Triangles that contain both `u` and `v`: removed.
     pub removed: Vec<u32>,
-    /// Triangles around `u` that stay, `u` replaced by `v`.
+    /// Triangles around `u` that stay, `u` replaced by `v`, then (when `v`
+    /// moves) the triangles around `v` that stay.
     pub moved: Vec<u32>,
+    /// Where `v` ends up (its own position for a half-edge collapse).
+    pub position: DVec3,
 }
 
 impl Dynamic {
@@ -41,9 +49,12 @@ impl Dynamic {
     #[must_use]
     pub fn new(mesh: &IndexedMesh) -> Self {
         let mut around = vec![Vec::new(); mesh.positions.len()];
+        let mut quadrics = vec![Quadric::default(); mesh.positions.len()];
         for (f, t) in mesh.faces.iter().enumerate() {
+            let q = Quadric::of_triangle(&mesh.corners(f));
             for &v in t {
                 around[v as usize].push(f as u32);
+                quadrics[v as usize] = quadrics[v as usize] + q;
             }
         }
         Self {
@@ -52,6 +63,7 @@ impl Dynamic {
             alive: vec![true; mesh.faces.len()],
             around,
             live: mesh.faces.len(),
+            quadrics,
         }
     }
 
@@ -85,14 +97,16 @@ impl Dynamic {
         self.neighbours(u).into_iter().any(|w| self.shared(u, w).len() == 1)
     }
 
-    /// The triangles a collapse `u → v` removes and moves, or `None` when it
-    /// would break the surface: `u`, `v` not joined by an edge; the link
-    /// condition (the common neighbours of `u` and `v` are exactly the far
-    /// corners of the triangles on the edge); a boundary vertex `u` moved
-    /// off the boundary; two triangles made identical; a triangle left with
-    /// no area or turned past [`MIN_NORMAL_COSINE`]; fewer than 4 triangles.
+    /// The triangles a collapse `u → v` with `v` moved to `position`
+    /// removes and moves, or `None` when it would break the surface: `u`,
+    /// `v` not joined by an edge; the link condition (the common neighbours
+    /// of `u` and `v` are exactly the far corners of the triangles on the
+    /// edge); a boundary vertex `u` moved off the boundary, or a boundary
+    /// vertex moved at all by a full-edge collapse; two triangles made
+    /// identical; a triangle left with no area or turned past
+    /// [`MIN_NORMAL_COSINE`]; fewer than 4 triangles.
     #[must_use]
-    pub fn check(&self, u: u32, v: u32) -> Option<Change> {
+    pub fn check(&self, u: u32, v: u32, position: DVec3) -> Option<Change> {
         if u == v || self.around[u as usize].is_empty() || self.around[v as usize].is_empty() {
             return None;
         }
@@ -113,17 +127,27 @@ impl Dynamic {
         if removed.len() == 2 && self.on_boundary(u) {
             return None;
         }
-        let moved: Vec<u32> = self.around[u as usize].iter().copied().filter(|f| !removed.contains(f)).collect();
-        let pv = self.positions[v as usize];
-        for &f in &moved {
+        let placed = position != self.positions[v as usize];
+        if placed && (self.on_boundary(u) || self.on_boundary(v)) {
+            return None;
+        }
+        let mut moved: Vec<u32> = self.around[u as usize].iter().copied().filter(|f| !removed.contains(f)).collect();
+        let from_u = moved.len();
+        if placed {
+            moved.extend(self.around[v as usize].iter().copied().filter(|f| !removed.contains(f)));
+        }
+        for (i, &f) in moved.iter().enumerate() {
             let t = self.faces[f as usize];
             let p = t.map(|i| self.positions[i as usize]);
-            let q = t.map(|i| if i == u { pv } else { self.positions[i as usize] });
+            let q = self.moved_corners(f, u, v, position);
             let n0 = (p[1] - p[0]).cross(p[2] - p[0]);
             let n1 = (q[1] - q[0]).cross(q[2] - q[0]);
             let (l0, l1) = (n0.length(), n1.length());
             if l1 <= 1e-12 * l0.max(f64::MIN_POSITIVE) || n0.dot(n1) <= MIN_NORMAL_COSINE * l0 * l1 {
                 return None;
+            }
+            if i >= from_u {
+                continue;
             }
             // The moved triangle must not repeat one already around v.
             let (a, b) = match t.iter().position(|&i| i == u) {
@@ -141,10 +165,11 @@ impl Dynamic {
                 return None;
             }
         }
-        Some(Change { removed, moved })
+        Some(Change { removed, moved, position })
     }
 
-    /// Applies a checked collapse `u → v`.
+    /// Applies a checked collapse `u → v`: `v` moves to the change's
+    /// position and takes `u`'s quadric as well as its own.
     pub fn apply(&mut self, u: u32, v: u32, change: &Change) {
         for &f in &change.removed {
             self.alive[f as usize] = false;
@@ -154,20 +179,21 @@ impl Dynamic {
             }
         }
         for &f in &change.moved {
-            for w in &mut self.faces[f as usize] {
-                if *w == u {
-                    *w = v;
-                }
+            let t = &mut self.faces[f as usize];
+            if let Some(w) = t.iter_mut().find(|w| **w == u) {
+                *w = v;
+                self.around[v as usize].push(f);
             }
-            self.around[v as usize].push(f);
         }
         self.around[u as usize].clear();
+        self.positions[v as usize] = change.position;
+        self.quadrics[v as usize] = self.quadrics[v as usize] + self.quadrics[u as usize];
     }
 
-    /// The corners of triangle `f` after `u` moves onto `v`.
+    /// The corners of triangle `f` once `u` and `v` have merged at `position`.
     #[must_use]
-    pub fn moved_corners(&self, f: u32, u: u32, v: u32) -> [DVec3; 3] {
-        self.faces[f as usize].map(|i| self.positions[if i == u { v } else { i } as usize])
+    pub fn moved_corners(&self, f: u32, u: u32, v: u32, position: DVec3) -> [DVec3; 3] {
+        self.faces[f as usize].map(|i| if i == u || i == v { position } else { self.positions[i as usize] })
     }
 
     /// The corners of triangle `f`.
@@ -194,7 +220,7 @@ mod tests {
         'outer: while d.live > 8 {
             for u in 0..d.positions.len() as u32 {
                 for v in d.neighbours(u) {
-                    if let Some(c) = d.check(u, v) {
+                    if let Some(c) = d.check(u, v, d.positions[v as usize]) {
                         d.apply(u, v, &c);
                         done += 1;
                         let snap = d.snapshot();
@@ -219,7 +245,7 @@ mod tests {
         let d = Dynamic::new(&m);
         for u in 0..4 {
             for v in 0..4 {
-                assert!(d.check(u, v).is_none());
+                assert!(d.check(u, v, DVec3::ZERO).is_none());
             }
         }
     }

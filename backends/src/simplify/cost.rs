@@ -69,6 +69,9 @@ pub struct ViewState {
     pub background: bool,
     /// `a_o(v)` of triangle `o` from viewpoint `v` at `o · V + v`.
     pub a: Vec<f64>,
+    /// `a ln a` of each weight, same layout (kept, not recomputed per
+    /// proposal).
+    pub a_xlnx: Vec<f64>,
     /// Whole solid angle `Ω_o(v)` (visible or not), same layout; NaN where
     /// not yet needed (the triangle is hidden from `v`).
     pub omega: Vec<f64>,
@@ -109,12 +112,22 @@ pub struct ViewState {
 pub struct Proposal {
     /// `a_o(v)` of each moved triangle (`moved[i]` at `i · V + v`).
     pub a: Vec<f64>,
+    /// `a ln a` of those, same layout.
+    pub a_xlnx: Vec<f64>,
     /// `Ω_o(v)`, same layout (NaN where hidden).
     pub omega: Vec<f64>,
     /// Area of each moved triangle.
     pub areas: Vec<f64>,
     /// The cost.
     pub cost: f64,
+}
+
+/// `ln` of the columns a collapse touches ([`ViewState::column_logs`]).
+struct ColumnLogs {
+    /// Of the moved triangles' new columns.
+    new: Vec<f64>,
+    /// Of the moved, then the removed triangles' current columns.
+    old: Vec<f64>,
 }
 
 /// How one viewpoint's row changes when its object weight changes by `ds`
@@ -137,7 +150,7 @@ impl ViewState {
     /// Bytes needed for `faces` triangles and `views` viewpoints.
     #[must_use]
     pub fn bytes(faces: usize, views: usize) -> u64 {
-        2 * 8 * faces as u64 * views as u64 + 8 * (2 * faces + 5 * views) as u64
+        3 * 8 * faces as u64 * views as u64 + 8 * (2 * faces + 5 * views) as u64
     }
 
     /// Weights from a traced channel of the living triangles: channel patch
@@ -168,6 +181,7 @@ impl ViewState {
             eyes,
             background,
             a,
+            a_xlnx: vec![0.0; nf * nv],
             omega,
             object: vec![0.0; nv],
             bg,
@@ -201,6 +215,7 @@ impl ViewState {
     /// Recomputes every running sum from the weights.
     pub fn resum(&mut self) {
         let nv = self.views();
+        self.a_xlnx = self.a.iter().map(|&x| term(x)).collect();
         self.object.iter_mut().for_each(|x| *x = 0.0);
         self.row_xlnx.iter_mut().for_each(|x| *x = 0.0);
         for (f, col) in self.col_sum.iter_mut().enumerate() {
@@ -257,31 +272,45 @@ impl ViewState {
             .collect()
     }
 
-    /// Change of `K_v` at viewpoint `k` when the moved triangles get the
-    /// weights `new_a` (with column sums `new_cols`), the removed ones
-    /// vanish and the background goes from `bg0` (column `bg_total`) to `bg1`
-    /// (column `bg_total1`).
-    #[allow(clippy::too_many_arguments)]
-    fn cross_change(
-        &self,
-        k: usize,
-        change: &Change,
-        new_a: &[f64],
-        new_cols: &[f64],
-        bg1: f64,
-        bg_total1: f64,
-    ) -> f64 {
-        let nv = self.views();
-        let mut d = cross_term(bg1, bg_total1) - cross_term(self.bg[k], self.bg_total);
-        for (i, &f) in change.moved.iter().enumerate() {
-            let f = f as usize;
-            d += cross_term(new_a[i * nv + k], new_cols[i]) - cross_term(self.a[f * nv + k], self.col_sum[f]);
+    /// `ln` of each column a collapse touches, once per collapse rather
+    /// than once per viewpoint: of `new` (the moved triangles' new column
+    /// sums or areas), and of `old` (this state's, per triangle) for the
+    /// moved then the removed triangles; 0 where the column is 0.
+    fn column_logs(change: &Change, new: &[f64], old: &[f64]) -> ColumnLogs {
+        let ln = |c: f64| if c > 0.0 { itgfx_core::ln(c) } else { 0.0 };
+        ColumnLogs {
+            new: new.iter().map(|&c| ln(c)).collect(),
+            old: change.moved.iter().chain(&change.removed).map(|&f| ln(old[f as usize])).collect(),
         }
-        for &f in &change.removed {
-            let f = f as usize;
-            d -= cross_term(self.a[f * nv + k], self.col_sum[f]);
+    }
+
+    /// Change of `Σ_o a_o(v) ln c_o` at viewpoint `k` when the moved
+    /// triangles get the weights `new_a` and the removed ones vanish, with
+    /// the columns' logarithms `logs` (the cross term of
+    /// [`specific_information_of_weight_sums`]).
+    fn weighted_log_change(&self, k: usize, change: &Change, new_a: &[f64], logs: &ColumnLogs) -> f64 {
+        let nv = self.views();
+        let mut d = 0.0;
+        for (i, &f) in change.moved.iter().enumerate() {
+            d += new_a[i * nv + k] * logs.new[i] - self.a[f as usize * nv + k] * logs.old[i];
+        }
+        let m = change.moved.len();
+        for (j, &f) in change.removed.iter().enumerate() {
+            d -= self.a[f as usize * nv + k] * logs.old[m + j];
         }
         d
+    }
+
+    /// The background's part of the change of `K_v` when its column goes
+    /// from `bg_total` to `bg_total1`: at viewpoint `k`, `bg1 ln bg_total1 −
+    /// bg[k] ln bg_total` (the logarithms once per collapse, not per view).
+    fn background_cross(&self, bg_total1: f64) -> impl Fn(usize, f64) -> f64 + '_ {
+        let ln = |c: f64| if c > 0.0 { itgfx_core::ln(c) } else { 0.0 };
+        let (l1, l0) = (ln(bg_total1), ln(self.bg_total));
+        move |k, bg1| {
+            let b0 = self.bg[k];
+            (if bg1 > 0.0 { bg1 * l1 } else { 0.0 }) - (if b0 > 0.0 { b0 * l0 } else { 0.0 })
+        }
     }
 
     /// Change of `A_T` when the moved triangles get the areas `new_areas`
@@ -289,22 +318,6 @@ impl ViewState {
     fn area_change(&self, change: &Change, new_areas: &[f64]) -> f64 {
         let moved: f64 = change.moved.iter().zip(new_areas).map(|(&f, &a)| a - self.areas[f as usize]).sum();
         moved - change.removed.iter().map(|&f| self.areas[f as usize]).sum::<f64>()
-    }
-
-    /// Change of `Σ_o a_o(v) ln A_o` at viewpoint `k` for the weights
-    /// `new_a` and areas `new_areas` of the moved triangles.
-    fn area_cross_change(&self, k: usize, change: &Change, new_a: &[f64], new_areas: &[f64]) -> f64 {
-        let nv = self.views();
-        let mut d = 0.0;
-        for (i, &f) in change.moved.iter().enumerate() {
-            let f = f as usize;
-            d += cross_term(new_a[i * nv + k], new_areas[i]) - cross_term(self.a[f * nv + k], self.areas[f]);
-        }
-        for &f in &change.removed {
-            let f = f as usize;
-            d -= cross_term(self.a[f * nv + k], self.areas[f]);
-        }
-        d
     }
 
     fn mi(total: f64, joint: f64, rows: f64, cols: f64, bg_total: f64) -> f64 {
@@ -347,15 +360,18 @@ impl ViewState {
     }
 
     /// The new weights and the cost of collapse `u → v` (checked by
-    /// [`Dynamic::check`]). The triangles around `u` keep, from each
-    /// viewpoint, their joint visible fraction `Σ a / Σ Ω`.
+    /// [`Dynamic::check`]). The triangles that move (around `u`, and around
+    /// `v` when `v` moves) keep, from each viewpoint, the joint visible
+    /// fraction `Σ a / Σ Ω` of those they replace.
     #[must_use]
     pub fn propose(&self, d: &Dynamic, u: u32, v: u32, change: &Change, metric: Metric) -> Proposal {
         let nv = self.views();
         let m = change.moved.len();
-        let corners: Vec<[DVec3; 3]> = change.moved.iter().map(|&f| d.moved_corners(f, u, v)).collect();
+        let corners: Vec<[DVec3; 3]> =
+            change.moved.iter().map(|&f| d.moved_corners(f, u, v, change.position)).collect();
         let areas = corners.iter().map(triangle_area).collect();
-        let mut p = Proposal { a: vec![0.0; m * nv], omega: vec![0.0; m * nv], areas, cost: 0.0 };
+        let mut p =
+            Proposal { a: vec![0.0; m * nv], a_xlnx: vec![0.0; m * nv], omega: vec![0.0; m * nv], areas, cost: 0.0 };
         let old = || change.moved.iter().chain(&change.removed).map(|&f| f as usize);
         let (mut d_total, mut d_joint, mut d_rows, mut d_bg) = (0.0, 0.0, 0.0, 0.0);
         let mut ve = 0.0;
@@ -366,9 +382,8 @@ impl ViewState {
         for (k, eye) in self.eyes.iter().enumerate() {
             let (mut sa, mut old_terms) = (0.0, 0.0);
             for f in old() {
-                let x = self.a[f * nv + k];
-                sa += x;
-                old_terms += term(x);
+                sa += self.a[f * nv + k];
+                old_terms += self.a_xlnx[f * nv + k];
             }
             let (mut na, mut new_terms) = (0.0, 0.0);
             if sa > 0.0 {
@@ -389,10 +404,12 @@ impl ViewState {
                 for (i, t) in corners.iter().enumerate() {
                     let om = triangle_solid_angle(t[0] - *eye, t[1] - *eye, t[2] - *eye);
                     let x = om * fraction;
+                    let xlnx = term(x);
                     p.omega[i * nv + k] = om;
                     p.a[i * nv + k] = x;
+                    p.a_xlnx[i * nv + k] = xlnx;
                     na += x;
-                    new_terms += term(x);
+                    new_terms += xlnx;
                 }
             } else {
                 // Hidden from here: it stays hidden; its solid angle is worked
@@ -421,8 +438,9 @@ impl ViewState {
         p.cost = match metric {
             Metric::Ve => ve,
             Metric::Vmi => {
+                let col_logs = Self::column_logs(change, &new_cols, &self.col_sum);
                 let total1 = self.total + d_total;
-                let bg_total1 = self.bg_total + d_bg;
+                let bg_cross = self.background_cross(self.bg_total + d_bg);
                 let mut c = 0.0;
                 for (k, step) in steps.iter().enumerate() {
                     if step.before.0 <= 0.0 || self.total <= 0.0 {
@@ -431,9 +449,9 @@ impl ViewState {
                     // Triangles this viewpoint does not see add nothing to K_v:
                     // only the background's term moves.
                     let dk = if hidden[k] {
-                        cross_term(step.bg, bg_total1) - cross_term(self.bg[k], self.bg_total)
+                        bg_cross(k, step.bg)
                     } else {
-                        self.cross_change(k, change, &p.a, &new_cols, step.bg, bg_total1)
+                        bg_cross(k, step.bg) + self.weighted_log_change(k, change, &p.a, &col_logs)
                     };
                     let k1 = self.cross[k] + dk;
                     let i0 = self.vmi[k];
@@ -444,13 +462,14 @@ impl ViewState {
             }
             Metric::Vkl => {
                 let area_total1 = self.area_total + self.area_change(change, &p.areas);
+                let area_logs = Self::column_logs(change, &p.areas, &self.areas);
                 let mut c = 0.0;
                 for (k, step) in steps.iter().enumerate() {
                     if step.before.0 <= 0.0 || self.total <= 0.0 {
                         continue;
                     }
                     // A hidden viewpoint's row is unchanged; only A_T moves.
-                    let dk = if hidden[k] { 0.0 } else { self.area_cross_change(k, change, &p.a, &p.areas) };
+                    let dk = if hidden[k] { 0.0 } else { self.weighted_log_change(k, change, &p.a, &area_logs) };
                     let x1 = self.row_xlnx[k] - term(self.bg[k]) + object_terms[k];
                     let kl1 = specific(area_total1, step.object, x1, self.area_cross[k] + dk);
                     c += step.before.0 / self.total * (kl1 - self.vkl[k]).abs();
@@ -488,24 +507,28 @@ impl ViewState {
             .map(|k| {
                 let (mut ds, mut dterm) = (0.0, 0.0);
                 for (i, &f) in change.moved.iter().enumerate() {
-                    let (x, old) = (p.a[i * nv + k], self.a[f as usize * nv + k]);
-                    ds += x - old;
-                    dterm += term(x) - term(old);
+                    let j = f as usize * nv + k;
+                    ds += p.a[i * nv + k] - self.a[j];
+                    dterm += p.a_xlnx[i * nv + k] - self.a_xlnx[j];
                 }
                 for &f in &change.removed {
-                    let old = self.a[f as usize * nv + k];
-                    ds -= old;
-                    dterm -= term(old);
+                    let j = f as usize * nv + k;
+                    ds -= self.a[j];
+                    dterm -= self.a_xlnx[j];
                 }
                 self.row_step(k, ds, dterm)
             })
             .collect();
         let bg_total1 = self.bg_total + steps.iter().enumerate().map(|(k, s)| s.bg - self.bg[k]).sum::<f64>();
-        let cross: Vec<f64> =
-            (0..nv).map(|k| self.cross_change(k, change, &p.a, &new_cols, steps[k].bg, bg_total1)).collect();
+        let col_logs = Self::column_logs(change, &new_cols, &self.col_sum);
+        let cross: Vec<f64> = {
+            let bg_cross = self.background_cross(bg_total1);
+            (0..nv).map(|k| bg_cross(k, steps[k].bg) + self.weighted_log_change(k, change, &p.a, &col_logs)).collect()
+        };
         let area_total1 = self.area_total + self.area_change(change, &p.areas);
+        let area_logs = Self::column_logs(change, &p.areas, &self.areas);
         for k in 0..nv {
-            self.area_cross[k] += self.area_cross_change(k, change, &p.a, &p.areas);
+            self.area_cross[k] += self.weighted_log_change(k, change, &p.a, &area_logs);
         }
         self.area_total = area_total1;
         for (k, step) in steps.iter().enumerate() {
@@ -521,6 +544,7 @@ impl ViewState {
         for (i, &f) in change.moved.iter().enumerate() {
             let f = f as usize;
             self.a[f * nv..(f + 1) * nv].copy_from_slice(&p.a[i * nv..(i + 1) * nv]);
+            self.a_xlnx[f * nv..(f + 1) * nv].copy_from_slice(&p.a_xlnx[i * nv..(i + 1) * nv]);
             self.omega[f * nv..(f + 1) * nv].copy_from_slice(&p.omega[i * nv..(i + 1) * nv]);
             self.cols_xlnx += term(new_cols[i]) - term(self.col_sum[f]);
             self.col_sum[f] = new_cols[i];
@@ -529,6 +553,7 @@ impl ViewState {
         for &f in &change.removed {
             let f = f as usize;
             self.a[f * nv..(f + 1) * nv].iter_mut().for_each(|x| *x = 0.0);
+            self.a_xlnx[f * nv..(f + 1) * nv].iter_mut().for_each(|x| *x = 0.0);
             self.omega[f * nv..(f + 1) * nv].iter_mut().for_each(|x| *x = 0.0);
             self.cols_xlnx -= term(self.col_sum[f]);
             self.col_sum[f] = 0.0;
@@ -552,29 +577,11 @@ fn entropy(sum: f64, xlnx: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::backend::BackendChoice;
-    use crate::meshes::icosphere_mesh;
-    use crate::simplify::{IndexedMesh, Settings, trace};
+    use crate::simplify::tests::test_settings;
+    use crate::simplify::{IndexedMesh, trace};
 
-    /// A bumpy sphere: no symmetry makes costs tie.
     fn bumpy() -> IndexedMesh {
-        let (positions, faces) = icosphere_mesh(2);
-        let positions = positions.iter().map(|p| *p * (0.8 + 0.15 * (3.0 * p.x).sin() * (2.0 * p.y).cos())).collect();
-        IndexedMesh { positions, faces: faces.iter().map(|t| t.map(|i| i as u32)).collect() }
-    }
-
-    /// The tests' settings: 12 views at distance 3 on the CPU backend.
-    fn test_settings(metric: Metric, background: bool) -> Settings {
-        Settings {
-            metric,
-            directions: crate::viewpoint::icosphere(0),
-            distance: 3.0,
-            backend: BackendChoice::Cpu,
-            refresh: 0.5,
-            tolerance: 0.05,
-            max_subdivision: 4,
-            background,
-        }
+        crate::simplify::tests::bumpy(2)
     }
 
     #[test]
@@ -590,7 +597,7 @@ mod tests {
                 let mut best: Option<(f64, u32, u32)> = None;
                 for u in 0..d.positions.len() as u32 {
                     for v in d.neighbours(u) {
-                        if let Some(c) = d.check(u, v) {
+                        if let Some(c) = d.check(u, v, d.positions[v as usize]) {
                             let cost = state.propose(&d, u, v, &c, metric).cost;
                             assert!(cost.is_finite() && cost >= 0.0);
                             if best.is_none_or(|b| cost < b.0) {
@@ -600,7 +607,7 @@ mod tests {
                     }
                 }
                 let (_, u, v) = best.unwrap();
-                let c = d.check(u, v).unwrap();
+                let c = d.check(u, v, d.positions[v as usize]).unwrap();
                 let p = state.propose(&d, u, v, &c, metric);
                 state.apply(&c, &p);
                 d.apply(u, v, &c);
@@ -660,7 +667,7 @@ mod tests {
                 for _ in 0..20 {
                     let (u, v, c) = (0..d.positions.len() as u32)
                         .flat_map(|u| d.neighbours(u).into_iter().map(move |v| (u, v)))
-                        .find_map(|(u, v)| d.check(u, v).map(|c| (u, v, c)))
+                        .find_map(|(u, v)| d.check(u, v, d.positions[v as usize]).map(|c| (u, v, c)))
                         .unwrap();
                     let p = state.propose(&d, u, v, &c, Metric::Vkl);
                     assert!(p.cost.is_finite() && p.cost >= 0.0);

@@ -1,0 +1,63 @@
+#!/usr/bin/env python3
+"""The meshes the placement and λ of `itgfx simplify` were chosen on, none
+of them the benchmark table's (suzanne, spot, teapot, fandisk):
+
+* torus6k.obj: a bumpy, flattened torus of 75 × 40 quads (6,000 triangles);
+* bunny6k.obj: stanford-bunny.obj reduced to 6,000 triangles by
+  fast-simplification (needs `pip install fast-simplification numpy`).
+
+Usage: simplify_tune_meshes.py STANFORD_BUNNY.obj OUTDIR   (never run by CI)
+"""
+
+import math
+import os
+import sys
+
+import numpy as np
+import fast_simplification
+
+
+def torus(path, u=75, v=40):
+    lines = []
+    for i in range(u):
+        for j in range(v):
+            a, b = 2 * math.pi * i / u, 2 * math.pi * j / v
+            r = 0.35 * (1 + 0.3 * max(math.cos(3 * a), 0)) + 0.03 * math.sin(7 * a) * math.cos(5 * b)
+            big = 1 + 0.15 * math.sin(2 * a)
+            z = r * math.sin(b) * (1.4 if j < v // 2 else 1.0)
+            lines.append(f"v {(big + r * math.cos(b)) * math.cos(a)} {(big + r * math.cos(b)) * math.sin(a)} {z}")
+
+    def idx(i, j):
+        return (i % u) * v + (j % v) + 1
+
+    for i in range(u):
+        for j in range(v):
+            p, q, r, t = idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1)
+            lines.append(f"f {p} {q} {r}\nf {p} {r} {t}")
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def reduced(src, path, count):
+    vs, fs = [], []
+    with open(src) as f:
+        for line in f:
+            if line.startswith("v "):
+                vs.append([float(x) for x in line.split()[1:4]])
+            elif line.startswith("f "):
+                idx = [int(w.split("/")[0]) - 1 for w in line.split()[1:]]
+                for k in range(1, len(idx) - 1):
+                    fs.append([idx[0], idx[k], idx[k + 1]])
+    v, f = fast_simplification.simplify(np.array(vs), np.array(fs), target_count=count)
+    with open(path, "w") as out:
+        for q in v:
+            out.write(f"v {float(q[0])!r} {float(q[1])!r} {float(q[2])!r}\n")
+        for t in f:
+            out.write(f"f {t[0] + 1} {t[1] + 1} {t[2] + 1}\n")
+
+
+if __name__ == "__main__":
+    bunny, out = sys.argv[1:3]
+    os.makedirs(out, exist_ok=True)
+    torus(os.path.join(out, "torus6k.obj"))
+    reduced(bunny, os.path.join(out, "bunny6k.obj"), 6000)

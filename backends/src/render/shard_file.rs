@@ -20,7 +20,7 @@
 //! the mean radiance (f64, written so it reads back exactly), the samples
 //! in the image and the pilot samples. Everything is checked on reading;
 //! foreign, duplicate and missing shards are refused with one line (see
-//! [`crate::shards::order`]).
+//! [`crate::shards::order`](mod@crate::shards::order)).
 
 use serde::{Deserialize, Serialize};
 

@@ -8,7 +8,7 @@
 //!   scene and settings, the settings), JSON reading with the format and
 //!   version checked first, reading several files, and ordering a run's
 //!   shards;
-//! * [`order`]: ordering with foreign, duplicate and missing shards refused;
+//! * [`order`](mod@order): ordering with foreign, duplicate and missing shards refused;
 //! * [`error`]: [`ShardError`], typed; a setting two shards disagree on is a
 //!   [`Setting`], which a front end names its own way ([`ShardError::describe`]).
 //!

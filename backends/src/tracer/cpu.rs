@@ -7,13 +7,14 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::ray::Ray;
 
+use super::interleave;
+use super::node8::{self, Tally};
 use super::packet::{self, LANES};
 use super::watertight::{
     BLOCK, Block, Shear, TriangleLanes, barycentric, before, finish, push_crossing, sphere_crossings, sphere_hit,
     triangle_hit, walk_direction,
 };
 use super::{BackendError, CrossingBuffer, Hit, Prepared, Tracer};
-use super::{interleave, node8};
 use crate::lines::Line;
 
 /// Triangle boxes and build parameters shared by the CPU and Vulkan BVHs:
@@ -70,22 +71,6 @@ pub(crate) fn build_bvh(scene: &Prepared, params: obvhs::BvhBuildParams) -> CwBv
     bvh2.uses_spatial_splits = true;
     ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
     bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false)
-}
-
-/// Counts of a walk: nodes tested and triangles tested
-/// (`docs/TRACING.md`'s per-ray statistics); `()` counts nothing.
-pub(crate) trait Tally {
-    /// A node's children were tested.
-    fn node(&self);
-    /// The triangles of `mask` were tested.
-    fn triangles(&self, mask: u32);
-}
-
-impl Tally for () {
-    #[inline(always)]
-    fn node(&self) {}
-    #[inline(always)]
-    fn triangles(&self, _: u32) {}
 }
 
 /// The CPU backend.

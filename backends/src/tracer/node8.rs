@@ -22,8 +22,6 @@ use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::ray::Ray;
 use std::mem::MaybeUninit;
 
-use super::cpu::Tally;
-
 /// Depth of the traversal stack: obvhs's (`TRAVERSAL_STACK_SIZE`, private
 /// there; its BVH validation keeps trees shallower).
 const STACK: usize = 32;
@@ -238,6 +236,22 @@ pub(super) unsafe fn walk_groups<const AVX2: bool, F: FnMut(u32, u32, &mut f32) 
             current_group = unsafe { stack[depth].assume_init() };
         }
     }
+}
+
+/// Counts of a walk: nodes tested and triangles tested
+/// (`docs/TRACING.md`'s per-ray statistics); `()` counts nothing.
+pub(crate) trait Tally {
+    /// A node's children were tested.
+    fn node(&self);
+    /// The triangles of `mask` were tested.
+    fn triangles(&self, mask: u32);
+}
+
+impl Tally for () {
+    #[inline(always)]
+    fn node(&self) {}
+    #[inline(always)]
+    fn triangles(&self, _: u32) {}
 }
 
 #[cfg(test)]

@@ -43,7 +43,7 @@ RUNS = "vmi/blend,vkl/blend,vmi/quadric,vmi/endpoint,ve/endpoint"
 PEERS = ["qem", "fqms"]
 
 
-def read_obj(path):
+def read_obj(path, dtype=np.float32):
     vs, fs = [], []
     with open(path) as f:
         for line in f:
@@ -53,7 +53,7 @@ def read_obj(path):
                 idx = [int(w.split("/")[0]) - 1 for w in line.split()[1:]]
                 for k in range(1, len(idx) - 1):
                     fs.append([idx[0], idx[k], idx[k + 1]])
-    return np.array(vs, dtype=np.float32), np.array(fs, dtype=np.uint32).reshape(-1)
+    return np.array(vs, dtype=dtype), np.array(fs, dtype=np.uint32).reshape(-1)
 
 
 def write_obj(path, v, idx, what):

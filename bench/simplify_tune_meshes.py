@@ -16,6 +16,9 @@ import sys
 import numpy as np
 import fast_simplification
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from simplify_table import read_obj  # noqa: E402  (one OBJ reader for the bench scripts)
+
 
 def torus(path, u=75, v=40):
     lines = []
@@ -39,16 +42,9 @@ def torus(path, u=75, v=40):
 
 
 def reduced(src, path, count):
-    vs, fs = [], []
-    with open(src) as f:
-        for line in f:
-            if line.startswith("v "):
-                vs.append([float(x) for x in line.split()[1:4]])
-            elif line.startswith("f "):
-                idx = [int(w.split("/")[0]) - 1 for w in line.split()[1:]]
-                for k in range(1, len(idx) - 1):
-                    fs.append([idx[0], idx[k], idx[k + 1]])
-    v, f = fast_simplification.simplify(np.array(vs), np.array(fs), target_count=count)
+    vs, idx = read_obj(src, dtype=np.float64)
+    fs = idx.reshape(-1, 3).astype(np.int64)
+    v, f = fast_simplification.simplify(vs, fs, target_count=count)
     with open(path, "w") as out:
         for q in v:
             out.write(f"v {float(q[0])!r} {float(q[1])!r} {float(q[2])!r}\n")

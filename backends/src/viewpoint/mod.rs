@@ -36,6 +36,7 @@ pub mod saliency;
 pub mod selection;
 pub mod shard_file;
 pub mod solid_angle;
+pub mod study;
 
 pub use analysis::{ViewpointAnalysis, ViewpointMeasures, ViewpointWeights};
 

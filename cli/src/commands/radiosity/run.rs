@@ -170,7 +170,9 @@ fn scores(a: &[f64], b: &[f64]) -> Result<[f64; 4], CliError> {
     Ok([ea.rmse, ep.rmse, ea.psnr, ep.psnr])
 }
 
-/// Runs `itgfx radiosity`.
+/// Runs `itgfx radiosity`: checks, the solution (or the path-traced
+/// reference), its report, the pictures scored against `--reference`, the
+/// files.
 ///
 /// # Errors
 /// Usage, scene, backend and output errors, one line.
@@ -187,25 +189,8 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
     let scene = load_scene(&spec, o.subdivide)?;
     check_scene(&scene).map_err(usage)?;
     let h0 = Hierarchy::new(&scene);
-    let coarsest = h0.roots.len().saturating_mul(4usize.saturating_pow(o.base_level));
-    if let Some(n) = o.elements
-        && n < coarsest
-    {
-        return Err(CliError::usage(format!(
-            "--elements {n}: {spec} already has {} polygons, {coarsest} elements at --base-level {} (the coarsest mesh)",
-            h0.roots.len(),
-            o.base_level
-        )));
-    }
-    let reference = o.reference.as_ref().map(|p| read_reference(p)).transpose()?;
-    if let Some((w, hh, _)) = &reference
-        && (*w != o.size || *hh != o.size)
-    {
-        return Err(CliError::usage(format!(
-            "--reference is {w} x {hh} pixels but --size is {}: make both with the same --size",
-            o.size
-        )));
-    }
+    coarsest_check(o, &spec, &h0)?;
+    let reference = reference_of(o)?;
     let files = outputs(o)?;
     let file = |name: &str| files.iter().find(|f| f.0 == name).map(|f| f.1.clone());
     let t0 = Instant::now();
@@ -215,7 +200,6 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
     let mut r = Report::new();
     r.text("scene", scene.name.clone()).text("backend", tracer.name());
     r.count("polygons", h0.roots.len() as u64).count("pixels", u64::from(o.size) * u64::from(o.size));
-
     if let Some(walks) = o.path_trace {
         let v = view(&scene, &prepared, tracer.as_ref(), &h0, &camera, (o.size, o.size)).map_err(usage)?;
         let mut progress = Progress::new();
@@ -223,9 +207,70 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
             progress.update(d, t)
         })
         .map_err(usage)?;
-        return reference_report(r, &reference, &v, o, walks, t0, &file);
+        return reference_report(r, &reference, &v, walks, t0, &file);
     }
+    let (solution, trials) = solve_or_search(o, &scene, &prepared, tracer.as_ref())?;
+    solution_report(&mut r, o, &solution, trials, t0.elapsed().as_secs_f64());
+    if let Some(paths) = o.check_paths {
+        let csv = super::check::check(&mut r, &scene, &prepared, tracer.as_ref(), &solution, paths, o.seed)?;
+        if let Some(p) = file("patches.csv") {
+            crate::output::write(&p, csv.as_bytes())?;
+        }
+    }
+    let v = view(&scene, &prepared, tracer.as_ref(), &solution.hierarchy, &camera, (o.size, o.size)).map_err(usage)?;
+    let pictures = Pictures::of(&solution, &v, reference.as_ref().map(|x| x.2.as_slice()));
+    fits_f32(&scene.name, &pictures.gouraud)?;
+    r.real("white", pictures.white, None);
+    if let Some((_, _, ref_px)) = &reference {
+        pictures.score(ref_px, &mut r)?;
+    }
+    pictures.write(&scene.name, &solution, &file)?;
+    r.real("seconds", t0.elapsed().as_secs_f64(), Some("s"));
+    if let Some(p) = file("radiosity.json") {
+        crate::output::write(&p, format!("{}\n", r.to_json()).as_bytes())?;
+    }
+    if !files.is_empty() {
+        r.texts("files", files.iter().map(|f| f.1.display().to_string()).collect());
+    }
+    Ok(r)
+}
 
+/// Refuses `--elements` below the coarsest mesh: every polygon at
+/// `--base-level`.
+fn coarsest_check(o: &RadiosityOptions, spec: &str, h0: &Hierarchy) -> Result<(), CliError> {
+    let coarsest = h0.roots.len().saturating_mul(4usize.saturating_pow(o.base_level));
+    match o.elements {
+        Some(n) if n < coarsest => Err(CliError::usage(format!(
+            "--elements {n}: {spec} already has {} polygons, {coarsest} elements at --base-level {} (the coarsest mesh)",
+            h0.roots.len(),
+            o.base_level
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// `--reference`, read and checked against `--size` before any work.
+fn reference_of(o: &RadiosityOptions) -> Result<Option<(u32, u32, Vec<Rgb>)>, CliError> {
+    let reference = o.reference.as_ref().map(|p| read_reference(p)).transpose()?;
+    if let Some((w, hh, _)) = &reference
+        && (*w != o.size || *hh != o.size)
+    {
+        return Err(CliError::usage(format!(
+            "--reference is {w} x {hh} pixels but --size is {}: make both with the same --size",
+            o.size
+        )));
+    }
+    Ok(reference)
+}
+
+/// The solution at `--epsilon`, or, with `--elements N`, at the epsilon the
+/// search finds for about N elements (with its trials).
+fn solve_or_search(
+    o: &RadiosityOptions,
+    scene: &itgfx_backends::scene::Scene,
+    prepared: &Prepared,
+    tracer: &dyn itgfx_backends::tracer::Tracer,
+) -> Result<(Solution, usize), CliError> {
     let settings = Settings {
         oracle: o.oracle,
         epsilon: o.epsilon.unwrap_or(1e-3),
@@ -238,34 +283,25 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
         base_level: o.base_level,
         ..Settings::default()
     };
-    let mut trials = Vec::new();
-    let solution: Solution = if let Some(n) = o.elements {
-        let s = search_epsilon(
-            &scene,
-            &prepared,
-            tracer.as_ref(),
-            &settings,
-            n,
-            o.count_tolerance,
-            o.max_trials,
-            &mut |t, e, k| {
-                if std::env::var_os("ITGFX_PROGRESS").is_some_and(|v| v == "1") {
-                    eprintln!("itgfx: trial {t}: epsilon {e:.4e} -> {k} elements");
-                }
-            },
-        )
-        .map_err(usage)?;
-        trials = s.trials;
-        s.solution
-    } else {
-        solve(&scene, &prepared, tracer.as_ref(), &settings).map_err(usage)?
+    let Some(n) = o.elements else {
+        return Ok((solve(scene, prepared, tracer, &settings).map_err(usage)?, 0));
     };
-    let solve_seconds = t0.elapsed().as_secs_f64();
-    let h = &solution.hierarchy;
-    let leaves = solution.leaves();
+    let verbose = std::env::var_os("ITGFX_PROGRESS").is_some_and(|v| v == "1");
+    let s = search_epsilon(scene, prepared, tracer, &settings, n, o.count_tolerance, o.max_trials, &mut |t, e, k| {
+        if verbose {
+            eprintln!("itgfx: trial {t}: epsilon {e:.4e} -> {k} elements");
+        }
+    })
+    .map_err(usage)?;
+    Ok((s.solution, s.trials.len()))
+}
+
+/// The solution's part of the report: its settings, size, rays, passes and
+/// power balance.
+fn solution_report(r: &mut Report, o: &RadiosityOptions, solution: &Solution, trials: usize, seconds: f64) {
     let (emitted, absorbed) = solution.power_balance();
     r.text("oracle", o.oracle.name()).real("epsilon", solution.settings.epsilon, None);
-    r.count("elements", leaves.len() as u64).count("links", solution.links.len() as u64);
+    r.count("elements", solution.leaves().len() as u64).count("links", solution.links.len() as u64);
     r.count("link_shares", solution.shares.len() as u64);
     r.count("base_level", u64::from(o.base_level));
     r.count("samples_per_link", u64::from(o.samples)).count("link_evaluations", solution.evaluations);
@@ -274,95 +310,109 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
     r.count("oracle_only_rays", solution.rays - solution.transport_rays);
     r.count("passes", u64::from(solution.passes)).count("iterations", u64::from(solution.sweeps));
     r.flag("capped", solution.capped);
-    if !trials.is_empty() {
-        r.count("search_trials", trials.len() as u64);
+    if trials > 0 {
+        r.count("search_trials", trials as u64);
     }
     let lum = |x: Rgb| SRGB_LUMINANCE_WEIGHTS.iter().zip(x).map(|(w, v)| w * v).sum::<f64>();
     r.real("power_emitted", lum(emitted), None).real("power_absorbed", lum(absorbed), None);
     r.real("balance", if lum(emitted) > 0.0 { lum(absorbed) / lum(emitted) } else { 0.0 }, None);
-    r.real("solve_seconds", solve_seconds, Some("s"));
-    if let Some(paths) = o.check_paths {
-        let csv = super::check::check(&mut r, &scene, &prepared, tracer.as_ref(), &solution, paths, o.seed)?;
-        if let Some(p) = file("patches.csv") {
-            crate::output::write(&p, csv.as_bytes())?;
-        }
+    r.real("solve_seconds", seconds, Some("s"));
+}
+
+/// The solution's pictures from the camera: Gouraud-shaded and flat, the
+/// leaf element of each pixel, and the white point that maps them to
+/// 8 bits (the reference's when one is given, so that both are scored alike).
+struct Pictures {
+    gouraud: Vec<Option<Rgb>>,
+    flat: Vec<Option<Rgb>>,
+    leaf: Vec<Option<itgfx_backends::radiosity::element::ElementId>>,
+    white: f64,
+    size: u32,
+}
+
+impl Pictures {
+    fn of(solution: &Solution, v: &View, reference: Option<&[Rgb]>) -> Self {
+        let h = &solution.hierarchy;
+        let (gouraud, leaf) = picture(h, &solution.radiosity, v, true);
+        let (flat, _) = picture(h, &solution.radiosity, v, false);
+        let reference_white = reference
+            .map(|px| white_point(&px.iter().map(|p| (p.iter().sum::<f64>() > 0.0).then_some(*p)).collect::<Vec<_>>()));
+        let white = reference_white.unwrap_or_else(|| white_point(&gouraud));
+        Self { gouraud, flat, leaf, white, size: v.width }
     }
 
-    let v = view(&scene, &prepared, tracer.as_ref(), h, &camera, (o.size, o.size)).map_err(usage)?;
-    let (gouraud, leaf) = picture(h, &solution.radiosity, &v, true);
-    let (flat, _) = picture(h, &solution.radiosity, &v, false);
-    fits_f32(&scene.name, &gouraud)?;
-    let reference_white = reference.as_ref().map(|(_, _, px)| {
-        white_point(&px.iter().map(|p| (p.iter().sum::<f64>() > 0.0).then_some(*p)).collect::<Vec<_>>())
-    });
-    let white = reference_white.unwrap_or_else(|| white_point(&gouraud));
-    r.real("white", white, None);
-    if let Some((_, _, ref_px)) = &reference {
-        let a = display(&dense(&gouraud), white);
-        let b = display(ref_px, white);
+    /// RMSE and PSNR of the Gouraud and flat pictures against the reference.
+    fn score(&self, ref_px: &[Rgb], r: &mut Report) -> Result<(), CliError> {
+        let a = display(&dense(&self.gouraud), self.white);
+        let b = display(ref_px, self.white);
         let [ra, rp, pa, pp] = scores(&a, &b)?;
-        r.real("RMSE_a", ra, None).real("RMSE_p", rp, None).real("PSNR_a", pa, Some("dB")).real(
-            "PSNR_p",
-            pp,
-            Some("dB"),
-        );
-        let fl = display(&dense(&flat), white);
+        r.real("RMSE_a", ra, None).real("RMSE_p", rp, None);
+        r.real("PSNR_a", pa, Some("dB")).real("PSNR_p", pp, Some("dB"));
+        let fl = display(&dense(&self.flat), self.white);
         let [fa, _, fpa, _] = scores(&fl, &b)?;
         r.real("RMSE_a_flat", fa, None).real("PSNR_a_flat", fpa, Some("dB"));
+        Ok(())
     }
-    if let Some(p) = file("radiosity.png") {
-        let px: Vec<[u8; 3]> =
-            gouraud.iter().map(|c| c.map_or(itgfx_backends::preview::BACKGROUND, |c| tonemap(c, white))).collect();
-        png(&px, o.size, o.size, &p)?;
-    }
-    if let Some(p) = file("mesh.png") {
-        png(&mesh_picture(&flat, &leaf, o.size, white), o.size, o.size, &p)?;
-    }
-    if let Some(p) = file("radiosity.exr") {
-        exr(&dense(&gouraud), o.size, o.size, &p)?;
-    }
-    if let Some(p) = file("radiosity.pfm") {
-        crate::output::write(&p, &pfm(&dense(&gouraud), o.size, o.size))?;
-    }
-    if let Some(p) = file("mesh.ply") {
-        super::mesh::write(&leaf_mesh(h, &solution.radiosity), &scene.name, white, &p)?;
-    }
-    if let Some(p) = file("elements.csv") {
-        let mut s = String::from("element,patch,level,area,x,y,z,B_r,B_g,B_b\n");
-        for &e in &leaves {
-            let el = &h.elements[e as usize];
-            let c = el.centre();
-            let b = solution.radiosity[e as usize];
-            s.push_str(&format!(
-                "{e},{},{},{:e},{},{},{},{:e},{:e},{:e}\n",
-                h.patch(e),
-                el.level,
-                el.area,
-                c.x,
-                c.y,
-                c.z,
-                b[0],
-                b[1],
-                b[2]
-            ));
+
+    /// The pictures and files `--out` asks for (all but the JSON report).
+    fn write(&self, name: &str, solution: &Solution, file: &dyn Fn(&str) -> Option<PathBuf>) -> Result<(), CliError> {
+        let (size, white, h) = (self.size, self.white, &solution.hierarchy);
+        if let Some(p) = file("radiosity.png") {
+            let px: Vec<[u8; 3]> = self
+                .gouraud
+                .iter()
+                .map(|c| c.map_or(itgfx_backends::preview::BACKGROUND, |c| tonemap(c, white)))
+                .collect();
+            png(&px, size, size, &p)?;
         }
-        crate::output::write(&p, s.as_bytes())?;
+        if let Some(p) = file("mesh.png") {
+            png(&mesh_picture(&self.flat, &self.leaf, size, white), size, size, &p)?;
+        }
+        if let Some(p) = file("radiosity.exr") {
+            exr(&dense(&self.gouraud), size, size, &p)?;
+        }
+        if let Some(p) = file("radiosity.pfm") {
+            crate::output::write(&p, &pfm(&dense(&self.gouraud), size, size))?;
+        }
+        if let Some(p) = file("mesh.ply") {
+            super::mesh::write(&leaf_mesh(h, &solution.radiosity), name, white, &p)?;
+        }
+        if let Some(p) = file("elements.csv") {
+            crate::output::write(&p, elements_csv(solution).as_bytes())?;
+        }
+        Ok(())
     }
-    r.real("seconds", t0.elapsed().as_secs_f64(), Some("s"));
-    if let Some(p) = file("radiosity.json") {
-        crate::output::write(&p, format!("{}\n", r.to_json()).as_bytes())?;
+}
+
+/// `elements.csv`: one row per leaf element, its patch, level, area,
+/// centre and radiosity.
+fn elements_csv(solution: &Solution) -> String {
+    let h = &solution.hierarchy;
+    let mut s = String::from("element,patch,level,area,x,y,z,B_r,B_g,B_b\n");
+    for e in solution.leaves() {
+        let el = &h.elements[e as usize];
+        let c = el.centre();
+        let b = solution.radiosity[e as usize];
+        s.push_str(&format!(
+            "{e},{},{},{:e},{},{},{},{:e},{:e},{:e}\n",
+            h.patch(e),
+            el.level,
+            el.area,
+            c.x,
+            c.y,
+            c.z,
+            b[0],
+            b[1],
+            b[2]
+        ));
     }
-    if !files.is_empty() {
-        r.texts("files", files.iter().map(|f| f.1.display().to_string()).collect());
-    }
-    Ok(r)
+    s
 }
 
 fn reference_report(
     mut r: Report,
     reference: &Reference,
     v: &View,
-    o: &RadiosityOptions,
     walks: u32,
     t0: Instant,
     file: &dyn Fn(&str) -> Option<PathBuf>,
@@ -423,6 +473,5 @@ fn reference_report(
     if let Some(p) = file("reference.json") {
         crate::output::write(&p, format!("{}\n", r.to_json()).as_bytes())?;
     }
-    let _ = o;
     Ok(r)
 }

@@ -1,10 +1,12 @@
 //! `itgfx register FIXED MOVING`: rigid registration by mutual information.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use itgfx_backends::imaging::register::{joint_histogram, resample};
-use itgfx_backends::imaging::{HistogramKind, Level, Metric, RegisterOptions as Engine, Rigid2, register};
+use itgfx_backends::imaging::{
+    Gray, HistogramKind, Level, Metric, RegisterOptions as Engine, Registration, Rigid2, register,
+};
 use itgfx_core::JointEntropies;
 
 use super::RegisterOptions;
@@ -215,43 +217,12 @@ const FILES: [&str; 7] =
 /// # Errors
 /// Bad inputs and output errors, one line.
 pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
-    let kinds = (sniff(&o.fixed)?, sniff(&o.moving)?);
-    match kinds {
-        (Kind::Png, Kind::Png) => {}
-        (Kind::Nrrd, Kind::Nrrd) => return super::run3::run_register3(o),
-        (a, _) => {
-            let name = |k| if k == Kind::Png { "a 2D PNG image" } else { "a 3D NRRD volume" };
-            return Err(CliError::usage(format!(
-                "{:?} is {} but {:?} is {}: register needs two images or two volumes",
-                o.fixed,
-                name(a),
-                o.moving,
-                name(if a == Kind::Png { Kind::Nrrd } else { Kind::Png })
-            )));
-        }
+    if volumes(o)? {
+        return super::run3::run_register3(o);
     }
     let levels = pyramid(o, false);
     let initial = start(o)?;
-    let fixed = read_gray(&o.fixed)?;
-    let moving = read_gray(&o.moving)?;
-    if (fixed.width, fixed.height) != (moving.width, moving.height) {
-        return Err(CliError::usage(format!(
-            "the fixed image is {} x {} but the moving image is {} x {}: register needs the same size",
-            fixed.width, fixed.height, moving.width, moving.height
-        )));
-    }
-    if fixed.width < 4 || fixed.height < 4 {
-        return Err(CliError::usage(format!(
-            "{:?}: {} x {} pixels: register needs at least 4 x 4",
-            o.fixed, fixed.width, fixed.height
-        )));
-    }
-    for (img, path) in [(&fixed, &o.fixed), (&moving, &o.moving)] {
-        let (lo, hi) = img.range();
-        if lo >= hi {
-            return Err(CliError::usage(format!("{path:?}: the image is constant: nothing to register")));
-        }
-    }
+    let (fixed, moving) = read_pair(o)?;
     let truth = o.truth.as_deref().map(read_truth).transpose()?;
     let (kind, metric) = choices(o, false);
     let engine = Engine {
@@ -273,36 +244,18 @@ pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
     .map_err(|e| CliError::usage(e.to_string()))?;
     let seconds = t0.elapsed().as_secs_f64();
     let t = r.transform;
-    let registered = resample(&moving, &t, 0.0);
-    write_gray(&registered, &paths[0])?;
-    let tile = (fixed.width.max(fixed.height) / 8).max(2);
-    write_rgb(&checkerboard(&fixed, &registered, tile), &paths[1])?;
-    write_rgb(&overlay(&fixed, &registered), &paths[2])?;
-    let hist = joint_histogram(&fixed, &moving, &t, engine.bins, kind);
-    let scale = (256 / engine.bins as u32).max(1);
-    write_rgb(&histogram_image(&hist.counts, engine.bins, scale), &paths[3])?;
-    let before = joint_histogram(&fixed, &moving, &engine.initial, engine.bins, kind);
-    write_rgb(&histogram_image(&before.counts, engine.bins, scale), &paths[4])?;
-    let traces: Vec<&[f64]> = r.levels.iter().map(|l| l.trace.as_slice()).collect();
-    write_rgb(&trace_picture(&traces), &paths[5])?;
+    write_pictures((&fixed, &moving), &engine, &r, &paths)?;
     // The engine measures in bits; `--base` converts every entropy.
     let k = std::f64::consts::LN_2 * o.common.base.per_nat();
     let mut rep = Report::new();
     rep.real("angle_deg", t.angle_deg, Some("deg")).real("tx", t.tx, Some("px")).real("ty", t.ty, Some("px"));
-    measures(&mut rep, o, metric, &r.entropies, r.initial_entropies.as_ref());
-    rep.real("overlap", r.overlap, None)
-        .count("iterations", r.levels.iter().map(|l| l.iterations as u64).sum())
-        .count("evaluations", r.levels.iter().map(|l| l.evaluations as u64).sum())
-        .real("seconds", seconds, Some("s"));
-    let levels: Vec<Report> = r
-        .levels
-        .iter()
-        .map(|l| {
-            let size = [l.size.0, l.size.1];
-            level_report(l.level, &size, (l.iterations, l.evaluations), &l.transform.params(), &l.trace, metric, k)
-        })
-        .collect();
-    rep.records("levels", levels);
+    let levels = r.levels.iter().map(|l| {
+        let size = [l.size.0, l.size.1];
+        level_report(l.level, &size, (l.iterations, l.evaluations), &l.transform.params(), &l.trace, metric, k)
+    });
+    let counts = r.levels.iter().map(|l| (l.iterations, l.evaluations));
+    let outcome = Outcome { entropies: &r.entropies, initial: r.initial_entropies.as_ref(), overlap: r.overlap };
+    outcome.report(&mut rep, o, metric, (counts, levels.collect()), (None, seconds));
     if let Some(truth) = truth {
         let rot = (t.angle_deg - truth.angle_deg).abs();
         let trans = (t.tx - truth.tx).hypot(t.ty - truth.ty);
@@ -311,8 +264,120 @@ pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
             .real("corner_error_px", t.corner_distance(&truth, fixed.width, fixed.height), Some("px"))
             .flag("success", rot < 0.5 && trans < 0.5);
     }
+    write_result(rep, &paths)
+}
+
+/// Whether FIXED and MOVING are volumes (NRRD) rather than images (PNG);
+/// refuses one of each.
+fn volumes(o: &RegisterOptions) -> Result<bool, CliError> {
+    match (sniff(&o.fixed)?, sniff(&o.moving)?) {
+        (Kind::Png, Kind::Png) => Ok(false),
+        (Kind::Nrrd, Kind::Nrrd) => Ok(true),
+        (a, _) => {
+            let name = |k| if k == Kind::Png { "a 2D PNG image" } else { "a 3D NRRD volume" };
+            Err(CliError::usage(format!(
+                "{:?} is {} but {:?} is {}: register needs two images or two volumes",
+                o.fixed,
+                name(a),
+                o.moving,
+                name(if a == Kind::Png { Kind::Nrrd } else { Kind::Png })
+            )))
+        }
+    }
+}
+
+/// FIXED and MOVING, read and checked: the same size, at least 4 x 4,
+/// neither constant.
+fn read_pair(o: &RegisterOptions) -> Result<(Gray, Gray), CliError> {
+    let fixed = read_gray(&o.fixed)?;
+    let moving = read_gray(&o.moving)?;
+    if (fixed.width, fixed.height) != (moving.width, moving.height) {
+        return Err(CliError::usage(format!(
+            "the fixed image is {} x {} but the moving image is {} x {}: register needs the same size",
+            fixed.width, fixed.height, moving.width, moving.height
+        )));
+    }
+    if fixed.width < 4 || fixed.height < 4 {
+        return Err(CliError::usage(format!(
+            "{:?}: {} x {} pixels: register needs at least 4 x 4",
+            o.fixed, fixed.width, fixed.height
+        )));
+    }
+    for (img, path) in [(&fixed, &o.fixed), (&moving, &o.moving)] {
+        let (lo, hi) = img.range();
+        if lo >= hi {
+            return Err(CliError::usage(format!("{path:?}: the image is constant: nothing to register")));
+        }
+    }
+    Ok((fixed, moving))
+}
+
+/// The registered image, the checkerboard and overlay against the fixed
+/// one, the joint histograms after and before, and the metric's trace.
+fn write_pictures(
+    (fixed, moving): (&Gray, &Gray),
+    engine: &Engine,
+    r: &Registration,
+    paths: &[PathBuf],
+) -> Result<(), CliError> {
+    let t = r.transform;
+    let registered = resample(moving, &t, 0.0);
+    write_gray(&registered, &paths[0])?;
+    let tile = (fixed.width.max(fixed.height) / 8).max(2);
+    write_rgb(&checkerboard(fixed, &registered, tile), &paths[1])?;
+    write_rgb(&overlay(fixed, &registered), &paths[2])?;
+    let hist = joint_histogram(fixed, moving, &t, engine.bins, engine.kind);
+    let scale = (256 / engine.bins as u32).max(1);
+    write_rgb(&histogram_image(&hist.counts, engine.bins, scale), &paths[3])?;
+    let before = joint_histogram(fixed, moving, &engine.initial, engine.bins, engine.kind);
+    write_rgb(&histogram_image(&before.counts, engine.bins, scale), &paths[4])?;
+    let traces: Vec<&[f64]> = r.levels.iter().map(|l| l.trace.as_slice()).collect();
+    write_rgb(&trace_picture(&traces), &paths[5])
+}
+
+/// What a registration of images or of volumes ends with: the metric's
+/// entropies at the result and at the start, and the overlap.
+pub struct Outcome<'a> {
+    /// The entropies at the final transform.
+    pub entropies: &'a JointEntropies,
+    /// The entropies at the initial transform.
+    pub initial: Option<&'a JointEntropies>,
+    /// The overlap of the two at the final transform.
+    pub overlap: f64,
+}
+
+impl Outcome<'_> {
+    /// The report's fields the two registrations share: the measures, the
+    /// overlap, the iterations and evaluations summed over the `levels`'
+    /// `counts`, the time (and its estimate), one record per level.
+    pub fn report(
+        &self,
+        rep: &mut Report,
+        o: &RegisterOptions,
+        metric: Metric,
+        (counts, levels): (impl Iterator<Item = (usize, usize)>, Vec<Report>),
+        (estimate, seconds): (Option<f64>, f64),
+    ) {
+        measures(rep, o, metric, self.entropies, self.initial);
+        let (iterations, evaluations) = counts.fold((0, 0), |(i, e), (a, b)| (i + a as u64, e + b as u64));
+        rep.real("overlap", self.overlap, None).count("iterations", iterations).count("evaluations", evaluations);
+        if let Some(s) = estimate {
+            rep.real("estimated_seconds", s, Some("s"));
+        }
+        rep.real("seconds", seconds, Some("s"));
+        rep.records("levels", levels);
+    }
+}
+
+/// Lists the files in the report and writes it, pretty, as the last of
+/// `paths` (`result.json`).
+///
+/// # Errors
+/// The output's write error.
+pub fn write_result(mut rep: Report, paths: &[PathBuf]) -> Result<Report, CliError> {
     rep.texts("files", paths.iter().map(|p| p.display().to_string()).collect());
     let text = serde_json::to_string_pretty(&rep.to_json()).unwrap_or_default();
-    crate::output::write(&paths[6], format!("{text}\n").as_bytes())?;
+    let last = paths.last().ok_or_else(|| CliError::runtime("register: no result.json path"))?;
+    crate::output::write(last, format!("{text}\n").as_bytes())?;
     Ok(rep)
 }

@@ -6,11 +6,11 @@ use std::path::Path;
 use std::time::Instant;
 
 use itgfx_backends::imaging::register3::{joint_histogram3, resample3, working_bytes};
-use itgfx_backends::imaging::{Gray3, RegisterOptions as Engine, Rigid3, register3};
+use itgfx_backends::imaging::{Gray3, RegisterOptions as Engine, Registration3, Rigid3, register3};
 use itgfx_backends::volume::nrrd::read_nrrd;
 
 use super::RegisterOptions;
-use super::run::{choices, level_report, measures, trace_picture};
+use super::run::{Outcome, choices, level_report, trace_picture, write_result};
 use crate::CliError;
 use crate::commands::phantom::CONVENTION_3D;
 use crate::imaging::pictures::{checkerboard, histogram_image, middle_slices, side_by_side, write_nrrd, write_rgb};
@@ -67,14 +67,9 @@ fn read(path: &Path) -> Result<Gray3, CliError> {
     Ok(Gray3 { dims: v.dims, spacing: v.spacing, data: v.data })
 }
 
-/// Registers two volumes, writes `registered.nrrd`, the pictures and
-/// `result.json`, returns the report.
-///
-/// # Errors
-/// Bad inputs and output errors, one line.
-pub fn run_register3(o: &RegisterOptions) -> Result<Report, CliError> {
-    let initial = start3(o)?;
-    let truth = o.truth.as_deref().map(read_truth3).transpose()?;
+/// FIXED and MOVING, read (their memory checked first) and checked: the
+/// same size and grid, at least 4 voxels along each axis, neither constant.
+fn read_pair3(o: &RegisterOptions) -> Result<(Gray3, Gray3), CliError> {
     // Reading holds a file's bytes and their f32 values (at most 4 per byte) at once.
     let len = |p: &Path| std::fs::metadata(p).map(|m| m.len()).unwrap_or(0);
     let reading = len(&o.fixed).saturating_mul(5).saturating_add(len(&o.moving).saturating_mul(4));
@@ -106,6 +101,18 @@ pub fn run_register3(o: &RegisterOptions) -> Result<Report, CliError> {
             return Err(CliError::usage(format!("{path:?}: the volume is constant: nothing to register")));
         }
     }
+    Ok((fixed, moving))
+}
+
+/// Registers two volumes, writes `registered.nrrd`, the pictures and
+/// `result.json`, returns the report.
+///
+/// # Errors
+/// Bad inputs and output errors, one line.
+pub fn run_register3(o: &RegisterOptions) -> Result<Report, CliError> {
+    let initial = start3(o)?;
+    let truth = o.truth.as_deref().map(read_truth3).transpose()?;
+    let (fixed, moving) = read_pair3(o)?;
     let voxels = fixed.data.len();
     let [nx, ny, nz] = fixed.dims;
     itgfx_backends::memory::check(|| format!("registering {nx}x{ny}x{nz} volumes"), working_bytes(voxels))
@@ -135,23 +142,7 @@ pub fn run_register3(o: &RegisterOptions) -> Result<Report, CliError> {
     .map_err(|e| CliError::usage(e.to_string()))?;
     let seconds = t0.elapsed().as_secs_f64();
     let t = r.transform;
-    let registered = resample3(&moving, &t, 0.0);
-    write_nrrd(&registered, &paths[0])?;
-    let (a, b) = (middle_slices(&fixed), middle_slices(&registered));
-    let boards: Vec<_> = (0..3)
-        .map(|k| {
-            let tile = (a[k].width.max(a[k].height) / 8).max(2);
-            checkerboard(&a[k], &b[k], tile)
-        })
-        .collect();
-    write_rgb(&side_by_side(&boards), &paths[1])?;
-    let scale = (256 / engine.bins as u32).max(1);
-    let hist = joint_histogram3(&fixed, &moving, &t, engine.bins, kind);
-    write_rgb(&histogram_image(&hist.counts, engine.bins, scale), &paths[2])?;
-    let before = joint_histogram3(&fixed, &moving, &engine.initial, engine.bins, kind);
-    write_rgb(&histogram_image(&before.counts, engine.bins, scale), &paths[3])?;
-    let traces: Vec<&[f64]> = r.levels.iter().map(|l| l.trace.as_slice()).collect();
-    write_rgb(&trace_picture(&traces), &paths[4])?;
+    write_pictures3((&fixed, &moving), &engine, &r, &paths)?;
     let k = std::f64::consts::LN_2 * o.common.base.per_nat();
     let sp = fixed.spacing;
     let mut rep = Report::new();
@@ -160,34 +151,58 @@ pub fn run_register3(o: &RegisterOptions) -> Result<Report, CliError> {
         .reals("translation", t.t.to_vec())
         .reals("translation_voxels", (0..3).map(|a| t.t[a] / sp[a]).collect())
         .text("convention", CONVENTION_3D);
-    measures(&mut rep, o, metric, &r.entropies, r.initial_entropies.as_ref());
-    rep.real("overlap", r.overlap, None)
-        .count("iterations", r.levels.iter().map(|l| l.iterations as u64).sum())
-        .count("evaluations", r.levels.iter().map(|l| l.evaluations as u64).sum())
-        .real("estimated_seconds", estimate, Some("s"))
-        .real("seconds", seconds, Some("s"));
-    let levels: Vec<Report> = r
-        .levels
-        .iter()
-        .map(|l| {
-            let counts = (l.iterations, l.evaluations);
-            level_report(l.level, &l.size, counts, &l.transform.params(), &l.trace, metric, k)
+    let levels = r.levels.iter().map(|l| {
+        let counts = (l.iterations, l.evaluations);
+        level_report(l.level, &l.size, counts, &l.transform.params(), &l.trace, metric, k)
+    });
+    let counts = r.levels.iter().map(|l| (l.iterations, l.evaluations));
+    let outcome = Outcome { entropies: &r.entropies, initial: r.initial_entropies.as_ref(), overlap: r.overlap };
+    outcome.report(&mut rep, o, metric, (counts, levels.collect()), (Some(estimate), seconds));
+    if let Some(truth) = truth {
+        truth_report(&mut rep, &t, &truth, (fixed.dims, sp));
+    }
+    write_result(rep, &paths)
+}
+
+/// The errors against `--truth`: rotation, translation (in voxels too) and
+/// the corners' distance, and whether they make a success ([`SUCCESS`]).
+fn truth_report(rep: &mut Report, t: &Rigid3, truth: &Rigid3, (dims, sp): ([usize; 3], [f64; 3])) {
+    let rot = t.rotation_distance_deg(truth);
+    let d: [f64; 3] = core::array::from_fn(|a| t.t[a] - truth.t[a]);
+    let trans = d.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let voxels_off = (0..3).map(|a| (d[a] / sp[a]).powi(2)).sum::<f64>().sqrt();
+    rep.real("rotation_error_deg", rot, Some("deg"))
+        .real("translation_error", trans, None)
+        .real("translation_error_voxels", voxels_off, Some("voxels"))
+        .real("corner_error", t.corner_distance(truth, dims, sp), None)
+        .flag("success", rot < SUCCESS.0 && voxels_off < SUCCESS.1);
+}
+
+/// The registered volume, the middle slices' checkerboards, the joint
+/// histograms after and before, and the metric's trace.
+fn write_pictures3(
+    (fixed, moving): (&Gray3, &Gray3),
+    engine: &Engine<Rigid3>,
+    r: &Registration3,
+    paths: &[std::path::PathBuf],
+) -> Result<(), CliError> {
+    let t = r.transform;
+    let registered = resample3(moving, &t, 0.0);
+    write_nrrd(&registered, &paths[0])?;
+    let (a, b) = (middle_slices(fixed), middle_slices(&registered));
+    let boards: Vec<_> = (0..3)
+        .map(|k| {
+            let tile = (a[k].width.max(a[k].height) / 8).max(2);
+            checkerboard(&a[k], &b[k], tile)
         })
         .collect();
-    rep.records("levels", levels);
-    if let Some(truth) = truth {
-        let rot = t.rotation_distance_deg(&truth);
-        let d: [f64; 3] = core::array::from_fn(|a| t.t[a] - truth.t[a]);
-        let trans = d.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let voxels_off = (0..3).map(|a| (d[a] / sp[a]).powi(2)).sum::<f64>().sqrt();
-        rep.real("rotation_error_deg", rot, Some("deg"))
-            .real("translation_error", trans, None)
-            .real("translation_error_voxels", voxels_off, Some("voxels"))
-            .real("corner_error", t.corner_distance(&truth, fixed.dims, sp), None)
-            .flag("success", rot < SUCCESS.0 && voxels_off < SUCCESS.1);
-    }
-    rep.texts("files", paths.iter().map(|p| p.display().to_string()).collect());
-    let text = serde_json::to_string_pretty(&rep.to_json()).unwrap_or_default();
-    crate::output::write(&paths[5], format!("{text}\n").as_bytes())?;
-    Ok(rep)
+    write_rgb(&side_by_side(&boards), &paths[1])?;
+    let scale = (256 / engine.bins as u32).max(1);
+    let hist = joint_histogram3(fixed, moving, &t, engine.bins, engine.kind);
+    write_rgb(&histogram_image(&hist.counts, engine.bins, scale), &paths[2])?;
+    let before = joint_histogram3(fixed, moving, &engine.initial, engine.bins, engine.kind);
+    write_rgb(&histogram_image(&before.counts, engine.bins, scale), &paths[3])?;
+    let traces: Vec<&[f64]> = r.levels.iter().map(|l| l.trace.as_slice()).collect();
+    write_rgb(&trace_picture(&traces), &paths[4])?;
+    Ok(())
 }

@@ -4,11 +4,13 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use itgfx_backends::open;
-use itgfx_backends::tracer::Prepared;
-use itgfx_backends::viewpoint::saliency::{mesh_saliency, patch_adjacency, smooth, viewpoint_saliency};
-use itgfx_backends::viewpoint::selection::{best_views, exploration, importance_information};
-use itgfx_backends::viewpoint::solid_angle::Refinement;
-use itgfx_backends::viewpoint::{ViewpointAnalysis, ViewpointChannel, ViewpointWeights, icosphere};
+use itgfx_backends::scene::Scene;
+use itgfx_backends::tracer::{Prepared, Tracer};
+use itgfx_backends::viewpoint::saliency::smooth;
+use itgfx_backends::viewpoint::solid_angle::{Convergence, Refinement};
+use itgfx_backends::viewpoint::study::{Study, StudySettings};
+use itgfx_backends::viewpoint::{ViewpointChannel, ViewpointWeights, icosphere};
+use itgfx_core::Base;
 
 use super::ViewpointsOptions;
 use crate::CliError;
@@ -41,24 +43,67 @@ fn core_err(e: itgfx_core::Error) -> CliError {
     CliError::usage(format!("viewpoint channel: {e}"))
 }
 
-/// Runs `itgfx viewpoints`.
+/// Runs `itgfx viewpoints`: checks, the channel (traced, merged from shards,
+/// or a shard saved), the study ([`Study`]), the report, the pictures.
 ///
 /// # Errors
 /// Usage, scene and backend errors.
-#[allow(clippy::too_many_lines)]
 pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
     let spec = o.mesh.clone().ok_or_else(|| CliError::usage("give a mesh: an .obj file or a built-in scene name"))?;
-    let base = o.common.base;
-    let unit = Some(base.unit());
-    let level = viewpoint_level(o.viewpoints);
-    let grid = o.estimator == "grid";
-    if !grid && o.resolution.is_some() {
+    if o.estimator != "grid" && o.resolution.is_some() {
         return Err(CliError::usage("--resolution sets the ray grid: give it with --estimator grid"));
     }
     super::shard::check(o, &pictures(o))?;
-    let resolution = o.resolution.unwrap_or(128);
-    let (distance, capture, max_views, steps, rounds) =
-        (o.distance, o.selection.capture, o.selection.best_n, o.selection.explore, o.smooth);
+    let outputs = checked_pictures(o)?;
+    let scene = load_scene(&spec, o.subdivide)?;
+    let dirs = icosphere(viewpoint_level(o.viewpoints));
+    memory_check(&scene, dirs.len())?;
+    let t0 = Instant::now();
+    let prepared = Prepared::new(&scene);
+    let tracer = open(o.tracing.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
+    let refine = Refinement {
+        distance: o.distance,
+        tolerance: o.tolerance,
+        max: o.max_subdivision,
+        first: Refinement::default().first.min(o.max_subdivision),
+        weights: weights(o),
+        background: o.background,
+    };
+    if let Some(s) = o.shards.shard {
+        return super::shard::save(o, s, &scene.name, &prepared, tracer.as_ref(), &dirs, &refine);
+    }
+    let (ch, convergence) = channel(o, &spec, &scene.name, &prepared, tracer.as_ref(), &dirs, &refine)?;
+    let t_channel = t0.elapsed().as_secs_f64();
+    if ch.is_blind() {
+        return Err(CliError::usage(format!("{spec}: no viewpoint sees any polygon (an empty mesh?)")));
+    }
+    let settings = StudySettings {
+        weights: weights(o),
+        background: o.background,
+        capture: o.selection.capture,
+        best_n: o.selection.best_n,
+        explore: o.selection.explore,
+        base: o.common.base,
+    };
+    let study = Study::run(&scene, ch, &settings).map_err(core_err)?;
+    let seconds = t0.elapsed().as_secs_f64();
+    let mut r = report(o, (&scene, tracer.name(), &dirs), &study, convergence.as_ref());
+    let written = write_pictures(o, &outputs, (&scene, tracer.as_ref(), &dirs), &study)?;
+    r.reals("exploration_directions", study.tour.path.iter().flat_map(|&v| dirs[v].to_array()).collect());
+    if !written.is_empty() {
+        r.texts("wrote", written.iter().map(|p| p.display().to_string()).collect());
+    }
+    r.real("channel_seconds", t_channel, Some("s")).real("seconds", seconds, Some("s"));
+    Ok(r)
+}
+
+/// `p(V)`: uniform with `--uniform-input`, else by projected area.
+fn weights(o: &ViewpointsOptions) -> ViewpointWeights {
+    if o.uniform_input { ViewpointWeights::Uniform } else { ViewpointWeights::ProjectedArea }
+}
+
+/// The pictures asked for, every path checked (and `--out` made) before any work.
+fn checked_pictures(o: &ViewpointsOptions) -> Result<Vec<(&'static str, &'static str, Option<PathBuf>)>, CliError> {
     let outputs = pictures(o);
     let checked =
         || outputs.iter().try_for_each(|(flag, _, p)| p.as_ref().map_or(Ok(()), |p| crate::output::check(flag, p)));
@@ -66,102 +111,62 @@ pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
         Some(d) => crate::output::out_dir_checked(d, checked).map(|_| ())?,
         None => checked()?,
     }
-    let path = |flag: &str| outputs.iter().find(|x| x.0 == flag).and_then(|x| x.2.clone());
-    let weights = if o.uniform_input { ViewpointWeights::Uniform } else { ViewpointWeights::ProjectedArea };
-    let (background, per_polygon) = (o.background, o.per_polygon);
-    let scene = load_scene(&spec, o.subdivide)?;
-    let dirs = icosphere(level);
-    memory_check(&scene, dirs.len())?;
-    let t0 = Instant::now();
-    let prepared = Prepared::new(&scene);
-    let tracer = open(o.tracing.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
+    Ok(outputs)
+}
+
+/// The channel: merged from `--merge`'s shards, or traced by the grid or
+/// the solid-angle estimator (with its convergence).
+fn channel(
+    o: &ViewpointsOptions,
+    spec: &str,
+    name: &str,
+    prepared: &Prepared,
+    tracer: &dyn Tracer,
+    dirs: &[glam::DVec3],
+    refine: &Refinement,
+) -> Result<(ViewpointChannel, Option<Convergence>), CliError> {
+    if !o.shards.merge.is_empty() {
+        return super::shard::merged(o, name, prepared, tracer, dirs, refine);
+    }
     let mut progress = Progress::new();
     let mut tick = |d, t| progress.update(d, t);
-    let refine = Refinement {
-        distance,
-        tolerance: o.tolerance,
-        max: o.max_subdivision,
-        first: Refinement::default().first.min(o.max_subdivision),
-        weights,
-        background,
-    };
-    if let Some(s) = o.shards.shard {
-        return super::shard::save(o, s, &scene.name, &prepared, tracer.as_ref(), &dirs, &refine);
-    }
-    let (ch, convergence) = if !o.shards.merge.is_empty() {
-        super::shard::merged(o, &scene.name, &prepared, tracer.as_ref(), &dirs, &refine)?
-    } else if grid {
-        let ch = ViewpointChannel::build(&prepared, tracer.as_ref(), &dirs, distance, resolution, &mut tick)
+    if o.estimator == "grid" {
+        let ch = ViewpointChannel::build(prepared, tracer, dirs, o.distance, o.resolution.unwrap_or(128), &mut tick)
             .map_err(|e| CliError::usage(e.to_string()))?;
-        (ch, None)
-    } else {
-        let (ch, c) = ViewpointChannel::build_solid_angle(&prepared, tracer.as_ref(), &dirs, &refine, &mut tick)
-            .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
-        (ch, Some(c))
-    };
-    let t_channel = t0.elapsed().as_secs_f64();
-    if ch.is_blind() {
-        return Err(CliError::usage(format!("{spec}: no viewpoint sees any polygon (an empty mesh?)")));
+        return Ok((ch, None));
     }
-    let neighbours = ch.neighbours(6);
-    let (rays_per_viewpoint, channel_entries) = (ch.rays_per_viewpoint, ch.patch.len() as u64);
-    // Without the background the analysis takes the channel's rows over
-    // (the same numbers as `new`, without a second copy of its entries).
-    let an = if background {
-        ViewpointAnalysis::new(&ch, weights, background)
-    } else {
-        ViewpointAnalysis::from_channel(ch, weights)
-    }
-    .map_err(core_err)?;
-    let m = an.measures(&scene.areas(), base).map_err(core_err)?;
-    // One logarithm per channel entry, shared by the instability and the
-    // best-n search (each row meets many others), freed before saliency
-    // takes its own per-column table.
-    let logs = an.entry_logs();
-    let instability = an.instability_logs(&neighbours, &logs, base).map_err(core_err)?;
-    let best_n = best_views(&an, &m, capture, max_views, base, Some(&logs)).map_err(core_err)?;
-    drop(logs);
-    let poly_info = an.polygonal_information(base).map_err(core_err)?;
-    let adjacency = patch_adjacency(&scene);
-    let saliency = mesh_saliency(&an, &adjacency, base).map_err(core_err)?;
-    let view_saliency = viewpoint_saliency(&an, &saliency);
-    let importance = importance_information(&an, &saliency, base).map_err(core_err)?;
-    let best_importance = argmin(&importance);
-    let tour = exploration(&an, &neighbours, m.best, steps, base).map_err(core_err)?;
-    let seconds = t0.elapsed().as_secs_f64();
+    let (ch, c) = ViewpointChannel::build_solid_angle(prepared, tracer, dirs, refine, &mut tick)
+        .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
+    Ok((ch, Some(c)))
+}
 
+/// The report: the channel, its estimator's convergence, the measures, the
+/// selections, one record per viewpoint, and per polygon with `--per-polygon`.
+fn report(
+    o: &ViewpointsOptions,
+    (scene, backend, dirs): (&Scene, &str, &[glam::DVec3]),
+    study: &Study,
+    convergence: Option<&Convergence>,
+) -> Report {
+    let base = o.common.base;
+    let unit = Some(base.unit());
+    let (m, best_n, tour) = (&study.measures, &study.best_n, &study.tour);
+    let best_importance = argmin(&study.importance);
     let mut r = Report::new();
-    r.text("mesh", scene.name.clone()).text("backend", tracer.name());
+    r.text("mesh", scene.name.clone()).text("backend", backend);
     r.count("polygons", scene.patches.len() as u64).count("viewpoints", dirs.len() as u64);
-    r.text("estimator", if grid { "grid" } else { "solid-angle" });
-    if let Some(c) = &convergence {
-        let met = c.met.iter().filter(|&&m| m).count();
-        r.real("tolerance", o.tolerance, None)
-            .flag("tolerance_met", met == c.met.len())
-            .count("views_meeting_tolerance", met as u64)
-            .count("visibility_rays", c.rays)
-            .count("boundary_triangles", c.boundary_triangles)
-            .count("max_subdivision_used", u64::from(c.subdivision.iter().copied().max().unwrap_or(0)));
-        if met < c.met.len() {
-            eprintln!(
-                "itgfx: warning: {} of {} viewpoints missed --tolerance {} at --max-subdivision {} (see VMI_stderr)",
-                c.met.len() - met,
-                c.met.len(),
-                o.tolerance,
-                o.max_subdivision
-            );
+    r.text("estimator", if convergence.is_none() { "grid" } else { "solid-angle" });
+    match convergence {
+        Some(c) => convergence_report(o, c, &mut r),
+        None => {
+            r.count("rays_per_viewpoint", study.rays_per_viewpoint);
         }
-    } else {
-        r.count("rays_per_viewpoint", rays_per_viewpoint);
     }
-    r.count("channel_entries", channel_entries);
-    r.text("p_v", if weights == ViewpointWeights::Uniform { "uniform" } else { "projected area" });
-    r.text("background", if background { "an extra polygon" } else { "excluded" });
-    r.real("I_VO", m.total_mutual_information, unit).real("H_O_given_V", m.conditional_entropy, unit).real(
-        "H_O",
-        m.object_entropy,
-        unit,
-    );
+    r.count("channel_entries", study.channel_entries);
+    r.text("p_v", if weights(o) == ViewpointWeights::Uniform { "uniform" } else { "projected area" });
+    r.text("background", if o.background { "an extra polygon" } else { "excluded" });
+    r.real("I_VO", m.total_mutual_information, unit).real("H_O_given_V", m.conditional_entropy, unit);
+    r.real("H_O", m.object_entropy, unit);
     r.count("best_view", m.best as u64).count("worst_view", m.worst as u64);
     r.reals("best_view_direction", dirs[m.best].to_array().to_vec())
         .reals("worst_view_direction", dirs[m.worst].to_array().to_vec());
@@ -171,39 +176,73 @@ pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
     r.reals("best_n_merged_VMI", best_n.merged_information.clone()).reals("best_n_captured", best_n.captured.clone());
     r.counts("exploration_path", tour.path.iter().map(|&v| v as u64).collect());
     r.reals("exploration_merged_VMI", tour.merged_information.clone());
-    let mut views = Vec::new();
-    for (v, d) in dirs.iter().enumerate() {
-        let mut x = Report::new();
-        x.reals("direction", d.to_array().to_vec());
-        x.real("p_v", m.weight[v], None).real("VE", m.entropy[v], unit).real("VMI", m.mutual_information[v], unit);
-        if let Some(c) = &convergence {
-            // The builder's standard errors are in nats.
-            x.real("VMI_stderr", c.vmi_stderr[v] * base.per_nat(), unit).flag("tolerance_met", c.met[v]);
-        }
-        x.maybe_real("VKL", Some(m.kullback_leibler[v]).filter(|x| !x.is_nan()), unit).real("HM", m.heuristic[v], None);
-        x.maybe_real("instability", Some(instability[v]).filter(|x| x.is_finite()), unit);
-        x.real("saliency", view_saliency[v], unit).real("importance_VMI", importance[v], unit);
-        views.push(x);
-    }
+    let views = (0..dirs.len()).map(|v| view_record(v, dirs[v], study, convergence, base)).collect();
     r.records("views", views);
-    if per_polygon {
-        r.reals("polygonal_information", poly_info[..scene.patches.len()].to_vec())
-            .reals("saliency", saliency.clone())
-            .reals("p_o", an.p_o[..scene.patches.len()].to_vec());
+    if o.per_polygon {
+        let n = scene.patches.len();
+        r.reals("polygonal_information", study.polygonal_information[..n].to_vec())
+            .reals("saliency", study.saliency.clone())
+            .reals("p_o", study.analysis.p_o[..n].to_vec());
     }
+    r
+}
 
-    // Pictures.
-    let size = (640, 480);
-    let tracer = tracer.as_ref();
+/// The solid-angle estimator's convergence, with a warning when some
+/// viewpoint missed `--tolerance`.
+fn convergence_report(o: &ViewpointsOptions, c: &Convergence, r: &mut Report) {
+    let met = c.met.iter().filter(|&&m| m).count();
+    r.real("tolerance", o.tolerance, None)
+        .flag("tolerance_met", met == c.met.len())
+        .count("views_meeting_tolerance", met as u64)
+        .count("visibility_rays", c.rays)
+        .count("boundary_triangles", c.boundary_triangles)
+        .count("max_subdivision_used", u64::from(c.subdivision.iter().copied().max().unwrap_or(0)));
+    if met < c.met.len() {
+        eprintln!(
+            "itgfx: warning: {} of {} viewpoints missed --tolerance {} at --max-subdivision {} (see VMI_stderr)",
+            c.met.len() - met,
+            c.met.len(),
+            o.tolerance,
+            o.max_subdivision
+        );
+    }
+}
+
+/// One viewpoint's record.
+fn view_record(v: usize, d: glam::DVec3, study: &Study, convergence: Option<&Convergence>, base: Base) -> Report {
+    let unit = Some(base.unit());
+    let m = &study.measures;
+    let mut x = Report::new();
+    x.reals("direction", d.to_array().to_vec());
+    x.real("p_v", m.weight[v], None).real("VE", m.entropy[v], unit).real("VMI", m.mutual_information[v], unit);
+    if let Some(c) = convergence {
+        // The builder's standard errors are in nats.
+        x.real("VMI_stderr", c.vmi_stderr[v] * base.per_nat(), unit).flag("tolerance_met", c.met[v]);
+    }
+    x.maybe_real("VKL", Some(m.kullback_leibler[v]).filter(|x| !x.is_nan()), unit).real("HM", m.heuristic[v], None);
+    x.maybe_real("instability", Some(study.instability[v]).filter(|x| x.is_finite()), unit);
+    x.real("saliency", study.view_saliency[v], unit).real("importance_VMI", study.importance[v], unit);
+    x
+}
+
+/// Writes the pictures asked for; returns the paths written.
+fn write_pictures(
+    o: &ViewpointsOptions,
+    outputs: &[(&'static str, &'static str, Option<PathBuf>)],
+    (scene, tracer, dirs): (&Scene, &dyn Tracer, &[glam::DVec3]),
+    study: &Study,
+) -> Result<Vec<PathBuf>, CliError> {
+    let path = |flag: &str| outputs.iter().find(|x| x.0 == flag).and_then(|x| x.2.clone());
+    let (m, size) = (&study.measures, (640, 480));
     let grey: Vec<[u8; 3]> = vec![[200, 200, 205]; scene.patches.len()];
-    let shot = |cols: &[[u8; 3]], v: usize, size| render_image(tracer, cols, dirs[v] * distance, size, Faces::Both);
+    let shot = |cols: &[[u8; 3]], v: usize, size| render_image(tracer, cols, dirs[v] * o.distance, size, Faces::Both);
     let mut written = Vec::new();
     // Information-theoretic ambient occlusion: a grey level per polygon from
     // I(o;V); polygons seen from few viewpoints (occluded) carry the most.
     // Pictures show the fields averaged over neighbours `--smooth` times.
     let patches = scene.patches.len();
-    let shown_info = smooth(&poly_info[..patches], &adjacency, rounds);
-    let shown_saliency = smooth(&saliency, &adjacency, rounds);
+    let shown_info = smooth(&study.polygonal_information[..patches], &study.adjacency, o.smooth);
+    let shown_saliency = smooth(&study.saliency, &study.adjacency, o.smooth);
     let ao = grey_levels(&shown_info);
     if let Some(p) = path("--best-image") {
         save(&shot(&grey, m.best, size)?, &p, &mut written)?;
@@ -212,15 +251,15 @@ pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
         save(&shot(&grey, m.worst, size)?, &p, &mut written)?;
     }
     if let Some(p) = path("--best-n-image") {
-        let imgs = best_n.views.iter().map(|&v| shot(&grey, v, (320, 240))).collect::<Result<Vec<_>, _>>()?;
+        let imgs = study.best_n.views.iter().map(|&v| shot(&grey, v, (320, 240))).collect::<Result<Vec<_>, _>>()?;
         save(&montage(&imgs, 3), &p, &mut written)?;
     }
     if let Some(p) = path("--importance-image") {
-        save(&shot(&colours(&shown_saliency), best_importance, size)?, &p, &mut written)?;
+        save(&shot(&colours(&shown_saliency), argmin(&study.importance), size)?, &p, &mut written)?;
     }
     if let Some(p) = path("--sphere-image") {
         let vmi: Vec<f64> = m.mutual_information.iter().map(|&x| if x.is_finite() { x } else { f64::NAN }).collect();
-        save(&sphere_image(&dirs, &[&vmi, &m.entropy], dirs[m.best], 160), &p, &mut written)?;
+        save(&sphere_image(dirs, &[&vmi, &m.entropy], dirs[m.best], 160), &p, &mut written)?;
     }
     if let Some(p) = path("--ao-image") {
         save(&shot(&ao, m.best, size)?, &p, &mut written)?;
@@ -232,19 +271,14 @@ pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
         save(&shot(&colours(&shown_info), m.best, size)?, &p, &mut written)?;
     }
     if let Some(p) = path("--export-ply") {
-        write_ply_with(&scene, &shown_info, &ao, &p)?;
+        write_ply_with(scene, &shown_info, &ao, &p)?;
         written.push(p);
     }
     if let Some(p) = path("--saliency-ply") {
-        write_ply_with(&scene, &shown_saliency, &colours(&shown_saliency), &p)?;
+        write_ply_with(scene, &shown_saliency, &colours(&shown_saliency), &p)?;
         written.push(p);
     }
-    r.reals("exploration_directions", tour.path.iter().flat_map(|&v| dirs[v].to_array()).collect());
-    if !written.is_empty() {
-        r.texts("wrote", written.iter().map(|p| p.display().to_string()).collect());
-    }
-    r.real("channel_seconds", t_channel, Some("s")).real("seconds", seconds, Some("s"));
-    Ok(r)
+    Ok(written)
 }
 
 fn save(img: &image::RgbImage, path: &Path, written: &mut Vec<PathBuf>) -> Result<(), CliError> {

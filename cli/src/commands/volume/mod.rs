@@ -14,6 +14,7 @@ mod pictures;
 mod routes;
 mod series;
 pub mod shard;
+mod study;
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -21,20 +22,18 @@ use std::time::Instant;
 use clap::Args;
 use itgfx_backends::BackendChoice;
 use itgfx_backends::backend::{open_volume, volume_memory};
-use itgfx_backends::viewpoint::selection::{best_views, exploration};
 use itgfx_backends::viewpoint::{ViewpointWeights, icosphere};
 use itgfx_backends::volume::channel::{channel_memory, seeable_voxels};
 use itgfx_backends::volume::raycast::Caster;
-use itgfx_backends::volume::{TransferFunction, VolumeChannelOptions, volume_channel, volume_measures};
+use itgfx_backends::volume::{TransferFunction, VolumeChannelOptions, volume_channel};
 
+use crate::CliError;
 use crate::options::Common;
 use crate::progress::Progress;
 use crate::report::Report;
-use crate::values::{argmin, backend, distance, out_path, threads, viewpoint_count, viewpoint_level};
-use crate::{CliError, core_err};
-use input::{dims, focus, image_side, iso_value, load, size, spacing, step, transfer, volume_help};
-use pictures::{PICTURES, Shots};
-use routes::{correlation, iso_route, object_measures};
+use crate::values::{backend, distance, out_path, threads, viewpoint_count, viewpoint_level};
+use input::{dims, image_side, iso_value, size, spacing, step, transfer, volume_help};
+use study::{Inputs, Study};
 
 /// Most memory the channel may take (estimated before any ray is cast).
 pub const MEMORY_LIMIT: u64 = 6 << 30;
@@ -143,8 +142,7 @@ pub fn run(o: &VolumeOptions) -> Result<Report, CliError> {
         Some(d) => crate::output::out_dir(d)?,
         None => None,
     };
-    let result =
-        if o.time.is_some() { series::run(o, &spec, &tf, base, unit) } else { run_in(o, &spec, &tf, base, unit) };
+    let result = if o.time.is_some() { series::run(o, &spec, &tf, base, unit) } else { run_in(o, &spec, &tf) };
     if result.is_err()
         && let Some(d) = created
     {
@@ -188,54 +186,21 @@ fn out_paths(o: &VolumeOptions, names: &[&str]) -> Result<Vec<PathBuf>, CliError
     Ok(paths)
 }
 
-#[allow(clippy::too_many_lines)]
-fn run_in(
-    o: &VolumeOptions,
-    spec: &str,
-    tf: &TransferFunction,
-    base: itgfx_core::Base,
-    unit: Option<&'static str>,
-) -> Result<Report, CliError> {
-    shard::check(o)?;
-    let outputs = out_paths(o, &PICTURES)?;
-    let volume = load(o, spec)?;
-    let focus = o.focus.as_deref().map(|f| focus(&volume, f)).transpose()?;
-    let between =
-        o.path_between.as_deref().map(|s| between::labels(&volume, s, o.path_steps.unwrap_or(8))).transpose()?;
-    let between_png = o.out.as_ref().filter(|_| between.is_some()).map(|d| d.join(between::PICTURE));
-    // The guided tour's montage, and each object's characteristic view for a labelled volume.
-    let tour_png = o.out.as_ref().map(|d| d.join(pictures::TOUR));
-    let objects_png = o.out.as_ref().filter(|_| volume.labels.is_some()).map(|d| d.join(pictures::OBJECTS));
-    for p in [&between_png, &tour_png, &objects_png].into_iter().flatten() {
-        crate::output::check("--out", p)?;
-    }
-    let (lo, hi) = volume.range();
-    if lo >= hi {
-        return Err(CliError::usage(format!("{}: constant volume (every voxel is {lo}): nothing to see", volume.name)));
-    }
+/// One volume's run: its inputs, the caster, the memory the channel needs,
+/// the channel (cast, merged, or a shard saved), the study, the report and
+/// the pictures.
+fn run_in(o: &VolumeOptions, spec: &str, tf: &TransferFunction) -> Result<Report, CliError> {
+    let inputs = Inputs::read(o, spec)?;
+    let volume = &inputs.volume;
     let t0 = Instant::now();
-    let caster = Caster::new(&volume, tf, o.step);
+    let caster = Caster::new(volume, tf, o.step);
     if caster.voxel_opacity.iter().all(|&a| a <= 0.0) {
         return Err(CliError::usage(format!("{}: the transfer function makes every voxel transparent", volume.name)));
     }
     let dirs = icosphere(viewpoint_level(o.viewpoints));
-    let (first, end) = shard::range(o, dirs.len());
     let largest = volume.dims.iter().copied().max().unwrap_or(1) as u32;
     let rays = o.size.unwrap_or((2 * largest).clamp(32, 512));
-    // The device's buffers too when it casts: on lavapipe they are host memory.
-    let casting = if o.shards.merge.is_empty() { u64::from(rays) * u64::from(rays) } else { 0 };
-    let need = channel_memory(&caster, seeable_voxels(&caster), end - first)
-        + if casting > 0 { volume_memory(o.backend, &caster, casting) } else { 0 };
-    if need > MEMORY_LIMIT {
-        return Err(CliError::usage(format!(
-            "{}: the channel may need {:.1} GiB (limit {} GiB): fewer --viewpoints or a smaller volume",
-            volume.name,
-            need as f64 / f64::from(1u32 << 30),
-            MEMORY_LIMIT >> 30
-        )));
-    }
-    itgfx_backends::memory::check(|| format!("{}: the channel", volume.name), need)
-        .map_err(|e| CliError::usage(format!("{e}: fewer --viewpoints or a smaller volume")))?;
+    let need = memory_need(o, &volume.name, &caster, shard::range(o, dirs.len()), rays)?;
     let backend_err = |e: itgfx_backends::BackendError| CliError::usage(e.to_string());
     if let Some(s) = o.shards.shard {
         return shard::save(o, s, &*open_volume(o.backend, &caster).map_err(backend_err)?, &dirs, rays, need);
@@ -256,163 +221,47 @@ fn run_in(
     if ch.is_blind() {
         return Err(CliError::usage(format!("{}: no viewpoint sees any voxel", volume.name)));
     }
-    let weights = if o.uniform_input { ViewpointWeights::Uniform } else { ViewpointWeights::ProjectedArea };
-    let err = |e| core_err("volume channel", e);
-    // What needs the raw rows comes first: the measures normalise them in place.
-    let (entries, rays_per_viewpoint, neighbours) = (ch.patch.len() as u64, ch.rays_per_viewpoint, ch.neighbours(6));
-    let objects = volume
-        .labels
-        .as_ref()
-        .map(|l| object_measures(&ch, &volume, l, &volume.label_names, weights, base))
-        .transpose()?;
-    let m = volume_measures(ch, &dirs, &caster.voxel_opacity, focus.as_ref().map(|f| f.0.as_slice()), weights, base)
-        .map_err(err)?;
-    let v = &m.views;
-    let t_measures = t0.elapsed().as_secs_f64() - t_channel;
-    let best_n = best_views(&m.analysis, v, o.selection.capture, o.selection.best_n, base, None).map_err(err)?;
-    let tour = exploration(&m.analysis, &neighbours, v.best, o.selection.explore, base).map_err(err)?;
-    // Without a logarithm held per entry: the memory estimate counts 12 bytes an entry.
-    let instability = m.analysis.instability_lean(&neighbours, base).map_err(err)?;
-    let seen = m.analysis.expand(&m.analysis.seen_angle, 0.0);
-    let iso = o.iso.map(|f| iso_route(&volume, f, &dirs, o.distance, rays, base)).transpose()?;
-    let path_between = match (&between, &objects) {
-        (Some(b), Some(ob)) => {
-            let backend = open_volume(o.backend, &caster).map_err(backend_err)?;
-            Some(between::path(b, &volume, &*backend, &dirs, ob, &m.analysis.p_o, (o.distance, rays), base)?)
-        }
-        _ => None,
-    };
+    let study = Study::run(o, &inputs, &caster, ch, (&dirs, rays))?;
     let seconds = t0.elapsed().as_secs_f64();
-
-    let mut r = Report::new();
-    r.text("volume", volume.name.clone()).text("backend", o.backend.name());
-    r.counts("dims", volume.dims.iter().map(|&d| d as u64).collect());
-    r.count("voxels", volume.voxels() as u64).count("viewpoints", dirs.len() as u64);
-    r.count("rays_per_viewpoint", rays_per_viewpoint).real("step_voxels", o.step, None);
-    r.count("channel_entries", entries);
-    r.count("voxels_seen", m.analysis.p_o.iter().filter(|&&p| p > 0.0).count() as u64);
-    r.text("p_v", if o.uniform_input { "uniform" } else { "visibility gathered" });
-    r.real("H_V", m.h_v, unit).real("H_Z", v.object_entropy, unit).real("H_Z_given_V", v.conditional_entropy, unit);
-    r.real("I_VZ", v.total_mutual_information, unit);
-    r.count("best_view", v.best as u64).count("worst_view", v.worst as u64);
-    r.reals("best_view_direction", dirs[v.best].to_array().to_vec());
-    r.reals("worst_view_direction", dirs[v.worst].to_array().to_vec());
-    let best_evmi = argmin(&m.evmi_opacity);
-    r.count("best_EVMI_opacity_view", best_evmi as u64);
-    r.count("best_EVMI_VoMI_view", argmin(&m.evmi_vomi) as u64);
-    let nw = &m.noteworthiness_entropy;
-    let best_nw = (0..nw.len()).max_by(|&a, &b| nw[a].total_cmp(&nw[b]).then(b.cmp(&a))).unwrap_or(0);
-    r.count("best_noteworthiness_VE_view", best_nw as u64);
-    if let (Some(f), Some((_, name))) = (&m.evmi_focus, &focus) {
-        r.text("focus", name.clone()).count("best_focus_view", argmin(f) as u64);
-        r.reals("best_focus_direction", dirs[argmin(f)].to_array().to_vec());
-    }
-    let vomi_max = m.vomi.iter().copied().fold(0.0, f64::max);
-    let vomi_mean: f64 = m.vomi.iter().zip(&m.analysis.p_o).map(|(i, p)| i * p).sum();
-    r.real("VoMI_max", vomi_max, unit).real("VoMI_mean_pz", vomi_mean, unit);
-    r.counts("best_n_views", best_n.views.iter().map(|&x| x as u64).collect());
-    r.reals("best_n_merged_VMI", best_n.merged_information.clone()).reals("best_n_captured", best_n.captured.clone());
-    r.counts("exploration_path", tour.path.iter().map(|&x| x as u64).collect());
-    if let Some(iso) = &iso {
-        r.real("iso", iso.value, None).count("iso_triangles", iso.triangles as u64);
-        r.real("iso_I_VO", iso.measures.total_mutual_information, unit);
-        r.count("iso_best_view", iso.measures.best as u64).count("iso_worst_view", iso.measures.worst as u64);
-        r.reals("iso_best_direction", dirs[iso.measures.best].to_array().to_vec());
-        let angle = dirs[iso.measures.best].angle_between(dirs[v.best]).to_degrees();
-        r.real("iso_best_angle_to_voxel_best_deg", angle, None);
-        // Symmetric volumes have many equally good views: the rank of the
-        // iso-surface's best view among the voxel route's VMIs says more than the angle.
-        let b = v.mutual_information[iso.measures.best];
-        let rank = v.mutual_information.iter().filter(|&&x| x < b - 1e-9 * b.abs()).count();
-        r.count("iso_best_voxel_rank", rank as u64);
-        r.maybe_real(
-            "iso_voxel_VMI_correlation",
-            correlation(&iso.measures.mutual_information, &v.mutual_information),
-            None,
-        );
-    }
-    if let Some(ob) = &objects {
-        r.real("object_I_VO", ob.measures.total_mutual_information, unit);
-        r.count("object_best_view", ob.measures.best as u64);
-        r.reals("object_best_direction", dirs[ob.measures.best].to_array().to_vec());
-        let recs = volume
-            .label_names
-            .iter()
-            .enumerate()
-            .map(|(k, name)| {
-                let mut x = Report::new();
-                x.text("name", name.clone()).real("p_o", ob.p_o[k], None).real("I_o_V", ob.information[k], unit);
-                if let Some(c) = ob.characteristic[k] {
-                    x.count("characteristic_view", c as u64)
-                        .reals("characteristic_direction", dirs[c].to_array().to_vec());
-                }
-                x
-            })
-            .collect();
-        r.records("objects", recs);
-    }
-    if let Some(p) = &path_between {
-        r.records("path_between", vec![p.report.clone()]);
-    }
-    let mut views = Vec::new();
-    for (k, d) in dirs.iter().enumerate() {
-        let mut x = Report::new();
-        x.reals("direction", d.to_array().to_vec());
-        x.real("p_v", v.weight[k], None).real("H_Z_given_v", v.entropy[k], unit).real(
-            "VMI",
-            v.mutual_information[k],
-            unit,
-        );
-        x.real("EVMI_opacity", m.evmi_opacity[k], unit).real("EVMI_VoMI", m.evmi_vomi[k], unit);
-        x.real("VE_noteworthiness", m.noteworthiness_entropy[k], unit);
-        if let Some(f) = &m.evmi_focus {
-            x.real("EVMI_focus", f[k], unit);
-        }
-        if let Some(iso) = &iso {
-            x.real("iso_VMI", iso.measures.mutual_information[k], unit);
-        }
-        if let Some(ob) = &objects {
-            x.real("object_VMI", ob.measures.mutual_information[k], unit);
-        }
-        x.maybe_real("instability", Some(instability[k]).filter(|x| x.is_finite()), unit);
-        x.real("visibility", seen[k] / rays_per_viewpoint as f64, None);
-        views.push(x);
-    }
-    r.records("views", views);
-    r.real("channel_seconds", t_channel, Some("s")).real("measures_seconds", t_measures, Some("s"));
+    let mut r = study.report(o, &inputs, &dirs);
+    r.real("channel_seconds", t_channel, Some("s")).real("measures_seconds", study.measures_seconds, Some("s"));
     r.real("seconds", seconds, Some("s"));
     r.real("memory_estimate_MiB", need as f64 / f64::from(1u32 << 20), None);
     if let Some(n) = host_rays {
         r.count("vulkan_rays_finished_on_host", n);
     }
-
     if let Some(dir) = &o.out {
-        let shots = Shots {
-            caster: &caster,
-            dirs: &dirs,
-            distance: o.distance,
-            side: o.image,
-            radius: caster.content_radius(),
-        };
-        shots.write(dir, &m, &best_n.views)?;
-        let mut files: Vec<String> = outputs.iter().map(|p| p.display().to_string()).collect();
-        let mut montages: Vec<(&PathBuf, Vec<glam::DVec3>)> = Vec::new();
-        if let (Some(p), Some(png)) = (&path_between, &between_png) {
-            montages.push((png, p.directions.clone()));
-        }
-        if let Some(png) = &tour_png {
-            montages.push((png, tour.path.iter().map(|&v| dirs[v]).collect()));
-        }
-        if let (Some(ob), Some(png)) = (&objects, &objects_png) {
-            montages.push((png, ob.characteristic.iter().flatten().map(|&v| dirs[v]).collect()));
-        }
-        for (png, directions) in montages {
-            pictures::montage_of(&caster, &directions, o.distance, shots.radius, o.image, png)?;
-            files.push(png.display().to_string());
-        }
-        r.texts("wrote", files);
-        let json = r.to_json().to_string();
-        crate::output::write(&dir.join(PICTURES[6]), json.as_bytes())?;
+        study.write(o, dir, &inputs, &caster, &dirs, &mut r)?;
     }
     Ok(r)
+}
+
+/// `p(V)`: uniform with `--uniform-input`, else by the visibility gathered.
+fn weights(o: &VolumeOptions) -> ViewpointWeights {
+    if o.uniform_input { ViewpointWeights::Uniform } else { ViewpointWeights::ProjectedArea }
+}
+
+/// The bytes the channel of viewpoints `first..end` may need (the device's
+/// buffers too when it casts: on lavapipe they are host memory), refused
+/// above [`MEMORY_LIMIT`] or what the process may use.
+fn memory_need(
+    o: &VolumeOptions,
+    name: &str,
+    caster: &Caster,
+    (first, end): (usize, usize),
+    rays: u32,
+) -> Result<u64, CliError> {
+    let casting = if o.shards.merge.is_empty() { u64::from(rays) * u64::from(rays) } else { 0 };
+    let need = channel_memory(caster, seeable_voxels(caster), end - first)
+        + if casting > 0 { volume_memory(o.backend, caster, casting) } else { 0 };
+    if need > MEMORY_LIMIT {
+        return Err(CliError::usage(format!(
+            "{name}: the channel may need {:.1} GiB (limit {} GiB): fewer --viewpoints or a smaller volume",
+            need as f64 / f64::from(1u32 << 30),
+            MEMORY_LIMIT >> 30
+        )));
+    }
+    itgfx_backends::memory::check(|| format!("{name}: the channel"), need)
+        .map_err(|e| CliError::usage(format!("{e}: fewer --viewpoints or a smaller volume")))?;
+    Ok(need)
 }

@@ -157,8 +157,9 @@ struct Frame {
     worst: usize,
 }
 
-/// Runs `itgfx volume --time SERIES`.
-#[allow(clippy::too_many_lines)]
+/// Runs `itgfx volume --time SERIES`: the frames, the memory they need,
+/// each frame's channel and measures, the static view and the dynamic path,
+/// the report and the montages.
 pub(super) fn run(
     o: &VolumeOptions,
     spec: &str,
@@ -176,7 +177,56 @@ pub(super) fn run(
     let max_turn = o.max_turn.map_or_else(|| neighbour_step(&dirs), f64::to_radians);
     let largest = frames[0].dims.iter().copied().max().unwrap_or(1) as u32;
     let rays = o.size.unwrap_or((2 * largest).clamp(32, 512));
-    // Memory: the process itself, every frame's values held, and one frame's channel at a time.
+    let (need, radius) = memory_need(o, &frames, (tf, range), dirs.len(), rays)?;
+    let t0 = Instant::now();
+    let per_frame = measure_frames(o, &frames, (tf, range), &dirs, rays, base)?;
+    let vmi: Vec<Vec<f64>> = per_frame.iter().map(|f| f.vmi.clone()).collect();
+    let stat =
+        static_view(&vmi).ok_or_else(|| CliError::usage("--time: no viewpoint sees the volume in every frame"))?;
+    let path = dynamic_path(&vmi, &dirs, max_turn).ok_or_else(|| {
+        CliError::usage(format!(
+            "--time: no view path within --max-turn {:.1} degrees sees the volume in every frame",
+            max_turn.to_degrees()
+        ))
+    })?;
+    let seconds = t0.elapsed().as_secs_f64();
+    let mut r = Report::new();
+    r.text("series", spec).count("frames", frames.len() as u64).text("backend", o.backend.name());
+    r.counts("dims", frames[0].dims.iter().map(|&d| d as u64).collect());
+    r.count("viewpoints", dirs.len() as u64).count("rays_per_viewpoint", u64::from(rays) * u64::from(rays));
+    r.reals("range", vec![range.0, range.1]).real("max_turn_deg", max_turn.to_degrees(), None);
+    series_report(&mut r, (&frames, &per_frame, &vmi), &dirs, (stat, &path), unit);
+    r.real("seconds", seconds, Some("s")).real("memory_estimate_MiB", need as f64 / f64::from(1u32 << 20), None);
+    if o.out.is_some() {
+        let half = (o.image / 2).max(16);
+        let per_row = frames.len().min(8);
+        let shots = |pick: &dyn Fn(usize) -> usize| -> Vec<image::RgbImage> {
+            frames
+                .iter()
+                .enumerate()
+                .map(|(k, f)| view(&Caster::with_range(f, tf, o.step, range), dirs[pick(k)], o.distance, radius, half))
+                .collect()
+        };
+        write_png(&montage(&shots(&|k| path.0[k]), per_row), &outputs[0])?;
+        write_png(&montage(&shots(&|_| stat.0), per_row), &outputs[1])?;
+        write_png(&montage(&shots(&|k| per_frame[k].best), per_row), &outputs[2])?;
+        r.texts("wrote", outputs.iter().map(|p| p.display().to_string()).collect());
+        crate::output::write(&outputs[3], r.to_json().to_string().as_bytes())?;
+    }
+    Ok(r)
+}
+
+/// The memory the series needs (the process, every frame's values held,
+/// one frame's channel at a time), refused above [`MEMORY_LIMIT`] or what
+/// the process may use; with the largest content radius of the frames.
+/// Refuses a frame the transfer function makes transparent.
+fn memory_need(
+    o: &VolumeOptions,
+    frames: &[Volume],
+    (tf, range): (&TransferFunction, (f64, f64)),
+    views: usize,
+    rays: u32,
+) -> Result<(u64, f64), CliError> {
     let held: u64 = PROCESS + frames.iter().map(|f| f.voxels() as u64 * 5).sum::<u64>();
     let mut need = held;
     let mut radius: f64 = 0.0;
@@ -189,7 +239,7 @@ pub(super) fn run(
             )));
         }
         radius = radius.max(caster.content_radius());
-        let one = channel_memory(&caster, seeable_voxels(&caster), dirs.len())
+        let one = channel_memory(&caster, seeable_voxels(&caster), views)
             + volume_memory(o.backend, &caster, u64::from(rays) * u64::from(rays));
         need = need.max(held + one);
     }
@@ -202,7 +252,18 @@ pub(super) fn run(
     }
     itgfx_backends::memory::check(|| "--time: the series".into(), need)
         .map_err(|e| CliError::usage(format!("{e}: fewer --viewpoints, frames or voxels")))?;
-    let t0 = Instant::now();
+    Ok((need, radius))
+}
+
+/// Each frame's channel (cast, one at a time) and the measures kept of it.
+fn measure_frames(
+    o: &VolumeOptions,
+    frames: &[Volume],
+    (tf, range): (&TransferFunction, (f64, f64)),
+    dirs: &[DVec3],
+    rays: u32,
+    base: itgfx_core::Base,
+) -> Result<Vec<Frame>, CliError> {
     let weights = if o.uniform_input { ViewpointWeights::Uniform } else { ViewpointWeights::ProjectedArea };
     let (nf, nv) = (frames.len() as u64, dirs.len() as u64);
     let mut progress = Progress::new();
@@ -210,14 +271,14 @@ pub(super) fn run(
     for (k, f) in frames.iter().enumerate() {
         let caster = Caster::with_range(f, tf, o.step, range);
         let backend = open_volume(o.backend, &caster).map_err(|e| CliError::usage(e.to_string()))?;
-        let copts = VolumeChannelOptions { directions: dirs.clone(), distance: o.distance, size: rays };
+        let copts = VolumeChannelOptions { directions: dirs.to_vec(), distance: o.distance, size: rays };
         let kk = k as u64;
         let ch = volume_channel(&*backend, &copts, &mut |d, _| progress.update(kk * nv + d, nf * nv))
             .map_err(|e| CliError::usage(e.to_string()))?;
         if ch.is_blind() {
             return Err(CliError::usage(format!("--time frame {k} ({}): no viewpoint sees any voxel", f.name)));
         }
-        let m = volume_measures(ch, &dirs, &caster.voxel_opacity, None, weights, base)
+        let m = volume_measures(ch, dirs, &caster.voxel_opacity, None, weights, base)
             .map_err(|e| core_err(&format!("frame {k}"), e))?;
         per_frame.push(Frame {
             vmi: m.views.mutual_information.clone(),
@@ -230,43 +291,30 @@ pub(super) fn run(
             worst: m.views.worst,
         });
     }
-    let vmi: Vec<Vec<f64>> = per_frame.iter().map(|f| f.vmi.clone()).collect();
-    let (stat, stat_mean) =
-        static_view(&vmi).ok_or_else(|| CliError::usage("--time: no viewpoint sees the volume in every frame"))?;
-    // Noteworthiness VE is best at its maximum: its negative is the cost.
-    let neg_nw: Vec<Vec<f64>> = per_frame
-        .iter()
-        .map(|f| f.noteworthiness.iter().map(|&x| if x > 0.0 { -x } else { f64::INFINITY }).collect())
-        .collect();
-    let nw_view = static_view(&neg_nw);
-    let (path, path_mean) = dynamic_path(&vmi, &dirs, max_turn).ok_or_else(|| {
-        CliError::usage(format!(
-            "--time: no view path within --max-turn {:.1} degrees sees the volume in every frame",
-            max_turn.to_degrees()
-        ))
-    })?;
-    let lower = per_frame.iter().map(|f| f.vmi[f.best]).sum::<f64>() / per_frame.len() as f64;
-    let seconds = t0.elapsed().as_secs_f64();
+    Ok(per_frame)
+}
 
-    let mut r = Report::new();
-    r.text("series", spec).count("frames", nf).text("backend", o.backend.name());
-    r.counts("dims", frames[0].dims.iter().map(|&d| d as u64).collect());
-    r.count("viewpoints", nv).count("rays_per_viewpoint", u64::from(rays) * u64::from(rays));
-    r.reals("range", vec![range.0, range.1]).real("max_turn_deg", max_turn.to_degrees(), None);
+/// The series' report: one record per frame, the static view (least mean
+/// VMI, and the most noteworthy), the dynamic path, one record per viewpoint.
+fn series_report(
+    r: &mut Report,
+    (frames, per_frame, vmi): (&[Volume], &[Frame], &[Vec<f64>]),
+    dirs: &[DVec3],
+    ((stat, stat_mean), (path, path_mean)): ((usize, f64), &(Vec<usize>, f64)),
+    unit: Option<&'static str>,
+) {
+    let nf = frames.len() as f64;
     let dir = |v: usize| dirs[v].to_array().to_vec();
     let recs = per_frame
         .iter()
-        .zip(&frames)
+        .zip(frames)
         .enumerate()
         .map(|(k, (f, v))| {
             let mut x = Report::new();
             x.count("frame", k as u64).text("volume", v.name.clone());
             x.real("I_VZ", f.i_vz, unit).real("H_Z", f.h_z, unit).real("H_Z_given_V", f.h_z_given_v, unit);
-            x.count("best_view", f.best as u64).reals("best_direction", dir(f.best)).real(
-                "best_VMI",
-                f.vmi[f.best],
-                unit,
-            );
+            x.count("best_view", f.best as u64).reals("best_direction", dir(f.best));
+            x.real("best_VMI", f.vmi[f.best], unit);
             x.count("worst_view", f.worst as u64).real("static_view_VMI", f.vmi[stat], unit);
             x
         })
@@ -274,7 +322,12 @@ pub(super) fn run(
     r.records("frame_measures", recs);
     r.text("static_criterion", "least VMI averaged over the frames");
     r.count("static_view", stat as u64).reals("static_direction", dir(stat)).real("static_mean_VMI", stat_mean, unit);
-    if let Some((v, m)) = nw_view {
+    // Noteworthiness VE is best at its maximum: its negative is the cost.
+    let neg_nw: Vec<Vec<f64>> = per_frame
+        .iter()
+        .map(|f| f.noteworthiness.iter().map(|&x| if x > 0.0 { -x } else { f64::INFINITY }).collect())
+        .collect();
+    if let Some((v, m)) = static_view(&neg_nw) {
         r.count("static_noteworthiness_view", v as u64).reals("static_noteworthiness_direction", dir(v));
         r.real("static_noteworthiness_mean_VE", -m, unit);
     }
@@ -291,39 +344,19 @@ pub(super) fn run(
         })
         .collect();
     r.records("path", steps);
-    r.real("path_mean_VMI", path_mean, unit).real("per_frame_best_mean_VMI", lower, unit);
+    let lower = per_frame.iter().map(|f| f.vmi[f.best]).sum::<f64>() / nf;
+    r.real("path_mean_VMI", *path_mean, unit).real("per_frame_best_mean_VMI", lower, unit);
     let views = (0..dirs.len())
         .map(|v| {
             let mut x = Report::new();
             x.reals("direction", dir(v));
-            x.maybe_real(
-                "mean_VMI",
-                Some(vmi.iter().map(|f| f[v]).sum::<f64>() / nf as f64).filter(|x| x.is_finite()),
-                unit,
-            );
+            let mean = vmi.iter().map(|f| f[v]).sum::<f64>() / nf;
+            x.maybe_real("mean_VMI", Some(mean).filter(|x| x.is_finite()), unit);
             x.reals("VMI", vmi.iter().map(|f| if f[v].is_finite() { f[v] } else { f64::NAN }).collect());
             x
         })
         .collect();
     r.records("views", views);
-    r.real("seconds", seconds, Some("s")).real("memory_estimate_MiB", need as f64 / f64::from(1u32 << 20), None);
-    if o.out.is_some() {
-        let half = (o.image / 2).max(16);
-        let per_row = frames.len().min(8);
-        let shots = |pick: &dyn Fn(usize) -> usize| -> Vec<image::RgbImage> {
-            frames
-                .iter()
-                .enumerate()
-                .map(|(k, f)| view(&Caster::with_range(f, tf, o.step, range), dirs[pick(k)], o.distance, radius, half))
-                .collect()
-        };
-        write_png(&montage(&shots(&|k| path[k]), per_row), &outputs[0])?;
-        write_png(&montage(&shots(&|_| stat), per_row), &outputs[1])?;
-        write_png(&montage(&shots(&|k| per_frame[k].best), per_row), &outputs[2])?;
-        r.texts("wrote", outputs.iter().map(|p| p.display().to_string()).collect());
-        crate::output::write(&outputs[3], r.to_json().to_string().as_bytes())?;
-    }
-    Ok(r)
 }
 
 #[cfg(test)]

@@ -1,0 +1,103 @@
+//! A viewpoint study: every Part V result `itgfx viewpoints` reports, from a
+//! built channel, in the order that keeps memory low. The job behind the
+//! command's run; the CLI only words and writes what it holds.
+
+use itgfx_core::{Base, Error};
+
+use super::ViewpointChannel;
+use super::analysis::{ViewpointAnalysis, ViewpointMeasures, ViewpointWeights};
+use super::saliency::{mesh_saliency, patch_adjacency, viewpoint_saliency};
+use super::selection::{BestViews, Exploration, best_views, exploration, importance_information};
+use crate::scene::Scene;
+
+/// What a study asks for besides the channel.
+#[derive(Clone, Copy, Debug)]
+pub struct StudySettings {
+    /// `p(v)`: uniform or by projected area.
+    pub weights: ViewpointWeights,
+    /// The background counts as an extra polygon.
+    pub background: bool,
+    /// Best-n views stop once they capture this fraction of `I(V;O)`.
+    pub capture: f64,
+    /// At most this many best views.
+    pub best_n: usize,
+    /// Steps of the guided exploration from the best view.
+    pub explore: usize,
+    /// Logarithm base of every measure.
+    pub base: Base,
+}
+
+/// The results of a study.
+#[derive(Debug)]
+pub struct Study {
+    /// The channel's analysis (`p(v)`, `p(o)`, the rows).
+    pub analysis: ViewpointAnalysis,
+    /// VE, VMI, VKL, the heuristic and `I(V;O)` (Part V eqs. (1)-(7)).
+    pub measures: ViewpointMeasures,
+    /// Each viewpoint's instability against its 6 neighbours (Part V: stability).
+    pub instability: Vec<f64>,
+    /// The greedy best-n views (Part V: best view selection).
+    pub best_n: BestViews,
+    /// `I(o;V)` per polygon, from the reversed channel (Part V §3).
+    pub polygonal_information: Vec<f64>,
+    /// The polygons' adjacency (shared edges).
+    pub adjacency: Vec<Vec<u32>>,
+    /// Mesh saliency per polygon (Part V: saliency).
+    pub saliency: Vec<f64>,
+    /// Viewpoint saliency per viewpoint.
+    pub view_saliency: Vec<f64>,
+    /// Importance-driven VMI per viewpoint (saliency as the importance).
+    pub importance: Vec<f64>,
+    /// The guided exploration from the best view.
+    pub tour: Exploration,
+    /// Rays per viewpoint of the channel (grid estimator).
+    pub rays_per_viewpoint: u64,
+    /// Non-zero entries of the channel.
+    pub channel_entries: u64,
+}
+
+impl Study {
+    /// Runs the study of `scene`'s channel `ch`.
+    ///
+    /// # Errors
+    /// The core's errors (an empty channel, a viewpoint that sees nothing).
+    pub fn run(scene: &Scene, ch: ViewpointChannel, s: &StudySettings) -> Result<Self, Error> {
+        let neighbours = ch.neighbours(6);
+        let (rays_per_viewpoint, channel_entries) = (ch.rays_per_viewpoint, ch.patch.len() as u64);
+        // Without the background the analysis takes the channel's rows over
+        // (the same numbers as `new`, without a second copy of its entries).
+        let analysis = if s.background {
+            ViewpointAnalysis::new(&ch, s.weights, s.background)
+        } else {
+            ViewpointAnalysis::from_channel(ch, s.weights)
+        }?;
+        let measures = analysis.measures(&scene.areas(), s.base)?;
+        // One logarithm per channel entry, shared by the instability and the
+        // best-n search (each row meets many others), freed before saliency
+        // takes its own per-column table.
+        let logs = analysis.entry_logs();
+        let instability = analysis.instability_logs(&neighbours, &logs, s.base)?;
+        let best_n = best_views(&analysis, &measures, s.capture, s.best_n, s.base, Some(&logs))?;
+        drop(logs);
+        let polygonal_information = analysis.polygonal_information(s.base)?;
+        let adjacency = patch_adjacency(scene);
+        let saliency = mesh_saliency(&analysis, &adjacency, s.base)?;
+        let view_saliency = viewpoint_saliency(&analysis, &saliency);
+        let importance = importance_information(&analysis, &saliency, s.base)?;
+        let tour = exploration(&analysis, &neighbours, measures.best, s.explore, s.base)?;
+        Ok(Self {
+            analysis,
+            measures,
+            instability,
+            best_n,
+            polygonal_information,
+            adjacency,
+            saliency,
+            view_saliency,
+            importance,
+            tour,
+            rays_per_viewpoint,
+            channel_entries,
+        })
+    }
+}

@@ -72,5 +72,7 @@ fn flag(s: itgfx_backends::shards::Setting) -> &'static str {
         Setting::Distance => "--distance",
         Setting::Levels => "subdivision levels",
         Setting::Resolution => "--resolution",
+        Setting::LineKind => "--local",
+        Setting::Blocks => "--blocks",
     }
 }

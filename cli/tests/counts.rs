@@ -1,5 +1,5 @@
 //! The counts file end to end (`--save-counts`, `--merge`): the binary
-//! (version 3) and JSON (version 2, `F.json`) formats round-trip bit for
+//! and JSON (`F.json`) formats, both under the one shard header (format 4), round-trip bit for
 //! bit, shards merge in any order and across formats, and every broken or
 //! hostile file is refused with one line and exit code 2.
 
@@ -136,7 +136,7 @@ fn bad_areas_are_refused() {
               area 1.0\narea 1.0\nblock 10 1 0 6.0 1 0.5 0.25 2\n0 1 1\n1 0 1\nend\n";
     let p = path("v1.counts");
     std::fs::write(&p, v1).unwrap();
-    refused(&strs(&merge(&[&p])), "version 1 counts file");
+    refused(&strs(&merge(&[&p])), "written by an older itgfx (format 1); re-run");
     let good = read(&save("good.counts", &[]));
     for (area, needle) in [
         (json!(-0.25), "patch 0 has area -0.25"),
@@ -162,13 +162,15 @@ fn bad_areas_are_refused() {
 fn huge_declared_sizes_are_refused_without_allocating() {
     let p = path("huge-v1.counts");
     std::fs::write(&p, "itgfx-counts 1\nscene x\npatches 999999999999 local 0\n").unwrap();
-    refused(&strs(&merge(&[&p])), "version 1");
+    refused(&strs(&merge(&[&p])), "older itgfx (format 1)");
+    // The header's sizes are under its fingerprint: an edit is refused as one.
+    let edited = "does not match the scene and settings";
     let mut v = read(&save("huge.counts", &[]));
-    v["scene"]["patches"] = json!(999_999_999_999u64);
-    refused(&strs(&merge(&[&write("huge.counts", &v)])), "999999999999 patches but 6 areas");
+    v["header"]["scene"]["patches"] = json!(999_999_999_999u64);
+    refused(&strs(&merge(&[&write("huge.counts", &v)])), edited);
     let mut v = read(&save("blocks.counts", &[]));
-    v["jackknife"]["blocks"] = json!(4_000_000_000u64);
-    refused(&strs(&merge(&[&write("blocks.counts", &v)])), "expected 4000000000 blocks");
+    v["header"]["settings"]["blocks"] = json!(4_000_000_000u64);
+    refused(&strs(&merge(&[&write("blocks.counts", &v)])), edited);
 }
 
 /// A pair count of 2^64-1 used to wrap when merged: sums are checked.
@@ -233,7 +235,7 @@ fn a_scene_name_with_a_newline_round_trips() {
     let o = obj.to_str().unwrap();
     let p = path("newline.counts.json");
     let run = json_of(&["complexity", o, "--lines", "3000", "--save-counts", &p, "--json"]);
-    assert_eq!(read(&p)["scene"]["name"], json!(o));
+    assert_eq!(read(&p)["header"]["scene"]["name"], json!(o));
     assert_eq!(json_of(&["complexity", o, "--merge", &p, "--json"]), run);
 }
 
@@ -275,8 +277,9 @@ fn hostile_binary_files_are_refused() {
     let a = ["complexity", "cube-enclosure:1", "--lines", "2000", "--blocks", "2", "--save-counts", &p];
     assert!(itgfx(&a).status.success());
     let good = std::fs::read(&p).unwrap();
-    let name_len = "cube-enclosure:1".len();
-    let patches_at = 8 + 4 + 4 + 8 + 4 + 4 + name_len;
+    // The header's length, then the header, then the count of line ranges.
+    let header_len = u32::from_le_bytes(good[12..16].try_into().unwrap()) as usize;
+    let ranges_at = 16 + header_len;
     let edit = |name: &str, f: &dyn Fn(&mut Vec<u8>)| {
         let mut b = good.clone();
         f(&mut b);
@@ -284,8 +287,10 @@ fn hostile_binary_files_are_refused() {
         std::fs::write(&q, b).unwrap();
         q
     };
-    let huge = edit("huge.counts", &|b| b[patches_at..patches_at + 8].copy_from_slice(&u64::MAX.to_le_bytes()));
-    refused(&strs(&merge(&[&huge])), "patches: 18446744073709551615 declared but only");
+    let huge = edit("huge.counts", &|b| b[ranges_at..ranges_at + 8].copy_from_slice(&u64::MAX.to_le_bytes()));
+    refused(&strs(&merge(&[&huge])), "line ranges: 18446744073709551615 declared but only");
+    let v3 = edit("v3.counts", &|b| b[8..12].copy_from_slice(&3u32.to_le_bytes()));
+    refused(&strs(&merge(&[&v3])), "written by an older itgfx (format 3); re-run");
     let cut = edit("cut.counts", &|b| b.truncate(b.len() - 3));
     refused(&strs(&merge(&[&cut])), "(truncated?)");
     let more = edit("more.counts", &|b| b.extend_from_slice(b"x"));

@@ -1,5 +1,6 @@
 #![no_main]
-//! The counts-file readers (JSON version 2, binary version 3): any text or
+//! The counts-file readers (JSON and binary, format 4 under the one shard
+//! header; the header's numbers are under its fingerprint): any text or
 //! bytes either load into counts that evaluate to finite numbers, save and
 //! load again to the same counts in both formats, and merge with themselves
 //! only as a repeat — or are refused. Never a panic, never an allocation
@@ -14,7 +15,7 @@ mod mutate;
 /// A valid file (`itgfx complexity tetrahedron --lines 12 --blocks 2
 /// --save-counts`): random text rarely parses, so each input also edits
 /// the numbers of this one.
-const TEMPLATE: &str = r#"{"format":"itgfx-counts","version":2,"scene":{"name":"tetrahedron","patches":4,"areas_hash":"e43d8a24adde2fed"},"areas":[3.4641016151377544,3.4641016151377544,3.4641016151377544,3.4641016151377544],"lines":"global","seed":1,"ranges":[[0,12]],"jackknife":{"blocks":2,"assignment":"line index mod blocks"},"blocks":[{"lines":6,"segments":3,"escaped":0,"samples":3,"log_sum":"88353198992621490176","log_sq_sum":"175795579957321155584","pairs":[[0,1,2],[0,2,1],[1,0,2],[2,0,1]],"background":[]},{"lines":6,"segments":2,"escaped":0,"samples":2,"log_sum":"8017824994703465472","log_sq_sum":"13500011225033745408","pairs":[[0,3,1],[1,2,1],[2,1,1],[3,0,1]],"background":[]}],"endpoints":[[0,4,"81948454753803217920"],[1,3,"91785714787293229056"],[2,2,"25412622672371736576"],[3,1,"-6404744238818272256"]]}"#;
+const TEMPLATE: &str = r#"{"header":{"format":"itgfx-counts","version":4,"shard":0,"shards":1,"fingerprint":"bf3c988257bca4a6","scene":{"name":"tetrahedron","patches":4,"triangles":0,"hash":"e43d8a24adde2fed"},"settings":{"lines":"global","seed":1,"blocks":2,"assignment":"line index mod blocks"}},"areas":[3.4641016151377544,3.4641016151377544,3.4641016151377544,3.4641016151377544],"ranges":[[0,12]],"blocks":[{"lines":6,"segments":3,"escaped":0,"samples":3,"log_sum":"88353198992621494272","log_sq_sum":"175795579957321163776","pairs":[[0,1,2],[0,2,1],[1,0,2],[2,0,1]],"background":[]},{"lines":6,"segments":2,"escaped":0,"samples":2,"log_sum":"8017824994703464448","log_sq_sum":"13500011225033746176","pairs":[[0,3,1],[1,2,1],[2,1,1],[3,0,1]],"background":[]}],"endpoints":[[0,4,"81948454753803220992"],[1,3,"91785714787293233152"],[2,2,"25412622672371736576"],[3,1,"-6404744238818273280"]]}"#;
 
 /// The template with some of its numbers replaced as `data` says.
 fn edited(data: &[u8]) -> String {

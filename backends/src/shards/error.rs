@@ -42,6 +42,10 @@ pub enum Setting {
     ImageResolution,
     /// Grid resolution of the ray-grid estimator.
     Resolution,
+    /// Global or local lines (counts files).
+    LineKind,
+    /// Jackknife blocks (counts files).
+    Blocks,
 }
 
 impl Setting {
@@ -66,6 +70,8 @@ impl Setting {
             Setting::Levels => "subdivision levels",
             Setting::ImageResolution => "image size",
             Setting::Resolution => "resolution",
+            Setting::LineKind => "line kind",
+            Setting::Blocks => "jackknife blocks",
         }
     }
 }

@@ -1,6 +1,6 @@
 //! The one shard module: every engine that splits a run into shards
-//! (`render` pixel rows, `viewpoints` and `volume` viewpoint rows) writes
-//! and reads its files through here.
+//! (`render` pixel rows, `viewpoints` and `volume` viewpoint rows,
+//! `complexity` line ranges) writes and reads its files' header through here.
 //!
 //! * [`place`]: a shard's place `i/n` and the part of the run it covers;
 //! * [`fingerprint`]: the one hash (FNV-1a) and what identifies a scene;
@@ -12,10 +12,11 @@
 //! * [`error`]: [`ShardError`], typed; a setting two shards disagree on is a
 //!   [`Setting`], which a front end names its own way ([`ShardError::describe`]).
 //!
-//! Counts files (`complexity --save-counts`) hold line ranges rather than a
-//! place (any `--offset` run merges), and keep their own layout in
-//! `visibility::counts_file` and `visibility::counts_binary`; their scene
-//! hash is [`Fnv`].
+//! Counts files (`complexity --save-counts`) carry this header too
+//! (`visibility::counts_header`), with place `0/1`: they hold line ranges
+//! rather than a place (any `--offset` run merges), after the header, in
+//! `visibility::counts_file` (JSON) and `visibility::counts_binary`; their
+//! scene hash is [`Fnv`] of the patch areas.
 
 pub mod error;
 pub mod fingerprint;

@@ -1,15 +1,14 @@
-//! The binary counts file (version 3): the same counts as the JSON file of
-//! [`super::counts_file`], little-endian, a few bytes per pair, read with
-//! every declared size checked against the bytes left before anything is
-//! allocated.
+//! The binary counts file (format 4): the same counts as the JSON file of
+//! [`super::counts_file`], under the same header, little-endian, a few
+//! bytes per pair, read with every declared size checked against the bytes
+//! left before anything is allocated.
 //!
 //! Layout (all integers little-endian, no padding):
 //!
 //! | field | bytes |
 //! |---|---|
-//! | magic `ITGFXCNT`, version `u32` = 3 | 12 |
-//! | flags `u32` (bit 0: local lines; others 0), seed `u64`, blocks `u32` | 16 |
-//! | scene name: length `u32`, UTF-8 bytes; patches `u64`; areas hash `u64` | 20 + name |
+//! | magic `ITGFXCNT`, version `u32` = 4 (earlier versions: "written by an older itgfx") | 12 |
+//! | the header of [`super::counts_header`] as JSON text `{"header": {...}}` (format, version, place, fingerprint, scene name, patches and areas hash, line kind, seed, blocks): length `u32`, UTF-8 bytes | 4 + header |
 //! | line ranges: count `u64`, then `[start, end)` as `u64` pairs | 8 + 16 per range |
 //! | areas: `f64` per patch | 8 per patch |
 //! | endpoints: count `u64` and `Σ ln(A_T F)` `i128` (units of `2^-64` nats) per patch | 24 per patch |
@@ -26,13 +25,12 @@
 
 use itgfx_core::PairCount;
 
+use super::counts_header::{FORMAT_VERSION, Run, header_text, older, read_header};
 use super::counts_valid::SceneFingerprint;
-use super::{BlockCounts, ContinuousSums, CountsError, FixedSum, MAX_BLOCKS, VisibilityCounts};
+use super::{BlockCounts, ContinuousSums, CountsError, FixedSum, VisibilityCounts};
 
 /// The first 8 bytes of a binary counts file.
 pub const MAGIC: &[u8; 8] = b"ITGFXCNT";
-/// The binary version written and read.
-pub const BINARY_VERSION: u32 = 3;
 /// Bytes of memory per byte of binary file that reading may take: the file,
 /// and the parsed pairs (a pair of at least 5 bytes becomes 16 bytes).
 pub const BYTES_PER_BINARY_BYTE: u64 = 5;
@@ -139,23 +137,19 @@ fn width(values: impl Iterator<Item = u64>) -> u8 {
 }
 
 impl VisibilityCounts {
-    /// The counts as a version-3 binary counts file, with the scene name
-    /// `name` in the fingerprint.
+    /// The counts as a binary counts file (format [`FORMAT_VERSION`]), with
+    /// the scene name `name` in the header.
     #[must_use]
     pub fn to_binary(&self, name: &str) -> Vec<u8> {
         let n = self.areas.len();
         let pairs: usize = self.blocks.iter().map(|b| b.pairs.len()).sum();
-        let mut out = Vec::with_capacity(64 + name.len() + 40 * n + self.blocks.len() * (96 + 4 * n) + 6 * pairs);
+        let header = header_text(name, self);
+        let mut out = Vec::with_capacity(64 + header.len() + 40 * n + self.blocks.len() * (96 + 4 * n) + 6 * pairs);
         out.extend_from_slice(MAGIC);
         let mut w = Writer(&mut out);
-        w.u32(BINARY_VERSION);
-        w.u32(u32::from(self.local));
-        w.u64(self.seed);
-        w.u32(self.blocks.len() as u32);
-        w.u32(name.len() as u32);
-        w.0.extend_from_slice(name.as_bytes());
-        w.u64(self.scene.patches);
-        w.u64(self.scene.areas_hash);
+        w.u32(FORMAT_VERSION);
+        w.u32(header.len() as u32);
+        w.0.extend_from_slice(header.as_bytes());
         w.u64(self.ranges.len() as u64);
         for r in &self.ranges {
             w.u64(r.0);
@@ -202,42 +196,26 @@ impl VisibilityCounts {
         out
     }
 
-    /// Reads a version-3 binary counts file and checks it
+    /// Reads a binary counts file and checks it
     /// ([`VisibilityCounts::validate`]); returns the scene name too.
     /// Nothing is allocated from a declared size before that size is
     /// checked against the bytes left in the file.
     ///
     /// # Errors
     /// [`CountsError::Format`] for bytes that are not a binary counts file
-    /// of this version (or are truncated, or run on), [`CountsError::Invalid`]
+    /// of this format (or are truncated, or run on), [`CountsError::Invalid`]
     /// / [`CountsError::Overflow`] for bad contents.
     pub fn from_binary(bytes: &[u8]) -> Result<(String, Self), CountsError> {
         let mut r = Reader { rest: bytes };
         if r.take(8, "the magic").ok() != Some(&MAGIC[..]) {
             return Err(CountsError::Format("not a binary itgfx counts file (no ITGFXCNT magic)".into()));
         }
-        let version = r.u32("the version")?;
-        if version != BINARY_VERSION {
-            return Err(CountsError::Format(format!(
-                "a binary counts file of version {version}: this itgfx reads version {BINARY_VERSION}; count again to save them in this version"
-            )));
-        }
-        let flags = r.u32("the flags")?;
-        if flags > 1 {
-            return Err(invalid(format!("flags {flags:#x}: only bit 0 (local lines) is defined")));
-        }
-        let seed = r.u64("the seed")?;
-        let blocks = r.u32("the block count")?;
-        if !(1..=MAX_BLOCKS).contains(&blocks) {
-            return Err(invalid(format!("{blocks} jackknife blocks: expected 1..={MAX_BLOCKS}")));
-        }
-        let len = r.u32("the scene name's length")?;
-        let len = r.count(u64::from(len), 1, "the scene name's bytes")?;
-        let name = std::str::from_utf8(r.take(len, "the scene name")?)
-            .map_err(|_| invalid("the scene name is not UTF-8"))?
-            .to_string();
-        let patches = r.u64("the patch count")?;
-        let areas_hash = r.u64("the areas hash")?;
+        version(r.u32("the version")?)?;
+        let len = r.u32("the header's length")?;
+        let len = r.count(u64::from(len), 1, "the header's bytes")?;
+        let text = std::str::from_utf8(r.take(len, "the header")?).map_err(|_| invalid("the header is not UTF-8"))?;
+        let Run { scene, local, seed, blocks } = read_header(text)?;
+        let (name, patches) = (scene.name.clone(), scene.patches);
         let ranges_declared = r.u64("the range count")?;
         let nr = r.count(ranges_declared, 16, "line ranges")?;
         let mut ranges = Vec::with_capacity(nr);
@@ -267,16 +245,7 @@ impl VisibilityCounts {
                 r.rest.len()
             )));
         }
-        let counts = Self {
-            scene: SceneFingerprint { name: name.clone(), patches, areas_hash },
-            areas,
-            local: flags == 1,
-            seed,
-            ranges,
-            blocks: out,
-            endpoints,
-            endpoint_log,
-        };
+        let counts = Self { scene, areas, local, seed, ranges, blocks: out, endpoints, endpoint_log };
         counts.validate()?;
         Ok((name, counts))
     }
@@ -368,23 +337,12 @@ impl VisibilityCounts {
         if len < 8 || f.bytes(8, "the magic")? != MAGIC {
             return Ok(None);
         }
-        let version = f.u32("the version")?;
-        if version != BINARY_VERSION {
-            return Err(CountsError::Format(format!(
-                "a binary counts file of version {version}: this itgfx reads version {BINARY_VERSION}; count again to save them in this version"
-            )));
-        }
-        let (flags, seed, blocks) = (f.u32("the flags")?, f.u64("the seed")?, f.u32("the block count")?);
-        if flags > 1 {
-            return Err(invalid(format!("flags {flags:#x}: only bit 0 (local lines) is defined")));
-        }
-        if !(1..=MAX_BLOCKS).contains(&blocks) {
-            return Err(invalid(format!("{blocks} jackknife blocks: expected 1..={MAX_BLOCKS}")));
-        }
-        let name_len = f.u32("the scene name's length")?;
-        let name = String::from_utf8(f.bytes(u64::from(name_len), "the scene name")?)
-            .map_err(|_| invalid("the scene name is not UTF-8"))?;
-        let (patches, areas_hash) = (f.u64("the patch count")?, f.u64("the areas hash")?);
+        version(f.u32("the version")?)?;
+        let header_len = f.u32("the header's length")?;
+        let text = String::from_utf8(f.bytes(u64::from(header_len), "the header")?)
+            .map_err(|_| invalid("the header is not UTF-8"))?;
+        let Run { scene, local, seed, blocks } = read_header(&text)?;
+        let patches = scene.patches;
         let nr = f.u64("the range count")?;
         let raw = f.bytes(f.declared(nr, 16, "line ranges")?, "line ranges")?;
         let at = |b: &[u8], i: usize| u64::from_le_bytes(b[i..i + 8].try_into().expect("8 bytes"));
@@ -409,14 +367,19 @@ impl VisibilityCounts {
             f.skip(f.declared(bg, 12, &what)?, &what)?;
             sizes.push((pairs, bg));
         }
-        Ok(Some(CountsHeader {
-            scene: SceneFingerprint { name, patches, areas_hash },
-            local: flags == 1,
-            seed,
-            ranges,
-            blocks: sizes,
-            bytes: len,
-        }))
+        Ok(Some(CountsHeader { scene, local, seed, ranges, blocks: sizes, bytes: len }))
+    }
+}
+
+/// Refuses a binary file of another version: an earlier one as written by
+/// an older itgfx.
+fn version(v: u32) -> Result<(), CountsError> {
+    match v {
+        FORMAT_VERSION => Ok(()),
+        v if v < FORMAT_VERSION => Err(older(v)),
+        v => Err(CountsError::Format(format!(
+            "a binary counts file of version {v}: this itgfx reads version {FORMAT_VERSION}"
+        ))),
     }
 }
 
@@ -540,27 +503,39 @@ mod tests {
         assert!(e.contains("1 bytes follow"), "{e}");
     }
 
-    /// Declared sizes of 2^64-1 patches, ranges, pairs or blocks are refused
-    /// before anything is allocated.
+    /// Declared sizes of 2^32-1 header bytes or 2^64-1 ranges or patches
+    /// are refused before anything is allocated; an edited header by its
+    /// fingerprint; another version by its number, an earlier one as older.
     #[test]
     fn huge_declared_sizes_are_refused() {
         let c = counts(300, false);
         let bytes = c.to_binary("cube-enclosure:2");
-        let name_len = "cube-enclosure:2".len();
-        let patches_at = 8 + 4 + 4 + 8 + 4 + 4 + name_len;
-        let ranges_at = patches_at + 16;
-        for (at, needle) in [(patches_at, "patches"), (ranges_at, "line ranges")] {
-            let mut b = bytes.clone();
-            b[at..at + 8].copy_from_slice(&u64::MAX.to_le_bytes());
-            let e = VisibilityCounts::from_binary(&b).unwrap_err().to_string();
-            assert!(e.contains(needle) && e.contains("declared"), "{e}");
-        }
+        let header_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+        let ranges_at = 16 + header_len;
         let mut b = bytes.clone();
-        b[8 + 4 + 4 + 8..8 + 4 + 4 + 8 + 4].copy_from_slice(&u32::MAX.to_le_bytes());
-        assert!(VisibilityCounts::from_binary(&b).unwrap_err().to_string().contains("jackknife blocks"));
+        b[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
+        let e = VisibilityCounts::from_binary(&b).unwrap_err().to_string();
+        assert!(e.contains("the header's bytes") && e.contains("declared"), "{e}");
+        let mut b = bytes.clone();
+        b[ranges_at..ranges_at + 8].copy_from_slice(&u64::MAX.to_le_bytes());
+        let e = VisibilityCounts::from_binary(&b).unwrap_err().to_string();
+        assert!(e.contains("line ranges") && e.contains("declared"), "{e}");
+        let text = std::str::from_utf8(&bytes[16..ranges_at]).unwrap();
+        let patches = format!("\"patches\":{},", c.scene.patches);
+        assert!(text.contains(&patches), "{text}");
+        let edited = text.replace(&patches, &format!("\"patches\":{},", c.scene.patches + 1));
+        let mut b = bytes[..16].to_vec();
+        b.extend_from_slice(edited.as_bytes());
+        b.extend_from_slice(&bytes[ranges_at..]);
+        let e = VisibilityCounts::from_binary(&b).unwrap_err().to_string();
+        assert!(e.contains("does not match the scene and settings"), "{e}");
+        let mut b = bytes.clone();
+        b[8..12].copy_from_slice(&3u32.to_le_bytes());
+        let e = VisibilityCounts::from_binary(&b).unwrap_err().to_string();
+        assert!(e.contains("written by an older itgfx (format 3); re-run"), "{e}");
         let mut b = bytes;
-        b[8..12].copy_from_slice(&2u32.to_le_bytes());
-        assert!(VisibilityCounts::from_binary(&b).unwrap_err().to_string().contains("version 2"));
+        b[8..12].copy_from_slice(&9u32.to_le_bytes());
+        assert!(VisibilityCounts::from_binary(&b).unwrap_err().to_string().contains("version 9"));
     }
 
     /// `peek` reads what the file says without its counts: the header
@@ -585,7 +560,8 @@ mod tests {
         for cut in [9, 30, 60, bytes.len() / 2, bytes.len() - 1] {
             std::fs::write(&p, &bytes[..cut]).unwrap();
             let e = VisibilityCounts::peek(&p).unwrap_err().to_string();
-            assert!(e.contains("truncated"), "cut at {cut}: {e}");
+            // Cut inside a field, or short of what a declared size needs.
+            assert!(e.contains("truncated") || e.contains("declared but only"), "cut at {cut}: {e}");
         }
         let mut json = Vec::new();
         c.save("cube-enclosure:2", &mut json).unwrap();

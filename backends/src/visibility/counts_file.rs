@@ -1,32 +1,29 @@
-//! The counts file: a run's counts saved as versioned JSON (serde), so that
-//! shards of a run (disjoint line ranges, `--offset`) can be merged and
-//! evaluated later. What identifies the scene, and the checks every loaded
-//! file passes, are in `counts_valid`.
+//! The counts file: a run's counts saved as JSON (serde), so that shards
+//! of a run (disjoint line ranges, `--offset`) can be merged and evaluated
+//! later. What identifies the scene, and the checks every loaded file
+//! passes, are in `counts_valid`; the header is the one shard header
+//! ([`super::counts_header`]).
 //!
-//! Version 2 holds the format name and version, the scene's fingerprint
-//! (name, patch count, a hash of the patch areas) and the areas, the line
-//! kind, the seed, the line index ranges covered, the jackknife block
-//! assignment (line `i` in block `i mod B`), and per block the line,
-//! segment and background totals, the `I_S^c` sums (fixed point, units of
-//! `2^-64` nats) and the sparse pair and background counts; per patch the
-//! endpoint counts and log sums. Every value is checked on reading: a file
-//! either loads into counts that evaluate to finite numbers, or is refused
-//! with one line. Nothing is allocated from a declared size: what is
-//! allocated is bounded by the length of the text.
+//! Format 4 holds the header (format, version, place `0/1`, fingerprint,
+//! the scene's name, patch count and areas hash, and the settings: line
+//! kind, seed, jackknife blocks and their assignment, line `i` in block
+//! `i mod B`), then the areas, the line index ranges covered, and per block
+//! the line, segment and background totals, the `I_S^c` sums (fixed point,
+//! units of `2^-64` nats) and the sparse pair and background counts; per
+//! patch the endpoint counts and log sums. Every value is checked on
+//! reading: a file either loads into counts that evaluate to finite
+//! numbers, or is refused with one line. Nothing is allocated from a
+//! declared size: what is allocated is bounded by the length of the text.
 
 use serde::{Deserialize, Serialize};
 
 use super::counts_binary::{BYTES_PER_BINARY_BYTE, MAGIC};
-use super::counts_valid::{SceneFingerprint, check_sparse, invalid};
+use super::counts_header::{CountsSettings, KIND, header_error, header_of, older, run_of};
+use super::counts_valid::{check_sparse, invalid};
 use super::{BlockCounts, ContinuousSums, CountsError, FixedSum, VisibilityCounts};
+use crate::shards::{Header, Kind, ShardFile};
 use itgfx_core::PairCount;
 
-/// The `format` field of a counts file.
-pub const FORMAT_NAME: &str = "itgfx-counts";
-/// The version written and read.
-pub const FORMAT_VERSION: u32 = 2;
-/// The block assignment written and read.
-const ASSIGNMENT: &str = "line index mod blocks";
 /// A fixed-point sum written as a decimal string: JSON readers that hold
 /// numbers as `f64` would round an integer past `2^53`.
 #[derive(Clone, Copy)]
@@ -49,22 +46,6 @@ impl<'de> Deserialize<'de> for Fixed {
 
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct FileScene {
-    name: String,
-    patches: u64,
-    /// 16 hexadecimal digits.
-    areas_hash: String,
-}
-
-#[derive(Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct FileJackknife {
-    blocks: u32,
-    assignment: String,
-}
-
-#[derive(Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
 struct FileBlock {
     lines: u64,
     segments: u64,
@@ -83,41 +64,42 @@ struct FileBlock {
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct File {
-    format: String,
-    version: u32,
-    scene: FileScene,
+    header: Header<CountsSettings>,
     areas: Vec<f64>,
-    /// `"global"` or `"local"`.
-    lines: String,
-    seed: u64,
     /// `[start, end)` line indices.
     ranges: Vec<(u64, u64)>,
-    jackknife: FileJackknife,
     blocks: Vec<FileBlock>,
     /// `[patch, endpoints, Σ ln(A_T F) in units of 2^-64 nats]`, sorted.
     endpoints: Vec<(u32, u64, Fixed)>,
 }
 
+impl ShardFile for File {
+    type Settings = CountsSettings;
+    const KIND: Kind = KIND;
+
+    fn header(&self) -> &Header<CountsSettings> {
+        &self.header
+    }
+
+    /// The counts' own invariants are checked once they are built
+    /// ([`VisibilityCounts::validate`]).
+    fn violation(&self) -> Option<String> {
+        None
+    }
+}
+
 impl VisibilityCounts {
-    /// Writes the counts as a version-2 counts file (JSON) with the scene
-    /// name `name` in the fingerprint (the name of the scene counted).
+    /// Writes the counts as a counts file (JSON, format
+    /// [`super::FORMAT_VERSION`]) with the scene name `name` in the header
+    /// (the name of the scene counted).
     ///
     /// # Errors
     /// I/O errors.
     pub fn save(&self, name: &str, out: &mut impl std::io::Write) -> std::io::Result<()> {
         let file = File {
-            format: FORMAT_NAME.into(),
-            version: FORMAT_VERSION,
-            scene: FileScene {
-                name: name.into(),
-                patches: self.scene.patches,
-                areas_hash: format!("{:016x}", self.scene.areas_hash),
-            },
+            header: header_of(name, self),
             areas: self.areas.clone(),
-            lines: if self.local { "local" } else { "global" }.into(),
-            seed: self.seed,
             ranges: self.ranges.clone(),
-            jackknife: FileJackknife { blocks: self.blocks.len() as u32, assignment: ASSIGNMENT.into() },
             blocks: self
                 .blocks
                 .iter()
@@ -149,42 +131,27 @@ impl VisibilityCounts {
     /// it ([`VisibilityCounts::validate`]); returns the scene name too.
     ///
     /// # Errors
-    /// [`CountsError::Format`] for text that is not a version-2 counts file,
+    /// [`CountsError::Format`] for text that is not a counts file of this
+    /// format (an older one: "written by an older itgfx (format N); re-run"),
     /// [`CountsError::Invalid`] / [`CountsError::Overflow`] for bad contents.
     pub fn load(text: &str) -> Result<(String, Self), CountsError> {
         if text.starts_with("itgfx-counts 1") {
-            return Err(CountsError::Format(
-                "a version 1 counts file: this itgfx reads version 2; count again to save them in this version".into(),
-            ));
+            return Err(older(1));
         }
-        let f: File = serde_json::from_str(text)
-            .map_err(|e| CountsError::Format(format!("not an itgfx counts file (version {FORMAT_VERSION}): {e}")))?;
-        if f.format != FORMAT_NAME || f.version != FORMAT_VERSION {
-            return Err(CountsError::Format(format!(
-                "format {:?} version {}: expected {FORMAT_NAME:?} version {FORMAT_VERSION}",
-                f.format, f.version
-            )));
-        }
-        let local = match f.lines.as_str() {
-            "global" => false,
-            "local" => true,
-            other => return Err(invalid(format!("lines {other:?}: expected \"global\" or \"local\""))),
-        };
-        if f.jackknife.assignment != ASSIGNMENT || f.jackknife.blocks as usize != f.blocks.len() {
+        let f: File = crate::shards::from_json(text).map_err(header_error)?;
+        let run = run_of(&f.header)?;
+        if run.blocks as usize != f.blocks.len() {
             return Err(invalid(format!(
-                "jackknife: expected {} blocks assigned by {ASSIGNMENT:?}, found {} blocks",
-                f.jackknife.blocks,
+                "jackknife: expected {} blocks assigned by {:?}, found {} blocks",
+                run.blocks,
+                f.header.settings.assignment,
                 f.blocks.len()
             )));
         }
-        let areas_hash = u64::from_str_radix(&f.scene.areas_hash, 16)
-            .ok()
-            .filter(|_| f.scene.areas_hash.len() == 16)
-            .ok_or_else(|| invalid("areas_hash: expected 16 hexadecimal digits"))?;
         // Every allocation below is at most a constant times the text's length.
         let n = f.areas.len();
-        if f.scene.patches != n as u64 {
-            return Err(invalid(format!("the scene has {} patches but {n} areas are listed", f.scene.patches)));
+        if run.scene.patches != n as u64 {
+            return Err(invalid(format!("the scene has {} patches but {n} areas are listed", run.scene.patches)));
         }
         let mut endpoints = vec![0u64; n];
         let mut endpoint_log = vec![FixedSum::default(); n];
@@ -209,22 +176,23 @@ impl VisibilityCounts {
                 },
             })
             .collect();
+        let name = run.scene.name.clone();
         let counts = Self {
-            scene: SceneFingerprint { name: f.scene.name.clone(), patches: f.scene.patches, areas_hash },
+            scene: run.scene,
             areas: f.areas,
-            local,
-            seed: f.seed,
+            local: run.local,
+            seed: run.seed,
             ranges: f.ranges,
             blocks,
             endpoints,
             endpoint_log,
         };
         counts.validate()?;
-        Ok((f.scene.name, counts))
+        Ok((name, counts))
     }
 
-    /// Reads and checks a counts file from `path`, binary (version 3,
-    /// [`super::counts_binary`]) or JSON (version 2), refusing before
+    /// Reads and checks a counts file from `path`, binary
+    /// ([`super::counts_binary`]) or JSON, refusing before
     /// reading one whose parsed form would not fit in the memory available
     /// (at most [`BYTES_PER_FILE_BYTE`] bytes per byte of JSON,
     /// [`BYTES_PER_BINARY_BYTE`] per byte of binary, the file included).
@@ -268,6 +236,7 @@ pub const BYTES_PER_FILE_BYTE: u64 = 24;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::visibility::SceneFingerprint;
 
     /// A hand-made run of one local line per block over two patches.
     fn tiny(name: &str, start: u64) -> VisibilityCounts {
@@ -302,6 +271,23 @@ mod tests {
         let (name, back) = VisibilityCounts::load(std::str::from_utf8(&out).unwrap()).unwrap();
         assert_eq!(name, "two\nlines \"quoted\"");
         assert_eq!(back, c);
+    }
+
+    /// A file of an earlier format (JSON version 2, the line-based version
+    /// 1) is refused as older, with the way out; the header is the one
+    /// shard header, format 4.
+    #[test]
+    fn older_formats_are_refused_as_older() {
+        let c = tiny("s", 0);
+        let mut out = Vec::new();
+        c.save("s", &mut out).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert!(text.starts_with("{\"header\":{\"format\":\"itgfx-counts\",\"version\":4,"), "{text}");
+        let v2 = r#"{"format":"itgfx-counts","version":2,"scene":{}}"#;
+        for (old, n) in [(v2, 2), ("itgfx-counts 1\nscene x\n", 1)] {
+            let e = VisibilityCounts::load(old).unwrap_err().to_string();
+            assert!(e.contains(&format!("written by an older itgfx (format {n}); re-run")), "{e}");
+        }
     }
 
     /// A refused merge leaves the counts as they were; ranges join.

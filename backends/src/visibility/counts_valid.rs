@@ -1,7 +1,7 @@
 //! What a set of counts must satisfy before it is evaluated or merged: the
 //! scene's fingerprint, and every invariant of the counts (areas, ranges,
 //! block shares, sparse entries, totals, the `I_S^c` sums), checked on every
-//! file read, whatever its format (JSON v2 or binary v3).
+//! file read, whatever its form (JSON or binary).
 
 use super::{ContinuousSums, CountsError, MAX_BLOCKS, VisibilityCounts};
 use crate::scene::Scene;

@@ -34,6 +34,7 @@
 pub mod count;
 pub mod counts_binary;
 pub mod counts_file;
+pub mod counts_header;
 pub mod counts_valid;
 pub mod jackknife;
 pub mod merge;
@@ -47,7 +48,7 @@ use itgfx_core::PairCount;
 use crate::tracer::BackendError;
 
 pub use count::{CHUNK, SPHERE_SCALE, count_visibility, local_line};
-pub use counts_file::FORMAT_VERSION;
+pub use counts_header::FORMAT_VERSION;
 pub use counts_valid::SceneFingerprint;
 pub use jackknife::Complexity;
 

@@ -30,9 +30,9 @@ fn run(cli: Cli) -> Result<String, CliError> {
             Ok(render(&measure::run(&m.measure)?, json))
         }
         Command::Complexity(o) => {
-            threads(o.tracing.threads)?;
+            threads(o.run.tracing.threads)?;
             let (report, _counts, _scene) = complexity::run(&o)?;
-            Ok(render(&report, o.common.json))
+            Ok(render(&report, o.run.common.json))
         }
         Command::Viewpoints(o) => {
             threads(o.tracing.threads)?;
@@ -60,8 +60,8 @@ fn run(cli: Cli) -> Result<String, CliError> {
             Ok(render(&itgfx_cli::commands::shapes::run::run(&o)?, o.common.json))
         }
         Command::Radiosity(o) => {
-            threads(o.tracing.threads)?;
-            Ok(render(&itgfx_cli::radiosity::run(&o)?, o.common.json))
+            threads(o.run.tracing.threads)?;
+            Ok(render(&itgfx_cli::radiosity::run(&o)?, o.run.common.json))
         }
     }
 }

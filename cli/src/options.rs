@@ -113,6 +113,19 @@ pub struct Tracing {
     pub threads: Option<usize>,
 }
 
+/// The options a command that traces a scene and reports measures ends
+/// with: [`Tracing`] (`--backend`, `--threads`), then [`Common`] (`--json`,
+/// `--base`), in that order in `--help`.
+#[derive(Debug, Clone, Copy, Args)]
+pub struct Traced {
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub tracing: Tracing,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub common: Common,
+}
+
 /// Best views and guided exploration (Part V §4), shared by `viewpoints`
 /// (channel V -> O) and `volume` (channel V -> Z).
 #[derive(Debug, Clone, Copy, Args)]

@@ -257,8 +257,8 @@ fn base_leaves(h: &mut Hierarchy, settings: &Settings) -> Result<Vec<ElementId>,
     let cap = settings.max_elements as u64;
     if leaves > cap || pairs > 64 * cap {
         return Err(RadiosityError::TooLarge(format!(
-            "base level {level}: {leaves} leaves and up to {pairs} initial links, above --max-elements {cap} \
-             (at most {cap} leaves and {} links): lower the base level or raise --max-elements",
+            "base level {level}: {leaves} leaves and up to {pairs} initial links, above the element cap {cap} \
+             (at most {cap} leaves and {} links): lower the base level or raise the cap",
             64 * cap
         )));
     }

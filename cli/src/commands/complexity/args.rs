@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{ArgGroup, Args};
 
-use crate::options::{Common, Tracing, scene_list};
+use crate::options::{Traced, scene_list};
 use crate::values::{blocks, count, lines, out_path, subdivide};
 
 /// `itgfx complexity SCENE`.
@@ -56,10 +56,7 @@ pub struct ComplexityOptions {
     /// `--shard`, `--save-counts` (the shard's counts, or any run's) and `--merge`
     #[command(flatten)]
     pub shards: crate::shard::ShardArgs,
+    /// `--backend`, `--threads`, `--json`, `--base`
     #[command(flatten)]
-    #[allow(missing_docs)]
-    pub tracing: Tracing,
-    #[command(flatten)]
-    #[allow(missing_docs)]
-    pub common: Common,
+    pub run: Traced,
 }

@@ -149,8 +149,8 @@ fn counts_of(
     job.run(scene).map_err(merge_error)
 }
 
-/// Writes `--save-counts`: binary (version 3) unless the name ends in
-/// `.json` (version 2).
+/// Writes `--save-counts`: binary unless the name ends in `.json` (JSON;
+/// both format 4, under the one shard header).
 fn save_counts(p: &Path, name: &str, counts: &VisibilityCounts) -> Result<(), CliError> {
     let bytes = if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("json")) {
         let mut bytes = Vec::new();
@@ -173,7 +173,7 @@ fn measures_report(
     estimate: Option<u64>,
     seconds: f64,
 ) -> Report {
-    let unit = Some(o.common.base.unit());
+    let unit = Some(o.run.common.base.unit());
     let m = &c.measures;
     let mut r = Report::new();
     r.text("scene", scene.name.clone())
@@ -248,7 +248,7 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
     let scene = load_scene(&spec, o.subdivide)?;
     let t0 = Instant::now();
     let prepared = Prepared::new(&scene);
-    let tracer = open(o.tracing.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
+    let tracer = open(o.run.tracing.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
     let (counts, estimate) = counts_of(o, &scene, &prepared, tracer.as_ref(), range)?;
     if let Some(p) = &o.shards.save_shard {
         save_counts(p, &scene.name, &counts)?;
@@ -256,7 +256,7 @@ pub fn run(o: &ComplexityOptions) -> Result<(Report, VisibilityCounts, Scene), C
     if o.counts_only {
         return Ok((counts_report(o, &scene, tracer.name(), &counts, estimate, t0), counts, scene));
     }
-    let c = counts.complexity(o.common.base);
+    let c = counts.complexity(o.run.common.base);
     if c.segments == 0 && c.lines > 0 {
         // Kept, not refused: the measures of an empty channel are what the
         // scene gives; but a closed mesh wound outwards is the usual cause.

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::Args;
 use itgfx_backends::radiosity::Oracle;
 
-use crate::options::{Common, Tracing};
+use crate::options::Traced;
 use crate::values::{count, out_path, ranged, real};
 
 /// `itgfx radiosity SCENE`.
@@ -83,12 +83,9 @@ pub struct RadiosityOptions {
     /// Write the pictures and files into DIR
     #[arg(long, value_name = "DIR", value_parser = out_path)]
     pub out: Option<PathBuf>,
+    /// `--backend`, `--threads`, `--json`, `--base`
     #[command(flatten)]
-    #[allow(missing_docs)]
-    pub tracing: Tracing,
-    #[command(flatten)]
-    #[allow(missing_docs)]
-    pub common: Common,
+    pub run: Traced,
 }
 
 fn oracle(s: &str) -> Result<Oracle, String> {

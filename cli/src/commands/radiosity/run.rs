@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use itgfx_backends::open;
 use itgfx_backends::radiosity::reference::{Reference, path_traced};
-use itgfx_backends::radiosity::refine::check_scene;
+use itgfx_backends::radiosity::refine::{RadiosityError, check_scene};
 use itgfx_backends::radiosity::render::{
     View, default_camera, leaf_mesh, mesh_picture, picture, tonemap, view, white_point,
 };
@@ -26,6 +26,15 @@ use crate::scene::load_scene;
 
 fn usage(e: impl std::fmt::Display) -> CliError {
     CliError::usage(e.to_string())
+}
+
+/// A solver error in the CLI's words: the element cap is `--max-elements`
+/// (the engine names no flag).
+fn solver(e: RadiosityError) -> CliError {
+    match e {
+        RadiosityError::TooLarge(m) => CliError::usage(format!("{m} (--max-elements)")),
+        e => usage(e),
+    }
 }
 
 /// The output files of a run, checked before any work.
@@ -195,7 +204,7 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
     let file = |name: &str| files.iter().find(|f| f.0 == name).map(|f| f.1.clone());
     let t0 = Instant::now();
     let prepared = Prepared::new(&scene);
-    let tracer = open(o.tracing.backend, &prepared).map_err(usage)?;
+    let tracer = open(o.run.tracing.backend, &prepared).map_err(usage)?;
     let camera = o.camera.unwrap_or_else(|| default_camera(&scene));
     let mut r = Report::new();
     r.text("scene", scene.name.clone()).text("backend", tracer.name());
@@ -284,7 +293,7 @@ fn solve_or_search(
         ..Settings::default()
     };
     let Some(n) = o.elements else {
-        return Ok((solve(scene, prepared, tracer, &settings).map_err(usage)?, 0));
+        return Ok((solve(scene, prepared, tracer, &settings).map_err(solver)?, 0));
     };
     let verbose = std::env::var_os("ITGFX_PROGRESS").is_some_and(|v| v == "1");
     let s = search_epsilon(scene, prepared, tracer, &settings, n, o.count_tolerance, o.max_trials, &mut |t, e, k| {
@@ -292,7 +301,7 @@ fn solve_or_search(
             eprintln!("itgfx: trial {t}: epsilon {e:.4e} -> {k} elements");
         }
     })
-    .map_err(usage)?;
+    .map_err(solver)?;
     Ok((s.solution, s.trials.len()))
 }
 

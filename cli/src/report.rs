@@ -55,6 +55,19 @@ pub fn json_real(v: f64) -> Value {
 }
 
 impl Report {
+    /// Lists `paths` as the report's `files` and writes it, pretty JSON,
+    /// to the last of them (the imaging commands' `result.json`).
+    ///
+    /// # Errors
+    /// The output's write error.
+    pub fn write_result(mut self, paths: &[std::path::PathBuf]) -> Result<Self, crate::CliError> {
+        self.texts("files", paths.iter().map(|p| p.display().to_string()).collect());
+        let text = serde_json::to_string_pretty(&self.to_json()).unwrap_or_default();
+        let last = paths.last().ok_or_else(|| crate::CliError::runtime("no result.json path"))?;
+        crate::output::write(last, format!("{text}\n").as_bytes())?;
+        Ok(self)
+    }
+
     /// An empty report.
     #[must_use]
     pub fn new() -> Self {

@@ -264,7 +264,7 @@ pub fn run_register(o: &RegisterOptions) -> Result<Report, CliError> {
             .real("corner_error_px", t.corner_distance(&truth, fixed.width, fixed.height), Some("px"))
             .flag("success", rot < 0.5 && trans < 0.5);
     }
-    write_result(rep, &paths)
+    rep.write_result(&paths)
 }
 
 /// Whether FIXED and MOVING are volumes (NRRD) rather than images (PNG);
@@ -367,17 +367,4 @@ impl Outcome<'_> {
         rep.real("seconds", seconds, Some("s"));
         rep.records("levels", levels);
     }
-}
-
-/// Lists the files in the report and writes it, pretty, as the last of
-/// `paths` (`result.json`).
-///
-/// # Errors
-/// The output's write error.
-pub fn write_result(mut rep: Report, paths: &[PathBuf]) -> Result<Report, CliError> {
-    rep.texts("files", paths.iter().map(|p| p.display().to_string()).collect());
-    let text = serde_json::to_string_pretty(&rep.to_json()).unwrap_or_default();
-    let last = paths.last().ok_or_else(|| CliError::runtime("register: no result.json path"))?;
-    crate::output::write(last, format!("{text}\n").as_bytes())?;
-    Ok(rep)
 }

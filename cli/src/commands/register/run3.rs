@@ -10,7 +10,7 @@ use itgfx_backends::imaging::{Gray3, RegisterOptions as Engine, Registration3, R
 use itgfx_backends::volume::nrrd::read_nrrd;
 
 use super::RegisterOptions;
-use super::run::{Outcome, choices, level_report, trace_picture, write_result};
+use super::run::{Outcome, choices, level_report, trace_picture};
 use crate::CliError;
 use crate::commands::phantom::CONVENTION_3D;
 use crate::imaging::pictures::{checkerboard, histogram_image, middle_slices, side_by_side, write_nrrd, write_rgb};
@@ -161,7 +161,7 @@ pub fn run_register3(o: &RegisterOptions) -> Result<Report, CliError> {
     if let Some(truth) = truth {
         truth_report(&mut rep, &t, &truth, (fixed.dims, sp));
     }
-    write_result(rep, &paths)
+    rep.write_result(&paths)
 }
 
 /// The errors against `--truth`: rotation, translation (in voxels too) and

@@ -4,7 +4,7 @@
 use std::time::Instant;
 
 use itgfx_backends::imaging::segment::SegmentOptions as Engine;
-use itgfx_backends::imaging::{Gray, segment};
+use itgfx_backends::imaging::{Gray, Segmentation, segment};
 
 use super::SegmentOptions;
 use crate::CliError;
@@ -45,7 +45,30 @@ pub fn run_segment(o: &SegmentOptions) -> Result<Report, CliError> {
     })
     .map_err(|e| CliError::usage(format!("{:?}: {e}", o.image)))?;
     let seconds = t0.elapsed().as_secs_f64();
-    let (w, h) = (img.width, img.height);
+    write_pictures(&s, (img.width, img.height), &paths)?;
+    // The engine measures in bits; `--base` converts every entropy.
+    let base = o.common.base;
+    let k = std::f64::consts::LN_2 * base.per_nat();
+    let unit = Some(base.unit());
+    let mut rep = Report::new();
+    rep.text("unit", base.unit())
+        .real("H_X", s.h_x * k, unit)
+        .count("bins", o.bins as u64)
+        .count("leaves", s.leaves.len() as u64)
+        .real("I_split", *s.split_curve.last().unwrap_or(&0.0) * k, unit)
+        .count("regions", s.regions as u64)
+        .real("I_regions", s.information * k, unit)
+        .real("fraction_of_H", s.information / s.h_x, None)
+        .reals("split_curve", s.split_curve.iter().map(|v| v * k).collect())
+        .reals("merge_curve", s.merge_curve.iter().map(|v| v * k).collect())
+        .reals("region_means", s.means.clone())
+        .real("seconds", seconds, Some("s"));
+    rep.write_result(&paths)
+}
+
+/// The labels, the region means and the curve of `I(R;X)` against the
+/// number of regions.
+fn write_pictures(s: &Segmentation, (w, h): (usize, usize), paths: &[std::path::PathBuf]) -> Result<(), CliError> {
     write_rgb(&label_image(&s.labels, w, h), &paths[0])?;
     let means = Gray { width: w, height: h, data: s.labels.iter().map(|&l| s.means[l] as f32).collect() };
     write_gray(&means, &paths[1])?;
@@ -64,26 +87,5 @@ pub fn run_segment(o: &SegmentOptions) -> Result<Report, CliError> {
             (360, 240),
         ),
         &paths[2],
-    )?;
-    // The engine measures in bits; `--base` converts every entropy.
-    let base = o.common.base;
-    let k = std::f64::consts::LN_2 * base.per_nat();
-    let unit = Some(base.unit());
-    let mut rep = Report::new();
-    rep.text("unit", base.unit())
-        .real("H_X", s.h_x * k, unit)
-        .count("bins", o.bins as u64)
-        .count("leaves", s.leaves.len() as u64)
-        .real("I_split", *s.split_curve.last().unwrap_or(&0.0) * k, unit)
-        .count("regions", s.regions as u64)
-        .real("I_regions", s.information * k, unit)
-        .real("fraction_of_H", s.information / s.h_x, None)
-        .reals("split_curve", s.split_curve.iter().map(|v| v * k).collect())
-        .reals("merge_curve", s.merge_curve.iter().map(|v| v * k).collect())
-        .reals("region_means", s.means.clone())
-        .real("seconds", seconds, Some("s"))
-        .texts("files", paths.iter().map(|p| p.display().to_string()).collect());
-    let text = serde_json::to_string_pretty(&rep.to_json()).unwrap_or_default();
-    crate::output::write(&paths[3], format!("{text}\n").as_bytes())?;
-    Ok(rep)
+    )
 }

@@ -88,7 +88,8 @@ fn memory_check(scenes: &[Scene], viewpoints: usize, samples: u64, information: 
 /// Descriptor name, descriptors, distance matrix, seconds, scores.
 type Outcome = (Kind, Vec<Descriptor>, Vec<f64>, f64, Option<Scores>);
 
-/// Runs `itgfx shapes`.
+/// Runs `itgfx shapes`: checks, the meshes, each descriptor of each mesh
+/// and their distances, the report, the files.
 ///
 /// # Errors
 /// Usage errors (before any work), scene and backend errors.
@@ -122,33 +123,59 @@ pub fn run(o: &ShapesOptions) -> Result<Report, CliError> {
         },
     };
     memory_check(&scenes, o.viewpoints as usize, o.samples, kinds.contains(&Kind::Information))?;
-    let backend = o.tracing.backend;
-    let label_refs: Option<Vec<&str>> = labels.as_ref().map(|l| l.iter().map(String::as_str).collect());
+    let outcomes = describe_all(o, &scenes, &kinds, &settings, labels.as_deref())?;
+    let r = report(o, &kinds, labels.as_deref(), &outcomes);
+    if labels.is_some() && outcomes.iter().all(|x| x.4.is_none()) {
+        eprintln!("itgfx: warning: no class has two members: no retrieval scores");
+    }
+    if let Some(p) = paths {
+        write_outputs(&p, o, &outcomes, labels.is_some())?;
+    }
+    Ok(r)
+}
+
+/// Each descriptor of every mesh, their distance matrix, its time and,
+/// with classes, its retrieval scores.
+fn describe_all(
+    o: &ShapesOptions,
+    scenes: &[Scene],
+    kinds: &[Kind],
+    settings: &Settings,
+    labels: Option<&[String]>,
+) -> Result<Vec<Outcome>, CliError> {
+    let label_refs: Option<Vec<&str>> = labels.map(|l| l.iter().map(String::as_str).collect());
     let mut outcomes: Vec<Outcome> = Vec::new();
-    for &kind in &kinds {
+    for &kind in kinds {
         let t0 = Instant::now();
         let d: Vec<Descriptor> = scenes
             .par_iter()
             .zip(&o.files)
-            .map(|(s, f)| describe(s, kind, &settings, backend).map_err(|e| CliError::usage(format!("{f}: {e}"))))
+            .map(|(s, f)| {
+                describe(s, kind, settings, o.tracing.backend).map_err(|e| CliError::usage(format!("{f}: {e}")))
+            })
             .collect::<Result<_, _>>()?;
         let m = distance_matrix(&d).map_err(|e| crate::core_err("distance", e))?;
         let seconds = t0.elapsed().as_secs_f64();
         let sc = label_refs.as_ref().and_then(|l| scores(&m, l));
         outcomes.push((kind, d, m, seconds, sc));
     }
+    Ok(outcomes)
+}
 
+/// The report: the first descriptor's distances, then each descriptor's
+/// blocks, time, scores and distances.
+fn report(o: &ShapesOptions, kinds: &[Kind], labels: Option<&[String]>, outcomes: &[Outcome]) -> Report {
     let n = o.files.len();
     let rows = |m: &[f64]| -> Vec<Vec<f64>> { m.chunks(n).map(<[f64]>::to_vec).collect() };
     let mut r = Report::new();
     r.texts("files", o.files.clone());
     r.text("descriptor", kinds[0].name());
     r.matrix("distance", rows(&outcomes[0].2));
-    if let Some(l) = &labels {
-        r.texts("classes", l.clone());
+    if let Some(l) = labels {
+        r.texts("classes", l.to_vec());
     }
     let mut each = Vec::new();
-    for (kind, d, m, seconds, sc) in &outcomes {
+    for (kind, d, m, seconds, sc) in outcomes {
         let mut x = Report::new();
         x.text("descriptor", kind.name());
         x.texts("blocks", d[0].blocks.iter().map(|b| b.name.to_string()).collect());
@@ -163,22 +190,13 @@ pub fn run(o: &ShapesOptions) -> Result<Report, CliError> {
         x.matrix("distance", rows(m));
         each.push(x);
         if let Some(s) = sc {
-            r.real(&format!("{}_accuracy", kind.name()), s.nearest_neighbour, None).real(
-                &format!("{}_mAP", kind.name()),
-                s.mean_average_precision,
-                None,
-            );
+            r.real(&format!("{}_accuracy", kind.name()), s.nearest_neighbour, None);
+            r.real(&format!("{}_mAP", kind.name()), s.mean_average_precision, None);
         }
         r.real(&format!("{}_seconds", kind.name()), *seconds, Some("s"));
     }
     r.records("descriptors", each);
-    if labels.is_some() && outcomes.iter().all(|x| x.4.is_none()) {
-        eprintln!("itgfx: warning: no class has two members: no retrieval scores");
-    }
-    if let Some(p) = paths {
-        write_outputs(&p, o, &outcomes, labels.is_some())?;
-    }
-    Ok(r)
+    r
 }
 
 /// `--out`: the descriptors (CSV: one row per file and descriptor, bins of

@@ -4,6 +4,8 @@
 //! `scene.xml` reads back to the same triangles, materials and camera; and
 //! each refused file is one line on stderr and exit 2.
 
+mod common;
+
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -227,15 +229,8 @@ fn obj_ply_and_glb_give_the_same_channels() {
     // A real mesh: the file itself against a binary PLY of the same
     // polygons (quads and triangles, triangulated alike), and its triangles
     // (rounded to f32) as OBJ against GLB.
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let mesh = ["../shared/data/meshes/suzanne.obj", "/work/shared/data/meshes/suzanne.obj"]
-        .iter()
-        .map(|p| root.join(p))
-        .find(|p| p.is_file());
-    let Some(mesh) = mesh else {
-        eprintln!("shared/data/meshes/suzanne.obj not found from the workspace root: real-mesh half skipped");
-        return;
-    };
+    // From the shared data beside the workspace (a missing copy fails).
+    let mesh = common::shared_mesh("suzanne.obj");
     let text = std::fs::read_to_string(&mesh).unwrap();
     let mut verts = Vec::new();
     let mut faces = Vec::new();

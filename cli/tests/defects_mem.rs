@@ -243,10 +243,9 @@ fn a_ply_too_large_for_the_memory_left_is_refused_before_allocating() {
     for v in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]] {
         v.iter().for_each(|c| ply.extend_from_slice(&c.to_le_bytes()));
     }
-    for _ in 0..faces {
-        ply.push(4);
-        (0..4u32).for_each(|i| ply.extend_from_slice(&i.to_le_bytes()));
-    }
+    let mut quad = vec![4u8];
+    (0..4u32).for_each(|i| quad.extend_from_slice(&i.to_le_bytes()));
+    ply.extend(quad.repeat(faces as usize));
     let p = d.join("big.ply");
     std::fs::write(&p, &ply).unwrap();
     let out = under_ulimit(1 << 20, &["complexity", s(&p), "--lines", "1000"]);

@@ -273,9 +273,9 @@ mod tests {
         assert_eq!(back, c);
     }
 
-    /// A file of an earlier format (JSON version 2, the line-based version
-    /// 1) is refused as older, with the way out; the header is the one
-    /// shard header, format 4.
+    /// A file of an earlier format (JSON version 2, the line-based
+    /// version 1) is refused as older, with the way out; the header is the
+    /// one shard header, format 4.
     #[test]
     fn older_formats_are_refused_as_older() {
         let c = tiny("s", 0);

@@ -20,8 +20,11 @@ use crate::report::Report;
 use crate::scene::load_scene;
 use crate::values::{argmin, viewpoint_level};
 
+/// A picture: its flag, its name under `--out`, and where it goes if asked for.
+type Picture = (&'static str, &'static str, Option<PathBuf>);
+
 /// Where each picture goes: explicit paths, or standard names under `--out`.
-fn pictures(o: &ViewpointsOptions) -> Vec<(&'static str, &'static str, Option<PathBuf>)> {
+fn pictures(o: &ViewpointsOptions) -> Vec<Picture> {
     let list = [
         ("--best-image", "best.png", &o.best_image),
         ("--worst-image", "worst.png", &o.worst_image),
@@ -103,7 +106,7 @@ fn weights(o: &ViewpointsOptions) -> ViewpointWeights {
 }
 
 /// The pictures asked for, every path checked (and `--out` made) before any work.
-fn checked_pictures(o: &ViewpointsOptions) -> Result<Vec<(&'static str, &'static str, Option<PathBuf>)>, CliError> {
+fn checked_pictures(o: &ViewpointsOptions) -> Result<Vec<Picture>, CliError> {
     let outputs = pictures(o);
     let checked =
         || outputs.iter().try_for_each(|(flag, _, p)| p.as_ref().map_or(Ok(()), |p| crate::output::check(flag, p)));
@@ -228,7 +231,7 @@ fn view_record(v: usize, d: glam::DVec3, study: &Study, convergence: Option<&Con
 /// Writes the pictures asked for; returns the paths written.
 fn write_pictures(
     o: &ViewpointsOptions,
-    outputs: &[(&'static str, &'static str, Option<PathBuf>)],
+    outputs: &[Picture],
     (scene, tracer, dirs): (&Scene, &dyn Tracer, &[glam::DVec3]),
     study: &Study,
 ) -> Result<Vec<PathBuf>, CliError> {

@@ -34,6 +34,7 @@
 mod cpu;
 mod error;
 mod interleave;
+mod interleave_hit;
 mod node8;
 mod packet;
 mod reference;

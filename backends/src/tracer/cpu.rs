@@ -8,7 +8,6 @@ use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::ray::Ray;
 
 use super::interleave;
-use super::interleave_hit::{self, Found};
 use super::node8::{self, Tally};
 use super::packet::{self, LANES};
 use super::watertight::{
@@ -200,20 +199,14 @@ impl CpuTracer {
         };
         // SAFETY: `AVX2` is true only in `closest_avx2`, entered after `has_avx2()`.
         unsafe { node8::walk_groups::<AVX2, _>(bvh, &ray, tally, group) };
-        self.hit_of(dir, &Found { best, numerators })
-    }
-
-    /// The [`Hit`] of a closest-hit walk along `dir` that found `found`.
-    #[inline(always)]
-    fn hit_of(&self, dir: Vec3A, found: &Found) -> Option<Hit> {
-        found.best.map(|(t, tri)| {
+        best.map(|(t, tri)| {
             let n = self.scene.normals[tri as usize];
             Hit {
                 t,
                 patch: self.scene.triangle_patch[tri as usize],
                 primitive: tri,
                 cos: n.dot(dir),
-                barycentric: barycentric(found.numerators),
+                barycentric: barycentric(numerators),
                 normal: n.into(),
             }
         })
@@ -321,21 +314,6 @@ impl CpuTracer {
         false
     }
 
-    /// Offers `lines` to `packet(start, chunk)` [`LANES`] at a time (`chunk`
-    /// is `lines[start..]`'s next lines), which answers them as a packet
-    /// and returns `true`, or returns `false`; the indices of the lines no
-    /// packet answered, for the interleaved single walks.
-    fn packets(&self, lines: &[Line], mut packet: impl FnMut(usize, &[Line]) -> bool) -> Vec<u32> {
-        let mut rest = Vec::with_capacity(lines.len());
-        for (c, chunk) in lines.chunks(LANES).enumerate() {
-            let start = c * LANES;
-            if !packet(start, chunk) {
-                rest.extend(start as u32..(start + chunk.len()) as u32);
-            }
-        }
-        rest
-    }
-
     /// The BVH and the packet of `lines`, where a packet applies: AVX2, a
     /// triangle scene, and at least two lines in one octant.
     #[cfg(target_arch = "x86_64")]
@@ -416,29 +394,6 @@ impl CpuTracer {
     }
 }
 
-/// EXPERIMENT: rays by octant, then Morton order of the origin.
-fn sort_rays(lines: &[Line], rest: Vec<u32>) -> Vec<u32> {
-    fn spread(x: u64) -> u64 {
-        let mut x = x & 0x3ff;
-        x = (x | x << 16) & 0x0300_00ff;
-        x = (x | x << 8) & 0x0300_f00f;
-        x = (x | x << 4) & 0x030c_30c3;
-        (x | x << 2) & 0x0924_9249
-    }
-    let mut keyed: Vec<u64> = rest
-        .iter()
-        .map(|&i| {
-            let l = &lines[i as usize];
-            let q = |v: f32| ((v + 1.0) * 511.5).clamp(0.0, 1023.0) as u64;
-            let oct = u64::from(l.direction[0] < 0.0) | u64::from(l.direction[1] < 0.0) << 1 | u64::from(l.direction[2] < 0.0) << 2;
-            let key = oct << 30 | spread(q(l.origin[0])) | spread(q(l.origin[1])) << 1 | spread(q(l.origin[2])) << 2;
-            key << 32 | u64::from(i)
-        })
-        .collect();
-    keyed.sort_unstable();
-    keyed.into_iter().map(|k| k as u32).collect()
-}
-
 impl Tracer for CpuTracer {
     fn name(&self) -> &'static str {
         "cpu"
@@ -464,35 +419,6 @@ impl Tracer for CpuTracer {
     fn closest_hit(&self, lines: &[Line], out: &mut Vec<Option<Hit>>) -> Result<(), BackendError> {
         out.clear();
         let mut stack = Vec::with_capacity(256);
-        #[cfg(target_arch = "x86_64")]
-        if self.interleave
-            && let Some(bvh) = &self.bvh
-        {
-            out.resize(lines.len(), None);
-            let mut packet = Vec::with_capacity(LANES);
-            let rest = self.packets(lines, |start, chunk| {
-                if !interleave_hit::knobs().2 {
-                    return false;
-                }
-                packet.clear();
-                let done = self.closest_packet(chunk, &mut stack, &mut packet);
-                if done {
-                    out[start..start + chunk.len()].copy_from_slice(&packet);
-                }
-                done
-            });
-            let rest = if interleave_hit::knobs().3 { sort_rays(lines, rest) } else { rest };
-            if interleave_hit::knobs().0 == 0 {
-                for &i in &rest {
-                    out[i as usize] = self.closest(&lines[i as usize]);
-                }
-                return Ok(());
-            }
-            let done = |i: u32, found: &Found| out[i as usize] = self.hit_of(walk_direction(&lines[i as usize]), found);
-            // SAFETY: `self.interleave` implies `self.avx2`, which came from `has_avx2()`.
-            unsafe { interleave_hit::walk_any::<false>(bvh, &self.ordered, &self.lanes, lines, &rest, done) };
-            return Ok(());
-        }
         for chunk in lines.chunks(LANES) {
             if !self.closest_packet(chunk, &mut stack, out) {
                 out.extend(chunk.iter().map(|l| self.closest(l)));
@@ -504,35 +430,6 @@ impl Tracer for CpuTracer {
     fn occluded(&self, lines: &[Line], out: &mut Vec<bool>) -> Result<(), BackendError> {
         out.clear();
         let mut stack = Vec::with_capacity(256);
-        #[cfg(target_arch = "x86_64")]
-        if self.interleave
-            && let Some(bvh) = &self.bvh
-        {
-            out.resize(lines.len(), false);
-            let mut packet = Vec::with_capacity(LANES);
-            let rest = self.packets(lines, |start, chunk| {
-                if !interleave_hit::knobs().2 {
-                    return false;
-                }
-                packet.clear();
-                let done = self.occluded_packet(chunk, &mut stack, &mut packet);
-                if done {
-                    out[start..start + chunk.len()].copy_from_slice(&packet);
-                }
-                done
-            });
-            let rest = if interleave_hit::knobs().3 { sort_rays(lines, rest) } else { rest };
-            if interleave_hit::knobs().0 == 0 {
-                for &i in &rest {
-                    out[i as usize] = self.any(&lines[i as usize]);
-                }
-                return Ok(());
-            }
-            let done = |i: u32, found: &Found| out[i as usize] = found.best.is_some();
-            // SAFETY: `self.interleave` implies `self.avx2`, which came from `has_avx2()`.
-            unsafe { interleave_hit::walk_any::<true>(bvh, &self.ordered, &self.lanes, lines, &rest, done) };
-            return Ok(());
-        }
         for chunk in lines.chunks(LANES) {
             if !self.occluded_packet(chunk, &mut stack, out) {
                 out.extend(chunk.iter().map(|l| self.any(l)));

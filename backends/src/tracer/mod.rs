@@ -34,7 +34,6 @@
 mod cpu;
 mod error;
 mod interleave;
-mod interleave_hit;
 mod node8;
 mod packet;
 mod reference;

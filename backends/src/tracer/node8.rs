@@ -145,110 +145,20 @@ pub(crate) fn traverse<F: FnMut(u32, &mut f32) -> bool>(bvh: &CwBvh, ray: &Ray, 
     walk::<false, F>(bvh, ray, prim);
 }
 
-/// Asks for every cache line that holds part of the `bytes` bytes at `p`
-/// (at least the line of `p`): a hint, which never faults whatever the
-/// address.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-pub(super) fn prefetch_lines<T>(p: *const T, bytes: usize) {
-    use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-    let skew = p as usize & 63;
-    let first = p.cast::<i8>().wrapping_sub(skew);
-    for line in 0..(skew + bytes.max(1)).div_ceil(64) {
-        // SAFETY: a prefetch is only a hint and never faults, whatever the
-        // address; the pointer is formed with `wrapping_add`, never read.
-        unsafe { _mm_prefetch::<_MM_HINT_T0>(first.wrapping_add(line * 64)) };
-    }
-}
-
 /// Asks for the cache lines of `node`'s internal children (adjacent in
 /// `bvh.nodes`): the walk visits one next and pushes the others, whose
 /// loads would otherwise wait until they are popped.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn prefetch_children(bvh: &CwBvh, node: &CwBvhNode) {
-    let first = bvh.nodes.as_ptr().wrapping_add(node.child_base_idx as usize);
-    prefetch_lines(first, node.imask.count_ones() as usize * size_of::<CwBvhNode>());
-}
-
-/// A walk's traversal stack of child groups still to visit: obvhs's
-/// `StackStack` (the same depth and overflow rule: a push onto a full
-/// stack overwrites its top), left uninitialised instead of zeroing its
-/// 256 bytes for every ray.
-pub(super) struct Stack {
-    slots: [MaybeUninit<UVec2>; STACK],
-    depth: usize,
-}
-
-impl Stack {
-    /// An empty stack.
-    #[inline(always)]
-    pub(super) fn new() -> Self {
-        Self { slots: [MaybeUninit::uninit(); STACK], depth: 0 }
+    use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+    let first = bvh.nodes.as_ptr().wrapping_add(node.child_base_idx as usize).cast::<i8>();
+    let bytes = node.imask.count_ones() as usize * size_of::<CwBvhNode>();
+    for offset in (0..bytes).step_by(64) {
+        // SAFETY: a prefetch is only a hint and never faults, whatever the
+        // address; the pointer is formed with `wrapping_add`, never read.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>(first.wrapping_add(offset)) };
     }
-
-    /// Empties the stack.
-    #[inline(always)]
-    pub(super) fn clear(&mut self) {
-        self.depth = 0;
-    }
-
-    /// Pushes `group`.
-    #[inline(always)]
-    pub(super) fn push(&mut self, group: UVec2) {
-        self.slots[self.depth] = MaybeUninit::new(group);
-        self.depth = (self.depth + 1).min(STACK - 1);
-    }
-
-    /// Pops the last group pushed, if any.
-    #[inline(always)]
-    pub(super) fn pop(&mut self) -> Option<UVec2> {
-        if self.depth == 0 {
-            return None;
-        }
-        self.depth -= 1;
-        // SAFETY: every slot below `depth` was written by a push since the
-        // stack was made (a push writes `slots[depth]` before raising
-        // `depth`, and a pop lowers it first).
-        Some(unsafe { self.slots[self.depth].assume_init() })
-    }
-}
-
-/// Takes the next child out of `group` (internal children still to visit,
-/// their hit bits in the top byte) in obvhs's order for the octant
-/// `oct_inv4`: clears its bit and returns its index in `bvh.nodes`. Where
-/// children are left, `group` must go on the stack before the child is
-/// visited (obvhs's `traverse!`).
-#[inline(always)]
-pub(super) fn take_child(group: &mut UVec2, oct_inv4: u32) -> u32 {
-    let hits_imask = group.y;
-    let child_index_offset = obvhs::cwbvh::firstbithigh(hits_imask);
-    group.y &= !(1u32 << child_index_offset);
-    let slot_index = (child_index_offset - 24) ^ (oct_inv4 & 0xff);
-    let relative_index = (hits_imask & !(0xffff_ffffu32 << slot_index)).count_ones();
-    group.x + relative_index
-}
-
-/// Whether `group` still holds internal children to visit.
-#[inline(always)]
-pub(super) fn has_children(group: UVec2) -> bool {
-    group.y & 0xff00_0000 != 0
-}
-
-/// A visited node's groups from its hit mask: its internal children to
-/// visit and its leaf children's primitives to test (obvhs's `traverse!`).
-#[inline(always)]
-pub(super) fn groups_of(node: &CwBvhNode, hitmask: u32) -> (UVec2, UVec2) {
-    (
-        UVec2::new(node.child_base_idx, (hitmask & 0xff00_0000) | u32::from(node.imask)),
-        UVec2::new(node.primitive_base_idx, hitmask & 0x00ff_ffff),
-    )
-}
-
-/// The group a walk starts from: the root, or nothing in an empty BVH.
-#[inline(always)]
-pub(super) fn root_group(bvh: &CwBvh) -> UVec2 {
-    if bvh.nodes.is_empty() { UVec2::ZERO } else { UVec2::new(0, 0x8000_0000) }
 }
 
 /// [`walk`] by primitive groups: `group(first, mask, &mut tmax)` gets all
@@ -270,21 +180,31 @@ pub(super) unsafe fn walk_groups<const AVX2: bool, F: FnMut(u32, u32, &mut f32) 
     let mut r = *ray;
     let oct_inv4 = bvh.new_traversal(ray.direction).oct_inv4;
     // obvhs's `traverse!`, with its inner loop over one primitive group
-    // handed to `group` whole, and its traversal stack uninitialised.
-    let mut stack = Stack::new();
-    let mut current_group = root_group(bvh);
+    // handed to `group` whole, and its traversal stack (`StackStack`, the
+    // same depth and the same overflow rule) left uninitialised instead of
+    // zeroing its 256 bytes for every ray.
+    let mut stack = [MaybeUninit::<UVec2>::uninit(); STACK];
+    let mut depth = 0usize;
+    let mut current_group = if bvh.nodes.is_empty() { UVec2::ZERO } else { UVec2::new(0, 0x8000_0000) };
     let mut primitive_group = UVec2::ZERO;
     loop {
         if primitive_group.y != 0 && group(primitive_group.x, primitive_group.y, &mut r.tmax) {
             return;
         }
         primitive_group = UVec2::ZERO;
-        if has_children(current_group) {
-            let child = take_child(&mut current_group, oct_inv4);
-            if has_children(current_group) {
-                stack.push(current_group);
+        if current_group.y & 0xff00_0000 != 0 {
+            let hits_imask = current_group.y;
+            let child_index_offset = obvhs::cwbvh::firstbithigh(hits_imask);
+            let child_index_base = current_group.x;
+            current_group.y &= !(1u32 << child_index_offset);
+            if current_group.y & 0xff00_0000 != 0 {
+                // As `StackStack::push`: a full stack overwrites its top.
+                stack[depth] = MaybeUninit::new(current_group);
+                depth = (depth + 1).min(STACK - 1);
             }
-            let node = &bvh.nodes[child as usize];
+            let slot_index = (child_index_offset - 24) ^ (oct_inv4 & 0xff);
+            let relative_index = (hits_imask & !(0xffff_ffffu32 << slot_index)).count_ones();
+            let node = &bvh.nodes[(child_index_base + relative_index) as usize];
             #[cfg(target_arch = "x86_64")]
             let hitmask = if AVX2 {
                 // SAFETY: `AVX2` is true only where the CPU has AVX2
@@ -300,15 +220,20 @@ pub(super) unsafe fn walk_groups<const AVX2: bool, F: FnMut(u32, u32, &mut f32) 
             if AVX2 && (hitmask >> 24).count_ones() > 1 {
                 prefetch_children(bvh, node);
             }
-            (current_group, primitive_group) = groups_of(node, hitmask);
+            current_group = UVec2::new(node.child_base_idx, (hitmask & 0xff00_0000) | u32::from(node.imask));
+            primitive_group = UVec2::new(node.primitive_base_idx, hitmask & 0x00ff_ffff);
         } else {
             current_group = UVec2::ZERO;
         }
-        if primitive_group.y == 0 && !has_children(current_group) {
-            match stack.pop() {
-                Some(g) => current_group = g,
-                None => return,
+        if primitive_group.y == 0 && (current_group.y & 0xff00_0000) == 0 {
+            if depth == 0 {
+                return;
             }
+            depth -= 1;
+            // SAFETY: every slot below `depth` was written by a push since
+            // this walk began (a push writes `stack[depth]` before raising
+            // `depth`, and a pop lowers it first).
+            current_group = unsafe { stack[depth].assume_init() };
         }
     }
 }

@@ -317,18 +317,6 @@ impl TriangleLanes {
         Self { coord }
     }
 
-    /// Asks for the cache lines holding triangles `first..=last` in every
-    /// coordinate array (a hint: see `node8::prefetch_lines`).
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    pub(crate) fn prefetch(&self, first: usize, last: usize) {
-        for per_vertex in &self.coord {
-            for c in per_vertex {
-                super::node8::prefetch_lines(c.as_ptr().wrapping_add(first), (last + 1 - first) * size_of::<f32>());
-            }
-        }
-    }
-
     /// [`Shear::hit_within`] for the triangles `first + i` with bit `i` of
     /// `lanes` set (`first + i < len`), one lane each: the same `t` to the
     /// bit, and the hits among `lanes`. `ordered` is the array `self` was

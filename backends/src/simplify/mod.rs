@@ -507,6 +507,74 @@ pub(crate) mod tests {
         }
     }
 
+    /// A flat square `[-1, 1]²` of `2 n²` triangles (open: its outline is
+    /// the boundary).
+    fn square(n: u32) -> IndexedMesh {
+        let at = |i: u32| -1.0 + 2.0 * f64::from(i) / f64::from(n);
+        let positions = (0..=n).flat_map(|j| (0..=n).map(move |i| DVec3::new(at(i), at(j), 0.0))).collect();
+        let id = |i: u32, j: u32| j * (n + 1) + i;
+        let faces = (0..n)
+            .flat_map(|j| {
+                (0..n).flat_map(move |i| {
+                    [[id(i, j), id(i + 1, j), id(i + 1, j + 1)], [id(i, j), id(i + 1, j + 1), id(i, j + 1)]]
+                })
+            })
+            .collect();
+        IndexedMesh { positions, faces }
+    }
+
+    /// Edges with one triangle.
+    fn boundary_edges(m: &IndexedMesh) -> usize {
+        let mut count: HashMap<(u32, u32), u32> = HashMap::new();
+        for t in &m.faces {
+            for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                *count.entry((a.min(b), a.max(b))).or_default() += 1;
+            }
+        }
+        count.values().filter(|&&c| c == 1).count()
+    }
+
+    #[test]
+    fn boundary_planes_pin_corners_and_let_boundary_edges_collapse_placed() {
+        let m = square(4);
+        let d = Dynamic::new(&m);
+        // Corner 0 at (-1, -1) and its neighbour 1 along the side y = -1:
+        // the face plane z = 0 and the boundary planes x = -1, y = -1 meet
+        // at the corner only.
+        let q = d.quadrics[0] + d.quadrics[1];
+        let p = q.minimiser().expect("three independent planes");
+        assert!((p - DVec3::new(-1.0, -1.0, 0.0)).length() < 1e-12, "{p}");
+        // Two vertices inside the side y = -1: the merged vertex may be
+        // placed between them (a full-edge collapse along the boundary) ...
+        let mid = 0.5 * (d.positions[1] + d.positions[2]);
+        assert!(d.check(1, 2, mid).is_some());
+        // ... but a side vertex is never placed off the boundary by an
+        // inner edge's collapse.
+        let inner = 6; // (-0.5, -0.5), inside
+        assert!(d.check(inner, 1, 0.5 * (d.positions[1] + d.positions[inner as usize])).is_none());
+        // Moved inwards in the square's plane, off the boundary line, the
+        // side's quadric grows (the face planes alone would not see it).
+        let q = d.quadrics[1] + d.quadrics[2];
+        assert!(q.error(mid + 0.1 * DVec3::Y) > 1e-6, "{}", q.error(mid + 0.1 * DVec3::Y));
+        assert!(q.error(mid) < 1e-20);
+    }
+
+    #[test]
+    fn an_open_square_keeps_its_outline_and_reaches_its_targets() {
+        // 128 triangles down to 32 and 8: the outline (corners pinned by
+        // the boundary planes, sides straight) keeps the area at 4, and
+        // every count is within one of its target.
+        let m = square(8);
+        let out = simplify(&m, &[32, 8], &settings(Placement::Blend(1e4)), &mut |_, _| {}).unwrap();
+        for st in &out.stages {
+            assert!(st.stalled.is_none(), "{}", st.target);
+            assert!(st.mesh.triangles().abs_diff(st.target) <= 1, "{}: {}", st.target, st.mesh.triangles());
+            assert_eq!(st.mesh.check(), Ok(()));
+            assert!((st.mesh.area() - 4.0).abs() < 1e-9, "{}: area {}", st.target, st.mesh.area());
+            assert!(boundary_edges(&st.mesh) >= 4);
+        }
+    }
+
     #[test]
     fn the_placed_vertex_is_the_quadric_minimiser_and_beats_both_ends() {
         // Around an edge of a curved surface the planes are independent:

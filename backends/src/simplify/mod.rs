@@ -160,6 +160,8 @@ struct Entry {
     v: u32,
     p: DVec3,
     stamp: u32,
+    /// `cost` is the full cost; else a lower bound of it (see [`bounded`]).
+    exact: bool,
 }
 
 impl PartialEq for Entry {
@@ -176,7 +178,12 @@ impl PartialOrd for Entry {
 impl Ord for Entry {
     /// Reversed, so the standard max-heap pops the cheapest.
     fn cmp(&self, o: &Self) -> Ordering {
-        o.cost.total_cmp(&self.cost).then(o.u.cmp(&self.u)).then(o.v.cmp(&self.v)).then(o.stamp.cmp(&self.stamp))
+        o.cost
+            .total_cmp(&self.cost)
+            .then(o.u.cmp(&self.u))
+            .then(o.v.cmp(&self.v))
+            .then(o.stamp.cmp(&self.stamp))
+            .then(o.exact.cmp(&self.exact))
     }
 }
 
@@ -238,9 +245,25 @@ fn stamp(placement: Placement, stamps: &[u32], u: u32, v: u32) -> u32 {
     }
 }
 
+/// Whether the queue holds lower bounds first ([`Placement::Blend`] with
+/// `λ > 0`): the blend's cost is the viewpoint cost (a sum of absolute
+/// changes, never negative) plus `λ·Q(p)/A_T`, so `λ·Q(p)/A_T` alone is a
+/// lower bound of it that needs no viewpoint. An edge is queued at its
+/// bound and priced in full only when that bound reaches the top of the
+/// queue; then it is queued again at its full cost. An entry popped at its
+/// full cost is below every other entry's bound or cost, so it is the one
+/// the fully priced queue would pop (up to the costs' staleness, which
+/// every greedy collapse scheme has): the viewpoint cost is computed for
+/// the edges near the top only, not for every edge around each collapse
+/// and every edge after each trace.
+fn bounded(s: &Settings) -> bool {
+    matches!(s.placement, Placement::Blend(l) if l > 0.0)
+}
+
 /// The collapse of edge `{a, b}` by a placed vertex (see [`Placement`])
-/// and its cost, if any is valid.
-fn placed(d: &Dynamic, state: &ViewState, s: &Settings, a: u32, b: u32) -> Option<(f64, u32, u32, DVec3)> {
+/// and its cost, if any is valid; with `bound` (only where [`bounded`]),
+/// the lower bound `λ·Q(p)/A_T` of its cost, the viewpoint cost left out.
+fn placed(d: &Dynamic, state: &ViewState, s: &Settings, a: u32, b: u32, bound: bool) -> Option<(f64, u32, u32, DVec3)> {
     let q = d.quadrics[a as usize] + d.quadrics[b as usize];
     let (pa, pb) = (d.positions[a as usize], d.positions[b as usize]);
     let mut candidates: Vec<(u32, u32, DVec3)> = Vec::with_capacity(4);
@@ -261,10 +284,13 @@ fn placed(d: &Dynamic, state: &ViewState, s: &Settings, a: u32, b: u32) -> Optio
             let error = |p: DVec3| q.error(p);
             candidates.sort_by(|x, y| error(x.2).total_cmp(&error(y.2)));
             candidates.into_iter().find_map(|(u, v, p)| {
-                let c = cost(u, v, p)?;
                 let extra =
                     if lambda > 0.0 && state.area_total > 0.0 { lambda * error(p) / state.area_total } else { 0.0 };
-                Some((c + extra, u, v, p))
+                if bound {
+                    d.check(u, v, p)?;
+                    return Some((extra, u, v, p));
+                }
+                Some((cost(u, v, p)? + extra, u, v, p))
             })
         }
     }
@@ -276,16 +302,18 @@ fn edge_key(placement: Placement, u: u32, v: u32) -> (u32, u32) {
     if placement == Placement::Endpoint { (u, v) } else { (u.min(v), u.max(v)) }
 }
 
-/// Re-prices the edge of a stale entry `u → v`, if it is still valid.
-fn reprice(d: &Dynamic, state: &ViewState, s: &Settings, u: u32, v: u32, stamps: &[u32]) -> Option<Entry> {
+/// Re-prices the edge of a stale entry `u → v`, if it is still valid: at
+/// its lower bound where [`bounded`] unless `exact`.
+fn reprice(d: &Dynamic, state: &ViewState, s: &Settings, u: u32, v: u32, stamps: &[u32], exact: bool) -> Option<Entry> {
+    let bound = bounded(s) && !exact;
     let (cost, u, v, p) = if s.placement == Placement::Endpoint {
         let p = d.positions[v as usize];
         let change = d.check(u, v, p)?;
         (state.propose(d, u, v, &change, s.metric).cost, u, v, p)
     } else {
-        placed(d, state, s, u.min(v), u.max(v))?
+        placed(d, state, s, u.min(v), u.max(v), bound)?
     };
-    cost.is_finite().then(|| Entry { cost, u, v, p, stamp: stamp(s.placement, stamps, u, v) })
+    cost.is_finite().then(|| Entry { cost, u, v, p, stamp: stamp(s.placement, stamps, u, v), exact: !bound })
 }
 
 /// Evaluates the collapses of every edge at the vertices `from`: each
@@ -300,7 +328,7 @@ fn evaluate(d: &Dynamic, state: &ViewState, s: &Settings, from: &[u32], stamps: 
                     let p = d.positions[v as usize];
                     let change = d.check(u, v, p)?;
                     let cost = state.propose(d, u, v, &change, s.metric).cost;
-                    cost.is_finite().then_some(Entry { cost, u, v, p, stamp: stamps[u as usize] })
+                    cost.is_finite().then_some(Entry { cost, u, v, p, stamp: stamps[u as usize], exact: true })
                 })
             })
             .collect();
@@ -309,11 +337,12 @@ fn evaluate(d: &Dynamic, state: &ViewState, s: &Settings, from: &[u32], stamps: 
         from.iter().flat_map(|&u| d.neighbours(u).into_iter().map(move |v| (u.min(v), u.max(v)))).collect();
     edges.sort_unstable();
     edges.dedup();
+    let bound = bounded(s);
     edges
         .par_iter()
         .filter_map(|&(a, b)| {
-            let (cost, u, v, p) = placed(d, state, s, a, b)?;
-            Some(Entry { cost, u, v, p, stamp: stamp(s.placement, stamps, u, v) })
+            let (cost, u, v, p) = placed(d, state, s, a, b, bound)?;
+            Some(Entry { cost, u, v, p, stamp: stamp(s.placement, stamps, u, v), exact: !bound })
         })
         .collect()
 }
@@ -403,8 +432,13 @@ pub fn simplify(
         if now != e.stamp {
             // Stale: re-priced here unless a current entry is queued.
             if s.lazy && priced.insert(edge_key(s.placement, e.u, e.v), now) != Some(now) {
-                heap.extend(reprice(&d, &state, s, e.u, e.v, &stamps));
+                heap.extend(reprice(&d, &state, s, e.u, e.v, &stamps, false));
             }
+            continue;
+        }
+        if !e.exact {
+            // A lower bound at the top: priced in full, queued again.
+            heap.extend(reprice(&d, &state, s, e.u, e.v, &stamps, true));
             continue;
         }
         let Some(change) = d.check(e.u, e.v, e.p) else { continue };
@@ -586,7 +620,7 @@ pub(crate) mod tests {
         let (ea, eb) = (q.error(d.positions[a as usize]), q.error(d.positions[b as usize]));
         assert!(q.error(p) < 0.5 * ea.min(eb), "{} vs {ea}, {eb}", q.error(p));
         let state = trace(&d, &settings(Placement::Quadric)).unwrap();
-        let (_, u, v, at) = placed(&d, &state, &settings(Placement::Quadric), a, b).unwrap();
+        let (_, u, v, at) = placed(&d, &state, &settings(Placement::Quadric), a, b, false).unwrap();
         assert_eq!((u, v, at), (a, b, p));
     }
 

@@ -21,10 +21,13 @@
 //! The channel is traced ([`ViewpointChannel::build_solid_angle`]) on the
 //! input and again each time the triangle count has fallen by
 //! [`Settings::refresh`]; in between, moved triangles inherit the visible
-//! fraction of the triangles they replace. Costs are recomputed for the
-//! half-edges leaving the vertices around each collapse; the others keep the
-//! cost of their last evaluation (the running sums have moved on since, as
-//! in every greedy collapse scheme). The result does not depend on the
+//! fraction of the triangles they replace. After a collapse the edges of
+//! the kept vertex are priced again at once and the others around it when
+//! they reach the top of the queue ([`Settings::lazy`]); with
+//! [`Placement::Blend`] an edge is queued at a lower bound of its cost and
+//! its viewpoint cost computed only when that bound reaches the top. Other
+//! entries keep the cost of their last evaluation (the running sums have
+//! moved on since, as in every greedy collapse scheme). The result does not depend on the
 //! number of threads: costs are pure functions, ties are broken by vertex
 //! index, and the collapses are applied in one sequence.
 

@@ -461,6 +461,30 @@ mod tests {
         assert!(!c.crosses(edges.corners(0), &tris[0]) && !c.crosses(edges.corners(1), &tris[1]));
     }
 
+    /// Hiding the upper triangle of the folded pair leaves out its rim
+    /// edges (both ends of each are that triangle), which were what crossed
+    /// the lower one; the shared fold (one end seen) stays. Each call starts
+    /// from all the view's contours.
+    #[test]
+    fn hiding_drops_the_contours_of_hidden_triangles_only() {
+        let v = |x: f32, y: f32, z: f32| Vec3A::new(x, y, z);
+        let folded = [
+            [v(0.0, 0.0, 0.0), v(0.5, 0.0, 0.0), v(0.0, 0.5, 0.0)],
+            [v(0.5, 0.0, 0.0), v(0.1, 0.1, 0.2), v(0.0, 0.5, 0.0)],
+        ];
+        let tris: Vec<[DVec3; 3]> = folded.iter().map(|t| t.map(|p| p.as_dvec3())).collect();
+        let edges = MeshEdges::new(&folded, &tris);
+        let mut c = Contours::new(&edges, DVec3::new(0.1, 0.2, 3.0), 8);
+        assert!(c.crosses(edges.corners(0), &tris[0]));
+        c.hide(&edges, &[false, true]);
+        assert!(!c.crosses(edges.corners(0), &tris[0]), "the upper rim is hidden");
+        c.hide(&edges, &[true, false]);
+        assert!(c.crosses(edges.corners(0), &tris[0]), "the upper rim is back");
+        c.hide(&edges, &[false, false]);
+        assert!(c.crosses(edges.corners(0), &tris[0]));
+        assert_eq!(c.members.len(), Contours::new(&edges, DVec3::new(0.1, 0.2, 3.0), 8).members.len());
+    }
+
     #[test]
     fn cutting_triangles_are_found_and_neighbours_are_not() {
         let tri = |a: [f64; 3], b: [f64; 3], c: [f64; 3]| [DVec3::from(a), DVec3::from(b), DVec3::from(c)];

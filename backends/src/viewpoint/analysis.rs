@@ -225,21 +225,29 @@ impl ViewpointAnalysis {
             return Err(Error::LengthMismatch { expected: self.patches, found: areas.len() });
         }
         let ch = self.channel()?;
-        let cm = ch.measures(&self.p_o, base)?;
         let n = self.rows();
-        let mut vmi = vec![0.0; n];
-        ch.specific_information_into(&self.p_o, base, &mut vmi)?;
-        let mut ve = vec![0.0; n];
-        ch.row_entropies_into(base, &mut ve)?;
-        let vkl = if self.background {
-            vec![f64::NAN; n]
-        } else {
+        // Four independent passes of the core over the channel, side by
+        // side (each computed as alone: the same bits).
+        let vmi = || {
+            let mut vmi = vec![0.0; n];
+            ch.specific_information_into(&self.p_o, base, &mut vmi).map(|()| vmi)
+        };
+        let ve = || {
+            let mut ve = vec![0.0; n];
+            ch.row_entropies_into(base, &mut ve).map(|()| ve)
+        };
+        let vkl = || {
+            if self.background {
+                return Ok(vec![f64::NAN; n]);
+            }
             let total: f64 = areas.iter().sum();
             let rel: Vec<f64> = areas.iter().map(|a| a / total).collect();
             let mut d = vec![0.0; n];
-            ch.specific_information_into(&rel, base, &mut d)?;
-            d
+            ch.specific_information_into(&rel, base, &mut d).map(|()| d)
         };
+        let ((cm, vmi), (ve, vkl)) =
+            rayon::join(|| rayon::join(|| ch.measures(&self.p_o, base), vmi), || rayon::join(ve, vkl));
+        let (cm, vmi, ve, vkl) = (cm?, vmi?, ve?, vkl?);
         let heuristic: Vec<f64> = (0..n)
             .map(|x| {
                 let visible = self.row(x).0.iter().filter(|&&o| (o as usize) < self.patches).count();

@@ -116,22 +116,25 @@ pub(super) struct Contours {
     /// Every vertex of the mesh projected (by [`MeshEdges`] id).
     points: Vec<Px>,
     /// Tile `k`'s contours are `members[starts[k]..starts[k + 1]]`, each
-    /// with its projection's box `[x0, x1, y0, y1]` copied in tile order
-    /// (read in sequence by [`Contours::crosses`]) and its index.
+    /// with its projected ends copied in tile order (read in sequence by
+    /// [`Contours::crosses`], which takes their box and, for the few whose
+    /// box meets the triangle's, the exact test from them) and its index.
     starts: Vec<u32>,
-    members: Vec<([f64; 4], u32)>,
-    /// Each contour's ends, in space and projected.
+    members: Vec<([Px; 2], u32)>,
+    /// Each contour's ends, in space and projected, and its edge (by
+    /// [`MeshEdges`] index): every contour of the view, also those that
+    /// [`Contours::hide`] left out of the tiles.
     ends: Vec<[DVec3; 2]>,
     projected: Vec<[Px; 2]>,
-    /// The two triangles of every manifold edge that is not a contour (of
-    /// the edges considered).
+    edge: Vec<u32>,
+    /// The two triangles of every manifold edge that is not a contour.
     links: Vec<[u32; 2]>,
 }
 
 impl Contours {
     /// The contours of `edges` seen from `eye` (outside the unit bounding
     /// sphere), in a grid of `tiles × tiles`.
-    pub(super) fn new(edges: &MeshEdges, eye: DVec3, tiles: usize, hidden: Option<&[bool]>) -> Self {
+    pub(super) fn new(edges: &MeshEdges, eye: DVec3, tiles: usize) -> Self {
         let forward = -eye.normalize();
         let (right, up) = forward.any_orthonormal_pair();
         let tiles = tiles.max(1);
@@ -149,16 +152,13 @@ impl Contours {
             members: Vec::new(),
             ends: Vec::new(),
             projected: Vec::new(),
+            edge: Vec::new(),
             links: Vec::new(),
         };
         c.points = edges.vertices.iter().map(|&p| c.project(p)).collect();
-        for (((e, ids), apex), owners) in edges.ends.iter().zip(&edges.end_ids).zip(&edges.apex).zip(&edges.owners) {
-            if let (Some(h), Some([a, b])) = (hidden, owners)
-                && h[*a as usize]
-                && h[*b as usize]
-            {
-                continue;
-            }
+        for (k, (((e, ids), apex), owners)) in
+            edges.ends.iter().zip(&edges.end_ids).zip(&edges.apex).zip(&edges.owners).enumerate()
+        {
             let fold = apex.is_none_or(|[p, q]| {
                 let m = (e[0] - eye).cross(e[1] - eye);
                 m.dot(p - eye) * m.dot(q - eye) >= 0.0
@@ -166,15 +166,24 @@ impl Contours {
             if fold {
                 c.ends.push(*e);
                 c.projected.push(ids.map(|k| c.points[k as usize]));
+                c.edge.push(k as u32);
             } else if let Some([a, b]) = owners {
                 c.links.push([*a, *b]);
             }
         }
-        // Bucket each contour into the tiles its bounding box touches
-        // (counting, then filling, so the lists are in contour order).
-        let ranges: Vec<[usize; 4]> = c.projected.iter().map(|s| c.tile_range(s)).collect();
+        c.bucket(|_| true);
+        c
+    }
+
+    /// Buckets each contour that `keep` takes (by index) into the tiles its
+    /// bounding box touches (counting, then filling, so each tile's list is
+    /// in contour order).
+    fn bucket(&mut self, keep: impl Fn(usize) -> bool) {
+        let tiles = self.tiles;
+        let ranges: Vec<(usize, [usize; 4])> =
+            (0..self.projected.len()).filter(|&i| keep(i)).map(|i| (i, self.tile_range(&self.projected[i]))).collect();
         let mut count = vec![0u32; tiles * tiles + 1];
-        for r in &ranges {
+        for (_, r) in &ranges {
             for y in r[2]..=r[3] {
                 for x in r[0]..=r[1] {
                     count[y * tiles + x + 1] += 1;
@@ -185,19 +194,37 @@ impl Contours {
             count[k] += count[k - 1];
         }
         let mut fill = count.clone();
-        c.members = vec![([0.0; 4], 0); count[tiles * tiles] as usize];
-        for (i, r) in ranges.iter().enumerate() {
+        self.members = vec![([(0.0, 0.0); 2], 0); count[tiles * tiles] as usize];
+        for &(i, r) in &ranges {
+            let ends = self.projected[i];
             for y in r[2]..=r[3] {
                 for x in r[0]..=r[1] {
                     let k = y * tiles + x;
-                    let [a, b] = c.projected[i];
-                    c.members[fill[k] as usize] = ([a.0.min(b.0), a.0.max(b.0), a.1.min(b.1), a.1.max(b.1)], i as u32);
+                    self.members[fill[k] as usize] = (ends, i as u32);
                     fill[k] += 1;
                 }
             }
         }
-        c.starts = count;
-        c
+        self.starts = count;
+    }
+
+    /// Leaves out of [`Contours::crosses`] every contour whose two triangles
+    /// are both `hidden` (a boundary edge's one triangle; a non-manifold
+    /// edge is always kept): the contours that a view built with those
+    /// edges skipped would have, in the same order, without projecting the
+    /// vertices or testing the folds again. Each call starts from all the
+    /// view's contours.
+    pub(super) fn hide(&mut self, edges: &MeshEdges, hidden: &[bool]) {
+        let edge = std::mem::take(&mut self.edge);
+        self.bucket(|i| {
+            edges.owners[edge[i] as usize].is_none_or(|[a, b]| !(hidden[a as usize] && hidden[b as usize]))
+        });
+        self.edge = edge;
+    }
+
+    /// Frees the links once they are read ([`Contours::links`]).
+    pub(super) fn drop_links(&mut self) {
+        self.links = Vec::new();
     }
 
     /// Contour edges of this view.
@@ -252,7 +279,9 @@ impl Contours {
         let lo = (proj[0].0.min(proj[1].0).min(proj[2].0), proj[0].1.min(proj[1].1).min(proj[2].1));
         let hi = (proj[0].0.max(proj[1].0).max(proj[2].0), proj[0].1.max(proj[1].1).max(proj[2].1));
         // Without branches: most members fail, unpredictably.
-        let outside = |b: &[f64; 4]| (b[1] < lo.0) | (b[0] > hi.0) | (b[3] < lo.1) | (b[2] > hi.1);
+        let outside = |[a, b]: &[Px; 2]| {
+            (a.0.max(b.0) < lo.0) | (a.0.min(b.0) > hi.0) | (a.1.max(b.1) < lo.1) | (a.1.min(b.1) > hi.1)
+        };
         let mut plane: Option<(DVec3, f64, f64)> = None;
         let mut behind = |p: DVec3| {
             let (n, eye_side, tol) = *plane.get_or_insert_with(|| {
@@ -271,8 +300,8 @@ impl Contours {
             }
             for x in r[0]..=r[1] {
                 let k = row + x;
-                for (b, i) in &self.members[self.starts[k] as usize..self.starts[k + 1] as usize] {
-                    if outside(b) || !crosses_interior(&proj, sign, self.projected[*i as usize]) {
+                for (s, i) in &self.members[self.starts[k] as usize..self.starts[k + 1] as usize] {
+                    if outside(s) || !crosses_interior(&proj, sign, *s) {
                         continue;
                     }
                     let e = &self.ends[*i as usize];
@@ -413,7 +442,7 @@ mod tests {
         let eye = DVec3::new(0.1, 0.2, 3.0);
         let count = |t: &[[Vec3A; 3]]| {
             let tris = d(t);
-            Contours::new(&MeshEdges::new(t, &tris), eye, 8, None).len()
+            Contours::new(&MeshEdges::new(t, &tris), eye, 8).len()
         };
         // Flat: the four rim edges only; folded: the shared edge too.
         assert_eq!(count(&flat), 4);
@@ -422,14 +451,38 @@ mod tests {
         // rim edges in front of it; the upper one, in front, by none.
         let tris = d(&folded);
         let edges = MeshEdges::new(&folded, &tris);
-        let c = Contours::new(&edges, eye, 8, None);
+        let c = Contours::new(&edges, eye, 8);
         assert!(c.crosses(edges.corners(0), &tris[0]));
         assert!(!c.crosses(edges.corners(1), &tris[1]));
         // Flat: nothing crosses either.
         let tris = d(&flat);
         let edges = MeshEdges::new(&flat, &tris);
-        let c = Contours::new(&edges, eye, 8, None);
+        let c = Contours::new(&edges, eye, 8);
         assert!(!c.crosses(edges.corners(0), &tris[0]) && !c.crosses(edges.corners(1), &tris[1]));
+    }
+
+    /// Hiding the upper triangle of the folded pair leaves out its rim
+    /// edges (both ends of each are that triangle), which were what crossed
+    /// the lower one; the shared fold (one end seen) stays. Each call starts
+    /// from all the view's contours.
+    #[test]
+    fn hiding_drops_the_contours_of_hidden_triangles_only() {
+        let v = |x: f32, y: f32, z: f32| Vec3A::new(x, y, z);
+        let folded = [
+            [v(0.0, 0.0, 0.0), v(0.5, 0.0, 0.0), v(0.0, 0.5, 0.0)],
+            [v(0.5, 0.0, 0.0), v(0.1, 0.1, 0.2), v(0.0, 0.5, 0.0)],
+        ];
+        let tris: Vec<[DVec3; 3]> = folded.iter().map(|t| t.map(|p| p.as_dvec3())).collect();
+        let edges = MeshEdges::new(&folded, &tris);
+        let mut c = Contours::new(&edges, DVec3::new(0.1, 0.2, 3.0), 8);
+        assert!(c.crosses(edges.corners(0), &tris[0]));
+        c.hide(&edges, &[false, true]);
+        assert!(!c.crosses(edges.corners(0), &tris[0]), "the upper rim is hidden");
+        c.hide(&edges, &[true, false]);
+        assert!(c.crosses(edges.corners(0), &tris[0]), "the upper rim is back");
+        c.hide(&edges, &[false, false]);
+        assert!(c.crosses(edges.corners(0), &tris[0]));
+        assert_eq!(c.members.len(), Contours::new(&edges, DVec3::new(0.1, 0.2, 3.0), 8).members.len());
     }
 
     #[test]

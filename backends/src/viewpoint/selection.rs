@@ -54,10 +54,11 @@ impl<'a> Merged<'a> {
             self.m[o as usize] += pv * q;
         }
         self.w += pv;
-        // Recomputed in full: no drift from incremental updates.
-        for ((t, &m), &q) in self.terms.iter_mut().zip(&self.m).zip(&self.an.p_o) {
+        // Recomputed in full: no drift from incremental updates (each term
+        // alone, so on every thread; the sum below stays in order).
+        self.terms.par_iter_mut().zip(&self.m).zip(&self.an.p_o).with_min_len(4096).for_each(|((t, &m), &q)| {
             *t = kl_term(m, q);
-        }
+        });
         self.a = self.terms.iter().sum();
     }
 

@@ -114,12 +114,11 @@ impl Lights {
         Some(Self { triangles, cdf, probability, of_triangle, fast, cdf32 })
     }
 
-    /// [`Lights::sample`] in f32.
+    /// [`Lights::sample`] in f32: `(light, point)`, the point
+    /// `v0 + √a (1 − b) e1 + √a b e2` (uniform on the triangle).
     #[inline]
-    pub(crate) fn sample32(&self, a: f32, b: f32) -> (usize, Vec3A) {
-        let i = self.cdf32.partition_point(|&c| c <= a).min(self.cdf32.len() - 1);
-        let lo = if i == 0 { 0.0 } else { self.cdf32[i - 1] };
-        let a = ((a - lo) / (self.cdf32[i] - lo)).clamp(0.0, 1.0);
+    pub(crate) fn sample32(&self, u: f32, a: f32, b: f32) -> (usize, Vec3A) {
+        let i = self.cdf32.partition_point(|&c| c <= u).min(self.cdf32.len() - 1);
         let l = &self.fast[i];
         let s = a.sqrt();
         (i, l.v0 + l.e1 * (s * (1.0 - b)) + l.e2 * (s * b))
@@ -131,19 +130,10 @@ impl Lights {
         self.fast[i].density * distance * distance / cos_light
     }
 
-    /// Picks a light and a point on it with `(a, b)`, uniform in the unit
-    /// square: `(light, point)`. The light is the one whose interval of
-    /// the selection CDF holds `a`; `a` rescaled within that interval
-    /// (uniform again, given the choice) and `b` then place the point
-    /// uniformly on its triangle, `v0 + √a (1 − b) e1 + √a b e2`. One 2D
-    /// draw for both, so stratified `(a, b)` stay stratified over all the
-    /// lights together (a separate draw for the choice would split each
-    /// light's strata at random).
+    /// Picks a light with `u` and a point on it with `(a, b)`: `(light, point)`.
     #[must_use]
-    pub fn sample(&self, a: f64, b: f64) -> (usize, DVec3) {
-        let i = self.cdf.partition_point(|&c| c <= a).min(self.cdf.len() - 1);
-        let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
-        let a = ((a - lo) / (self.cdf[i] - lo)).clamp(0.0, 1.0);
+    pub fn sample(&self, u: f64, a: f64, b: f64) -> (usize, DVec3) {
+        let i = crate::lines::sample_cdf(&self.cdf, u);
         let [v0, v1, v2] = self.triangles[i].vertices;
         let s = a.sqrt();
         (i, v0 * (1.0 - s) + v1 * (s * (1.0 - b)) + v2 * (s * b))
@@ -204,56 +194,5 @@ impl Surfaces {
     #[must_use]
     pub fn of(&self, t: u32) -> &Material {
         &self.materials[self.material[t as usize] as usize]
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Three lights of unequal selection probability: stratified first
-    /// coordinates of [`Lights::sample32`] choose each light in proportion to its probability (to
-    /// one sample), and the rescaled coordinate spreads its points
-    /// uniformly over its triangle (their mean is the centroid).
-    #[test]
-    fn one_draw_chooses_the_light_and_places_the_point() {
-        let tri = |o: f32| {
-            let v0 = Vec3A::new(o, 0.0, 0.0);
-            FastLight { v0, e1: Vec3A::X, e2: Vec3A::Y, normal: Vec3A::Z, radiance: Vec3A::ONE, density: 0.0 }
-        };
-        let probability = [0.2f64, 0.5, 0.3];
-        let mut acc = 0.0;
-        let cdf: Vec<f64> = probability
-            .iter()
-            .map(|p| {
-                acc += p;
-                acc
-            })
-            .collect();
-        let lights = Lights {
-            triangles: Vec::new(),
-            cdf32: cdf.iter().map(|&c| c as f32).collect(),
-            cdf,
-            probability: probability.to_vec(),
-            of_triangle: Vec::new(),
-            fast: (0..3).map(|i| tri(10.0 * i as f32)).collect(),
-        };
-        let n = 100_000u32;
-        let rng = crate::lines::LineRng::new(5, 0);
-        let mut count = [0u32; 3];
-        let mut sum = [Vec3A::ZERO; 3];
-        for k in 0..n {
-            let a = (k as f32 + rng.uniform32(2 * k)) / n as f32;
-            let (i, y) = lights.sample32(a, rng.uniform32(2 * k + 1));
-            count[i] += 1;
-            sum[i] += y;
-        }
-        for i in 0..3 {
-            let want = probability[i] * f64::from(n);
-            assert!((f64::from(count[i]) - want).abs() <= 1.0, "light {i}: {} of {n}, want {want}", count[i]);
-            let centroid = Vec3A::new(10.0 * i as f32 + 1.0 / 3.0, 1.0 / 3.0, 0.0);
-            let mean = sum[i] / count[i] as f32;
-            assert!((mean - centroid).length() < 5e-3, "light {i}: mean {mean}, centroid {centroid}");
-        }
     }
 }

@@ -23,16 +23,12 @@
 //!
 //! Camera samples that come with a [`Stratum`] (the pixel loop's batches)
 //! also stratify the two 2D draws of each diffuse vertex of their path, the
-//! light (its choice and its point, from one 2D draw: [`Lights::sample`])
-//! and the BSDF direction: the batch's `a × b` grid again, each pair and
-//! vertex under its own pseudo-random permutation of the batch's samples
-//! ([`permute`]), and within the cell correlated multi-jittered (Kensler
-//! 2013), so that each coordinate alone is stratified into as many strata
-//! as the batch has samples (stratified sampling padded across dimensions,
-//! as pbrt's samplers). Every draw stays uniform, so the estimator stays
-//! unbiased; the batch's samples cover each 2D domain once, as they cover
-//! the pixel. Such a pair's jitter takes one hashed word (16 bits a
-//! coordinate, a cell of `1/count` wide: 22 bits of resolution at 64 spp).
+//! light point of next-event estimation and the BSDF direction: the batch's
+//! `a × b` grid again, each pair and vertex under its own pseudo-random
+//! permutation of the batch's samples ([`permute`]), jittered within the
+//! cell (stratified sampling padded across dimensions, as pbrt's stratified
+//! sampler). Every draw stays uniform, so the estimator stays unbiased; the
+//! batch's samples cover each 2D domain once, as they cover the pixel.
 
 use std::f32::consts::FRAC_1_PI;
 
@@ -68,8 +64,8 @@ const FAR: f32 = 1e5;
 const ROULETTE_FROM: u32 = 5;
 /// Random draws used before the first bounce (the pixel jitter).
 pub const CAMERA_DRAWS: u32 = 2;
-/// Random draws per bounce: light (2), direction (2), roulette.
-const DRAWS_PER_BOUNCE: u32 = 5;
+/// Random draws per bounce: light choice, light point (2), direction (2), roulette.
+const DRAWS_PER_BOUNCE: u32 = 6;
 
 /// A scene ready to render: tracer, geometry, materials and lights.
 pub struct PathTracer<'a> {
@@ -118,38 +114,23 @@ impl Stratum {
     }
 
     /// [`Stratum::place`] with the permutation's key already hashed:
-    /// `hashed = pcg(key ^ which)`. Correlated multi-jittered (Kensler,
-    /// "Correlated Multi-Jittered Sampling", 2013): the cell `(cx, cy)` is
-    /// the sample's permuted index; within it, `(u, v)` land in the
-    /// sub-cell that a permutation of the rows (for `x`) and of the columns
-    /// (for `y`) gives (the same for every cell: correlated), so the batch's `x` (and its `y`) fall one in each
-    /// of `count` equal strata as well.
+    /// `hashed = pcg(key ^ which)`.
     #[inline(always)]
     fn place_hashed(&self, (a, b): (u32, u32), hashed: u32, u: f32, v: f32) -> (f32, f32) {
         let cell = permute(self.index, self.count, hashed);
         // `cx + u` can round up to `cx + 1`: keep the draw below 1.
         let below_one = 1.0 - f32::EPSILON / 2.0;
-        let (cx, cy) = if a.is_power_of_two() {
-            // Without a division (it was most of this function's time).
-            (cell & (a - 1), cell >> a.trailing_zeros())
+        let (x, y) = if a.is_power_of_two() && b.is_power_of_two() {
+            // The same numbers without divisions (they were most of this
+            // function's time): shifts and masks, and multiplying by `1/a`,
+            // which is exact for a power of two, so equals dividing by `a`.
+            let (ka, kb) = (a.trailing_zeros(), b.trailing_zeros());
+            let inv = |k: u32| f32::from_bits((127 - k) << 23);
+            (((cell & (a - 1)) as f32 + u) * inv(ka), ((cell >> ka) as f32 + v) * inv(kb))
         } else {
-            (cell % a, cell / a)
+            let (cx, cy) = (cell % a, cell / a);
+            ((cx as f32 + u) / a as f32, (cy as f32 + v) / b as f32)
         };
-        // The rows' and columns' permutations: a random XOR where the side
-        // is a power of two (a permutation, each image equally likely over
-        // keys, at the cost of two operations; Kensler's hashed
-        // permutations cost the renders 10-13% more CPU time), [`permute`]
-        // otherwise.
-        let side = |i: u32, n: u32, mix: u32| {
-            let k = hashed.wrapping_mul(mix);
-            if n.is_power_of_two() { i ^ ((k >> 16) & (n - 1)) } else { permute(i, n, k) }
-        };
-        let (sx, sy) = (side(cx, a, 0x68bc_21eb), side(cy, b, 0x02e5_be93));
-        // `1/count` is exact when `count` is a power of two; otherwise the
-        // rounding moves a draw by an ulp, not out of its stratum's order.
-        let inv = 1.0 / self.count as f32;
-        let x = ((cx * b + sy) as f32 + u) * inv;
-        let y = ((cy * a + sx) as f32 + v) * inv;
         (x.min(below_one), y.min(below_one))
     }
 }
@@ -331,24 +312,17 @@ impl PathTracer<'_> {
                     p.direction = (p.direction - nf * (2.0 * p.direction.dot(nf))).normalize();
                     p.pdf = 0.0;
                 } else {
-                    let ((l1, l2), (d1, d2)) = if let Some(s) = strata {
-                        // One word a pair: two 16-bit jitters within a cell.
-                        let pair = |i: u32| {
-                            let h = p.rng.u32(k + i);
-                            let half = |x: u32| (x as f32 + 0.5) * (1.0 / 65_536.0);
-                            (half(h >> 16), half(h & 0xffff))
-                        };
-                        let ((l1, l2), (d1, d2)) = (pair(0), pair(2));
+                    let u = |i: u32| p.rng.uniform32(k + i);
+                    let (mut l1, mut l2, mut d1, mut d2) = (u(1), u(2), u(3), u(4));
+                    if let Some(s) = strata {
                         let s = &s[p.slot as usize];
                         let grid = self::strata(s.count);
                         let [wl, wd] = which(p.depth);
-                        (s.place_hashed(grid, pcg(s.key ^ wl), l1, l2), s.place_hashed(grid, pcg(s.key ^ wd), d1, d2))
-                    } else {
-                        let u = |i: u32| p.rng.uniform32(k + i);
-                        ((u(0), u(1)), (u(2), u(3)))
-                    };
+                        (l1, l2) = s.place_hashed(grid, pcg(s.key ^ wl), l1, l2);
+                        (d1, d2) = s.place_hashed(grid, pcg(s.key ^ wd), d1, d2);
+                    }
                     // Next-event estimation.
-                    let (li, y) = self.lights.sample32(l1, l2);
+                    let (li, y) = self.lights.sample32(u(0), l1, l2);
                     let to = y - o;
                     let dist = to.length();
                     let w = to / dist;
@@ -374,10 +348,10 @@ impl PathTracer<'_> {
                 p.beta *= rho;
                 p.depth += 1;
                 if p.depth >= ROULETTE_FROM {
-                    // The roulette's draw (the bounce's fifth), drawn only
+                    // The roulette's draw (the bounce's sixth), drawn only
                     // where the path needs it.
                     let q = p.beta.max_element().min(0.95);
-                    if p.rng.uniform32(k + 4) >= q {
+                    if p.rng.uniform32(k + 5) >= q {
                         continue;
                     }
                     p.beta /= q;
@@ -429,19 +403,6 @@ mod tests {
                     assert!(!seen[cell as usize], "count {count}: cell {cell} twice");
                     seen[cell as usize] = true;
                 }
-            }
-        }
-        // Each coordinate alone: one draw in each of `count` strata.
-        for count in [7u32, 8, 60, 64] {
-            let grid = self::strata(count);
-            let rng = LineRng::new(4, u64::from(count));
-            let (mut xs, mut ys) = (vec![false; count as usize], vec![false; count as usize]);
-            for index in 0..count {
-                let s = Stratum { index, count, key: 7 };
-                let (u, v) = s.place(grid, 3, rng.uniform32(2 * index), rng.uniform32(2 * index + 1));
-                let (i, j) = ((u * count as f32) as usize, (v * count as f32) as usize);
-                assert!(!xs[i] && !ys[j], "count {count}: stratum {i} or {j} twice");
-                (xs[i], ys[j]) = (true, true);
             }
         }
         let order =

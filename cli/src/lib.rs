@@ -11,12 +11,11 @@ pub mod options;
 pub mod output;
 pub mod plot;
 pub mod progress;
-pub use commands::{complexity, measure, radiosity, viewpoints, volume};
+pub use commands::{complexity, measure, radiosity, simplify, viewpoints, volume};
 pub mod render;
 pub mod report;
 pub mod scene;
 pub mod shard;
-pub mod simplify;
 pub mod values;
 
 use std::fmt;

@@ -1,7 +1,6 @@
 //! Commands laid out as `commands/<cmd>/{args,run}.rs`: the options clap
-//! parses, and the run. Every command is here but `render`, `compare` and
-//! `simplify` (still `cli/src/render/` and `cli/src/simplify.rs`) and
-//! `devices`.
+//! parses, and the run. Every command is here but `render` and `compare`
+//! (still `cli/src/render/`) and `devices`.
 
 pub mod complexity;
 pub mod measure;
@@ -9,6 +8,7 @@ pub mod phantom;
 pub mod radiosity;
 pub mod register;
 pub mod segment;
+pub mod simplify;
 pub mod viewpoints;
 pub mod volume;
 

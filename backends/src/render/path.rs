@@ -308,12 +308,9 @@ impl PathTracer<'_> {
                 }
                 let k = CAMERA_DRAWS + DRAWS_PER_BOUNCE * p.depth;
                 let o = x + nf * EPSILON;
-                // The roulette's draw (the bounce's sixth), when the path needs it.
-                let roulette;
                 if m.mirror {
                     p.direction = (p.direction - nf * (2.0 * p.direction.dot(nf))).normalize();
                     p.pdf = 0.0;
-                    roulette = (p.depth + 1 >= ROULETTE_FROM).then(|| p.rng.uniform32(k + 5));
                 } else {
                     let u = |i: u32| p.rng.uniform32(k + i);
                     let (mut l1, mut l2, mut d1, mut d2) = (u(1), u(2), u(3), u(4));
@@ -324,7 +321,6 @@ impl PathTracer<'_> {
                         (l1, l2) = s.place_hashed(grid, pcg(s.key ^ wl), l1, l2);
                         (d1, d2) = s.place_hashed(grid, pcg(s.key ^ wd), d1, d2);
                     }
-                    roulette = Some(u(5));
                     // Next-event estimation.
                     let (li, y) = self.lights.sample32(u(0), l1, l2);
                     let to = y - o;
@@ -351,11 +347,11 @@ impl PathTracer<'_> {
                 }
                 p.beta *= rho;
                 p.depth += 1;
-                if p.depth >= ROULETTE_FROM
-                    && let Some(r) = roulette
-                {
+                if p.depth >= ROULETTE_FROM {
+                    // The roulette's draw (the bounce's sixth), drawn only
+                    // where the path needs it.
                     let q = p.beta.max_element().min(0.95);
-                    if r >= q {
+                    if p.rng.uniform32(k + 5) >= q {
                         continue;
                     }
                     p.beta /= q;

@@ -39,8 +39,8 @@ fn run(cli: Cli) -> Result<String, CliError> {
             Ok(render(&viewpoints::run(&o)?, o.common.json))
         }
         Command::Simplify(o) => {
-            threads(o.tracing.threads)?;
-            Ok(render(&simplify::run(&o)?, o.common.json))
+            threads(o.run.tracing.threads)?;
+            Ok(render(&simplify::run(&o)?, o.run.common.json))
         }
         Command::Volume(o) => {
             threads(o.threads)?;

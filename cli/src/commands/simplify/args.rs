@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use crate::options::{Common, Tracing};
+use crate::options::Traced;
 use crate::values::{distance, max_subdivision, out_path, tolerance, viewpoint_count};
 
 /// `itgfx simplify MESH`.
@@ -72,12 +72,9 @@ pub struct SimplifyOptions {
     /// Points sampled on each surface for the Hausdorff distance
     #[arg(long, value_name = "N", default_value = "20000", value_parser = samples)]
     pub samples: usize,
+    /// `--backend`, `--threads`, `--json`, `--base`
     #[command(flatten)]
-    #[allow(missing_docs)]
-    pub tracing: Tracing,
-    #[command(flatten)]
-    #[allow(missing_docs)]
-    pub common: Common,
+    pub run: Traced,
 }
 
 fn lambda(s: &str) -> Result<f64, String> {

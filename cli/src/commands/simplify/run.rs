@@ -153,7 +153,7 @@ struct Simplified {
 const SHOWN: usize = 4;
 
 fn renders(mesh: &IndexedMesh, o: &SimplifyOptions, eyes: &[DVec3]) -> Result<Vec<Render>, CliError> {
-    render(mesh, o.tracing.backend, eyes, o.image_size).map_err(|e| CliError::usage(e.to_string()))
+    render(mesh, o.run.tracing.backend, eyes, o.image_size).map_err(|e| CliError::usage(e.to_string()))
 }
 
 /// Runs `itgfx simplify`.
@@ -207,9 +207,9 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
     crate::output::out_files(&out, &["original.png", "compare.png"])?;
 
     let t0 = Instant::now();
-    let unit = Some(o.common.base.unit());
+    let unit = Some(o.run.common.base.unit());
     // The simplifier measures in bits; reports follow --base.
-    let in_base = |bits: f64| bits * std::f64::consts::LN_2 * o.common.base.per_nat();
+    let in_base = |bits: f64| bits * std::f64::consts::LN_2 * o.run.common.base.per_nat();
     let eyes: Vec<DVec3> = evaluation_directions(o.eval_views).into_iter().map(|d| d * o.distance).collect();
     let reference = renders(&original, o, &eyes)?;
     let mut r = Report::new();
@@ -237,7 +237,7 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
             placement,
             directions: dirs,
             distance: o.distance,
-            backend: o.tracing.backend,
+            backend: o.run.tracing.backend,
             refresh: 0.5,
             tolerance: o.tolerance,
             max_subdivision: o.max_subdivision,

@@ -1,13 +1,13 @@
 //! Commands laid out as `commands/<cmd>/{args,run}.rs`: the options clap
-//! parses, and the run. Every command is here but `render`, `compare` and
-//! `simplify` (still `cli/src/render/` and `cli/src/simplify.rs`) and
-//! `devices`.
+//! parses, and the run. Every command is here but `simplify` (still
+//! `cli/src/simplify.rs`) and `devices`; `compare` lives with `render`.
 
 pub mod complexity;
 pub mod measure;
 pub mod phantom;
 pub mod radiosity;
 pub mod register;
+pub mod render;
 pub mod segment;
 pub mod viewpoints;
 pub mod volume;

@@ -3,11 +3,15 @@
 
 use std::path::Path;
 
+#[path = "src/vulkan/no_contraction.rs"]
+mod no_contraction;
+
 fn main() {
     let out = std::env::var("OUT_DIR").expect("OUT_DIR");
     for name in ["trace", "xlogy", "axis_sum", "volume"] {
         let src_path = format!("shaders/{name}.wgsl");
         println!("cargo::rerun-if-changed={src_path}");
+        println!("cargo::rerun-if-changed=src/vulkan/no_contraction.rs");
         let src = std::fs::read_to_string(&src_path).expect("read shader");
         let module = naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
         let caps = naga::valid::Capabilities::FLOAT64 | naga::valid::Capabilities::IMMEDIATES;
@@ -22,6 +26,8 @@ fn main() {
             ..Default::default()
         };
         let words = naga::back::spv::write_vec(&module, &info, &options, None).expect("SPIR-V");
+        // Each float operation rounded on its own, as on the CPU (no fused multiply-adds).
+        let words = no_contraction::mark_no_contraction(&words);
         let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
         std::fs::write(Path::new(&out).join(format!("{name}.spv")), bytes).expect("write SPIR-V");
     }

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Stacks the renders bench/simplify_table.py left behind into one labelled
-picture per mesh and target: rows original, VMI (placed vertex), VMI
-(half-edge), FQMS, QEM; columns the
+picture per mesh and target: rows original, VMI/BLEND (the default: placed
+vertex, VMI + quadric order), VMI/ENDPOINT (half-edge), FQMS, QEM; columns the
 first four evaluation views (none of them a channel viewpoint).
 
 Usage: simplify_images.py BENCH_OUT MESH TARGET OUT.png   (needs Pillow)
@@ -15,9 +15,9 @@ from PIL import Image, ImageDraw
 out_dir, mesh, target, dest = sys.argv[1:5]
 base = os.path.join(out_dir, mesh)
 rows = [
-    ("original", os.path.join(base, "vmi-quadric", "original.png")),
-    ("VMI", os.path.join(base, "vmi-quadric", f"simplified_{target}.png")),
-    ("VMI half", os.path.join(base, "vmi-endpoint", f"simplified_{target}.png")),
+    ("original", os.path.join(base, "vmi-blend", "original.png")),
+    ("VMI/BLEND", os.path.join(base, "vmi-blend", f"simplified_{target}.png")),
+    ("VMI/END", os.path.join(base, "vmi-endpoint", f"simplified_{target}.png")),
     ("FQMS", os.path.join(base, "fqms", f"fqms_{target}.png")),
     ("QEM", os.path.join(base, "qem", f"qem_{target}.png")),
 ]

@@ -3,6 +3,9 @@
 of them the benchmark table's (suzanne, spot, teapot, fandisk):
 
 * torus6k.obj: a bumpy, flattened torus of 75 × 40 quads (6,000 triangles);
+* open6k.obj: the same torus of 75 × 54 quads with a band of 75 × 14
+  quads of its tube left out (75 × 40 kept, 6,000 triangles): open, two
+  long boundary loops, for the boundary rules;
 * bunny6k.obj: stanford-bunny.obj reduced to 6,000 triangles by
   fast-simplification (needs `pip install fast-simplification numpy`).
 
@@ -20,7 +23,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from simplify_table import read_obj  # noqa: E402  (one OBJ reader for the bench scripts)
 
 
-def torus(path, u=75, v=40):
+def torus(path, u=75, v=40, keep=None):
     lines = []
     for i in range(u):
         for j in range(v):
@@ -34,7 +37,7 @@ def torus(path, u=75, v=40):
         return (i % u) * v + (j % v) + 1
 
     for i in range(u):
-        for j in range(v):
+        for j in range(v if keep is None else keep):
             p, q, r, t = idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1)
             lines.append(f"f {p} {q} {r}\nf {p} {r} {t}")
     with open(path, "w") as f:
@@ -56,4 +59,5 @@ if __name__ == "__main__":
     bunny, out = sys.argv[1:3]
     os.makedirs(out, exist_ok=True)
     torus(os.path.join(out, "torus6k.obj"))
+    torus(os.path.join(out, "open6k.obj"), v=54, keep=40)
     reduced(bunny, os.path.join(out, "bunny6k.obj"), 6000)

@@ -57,6 +57,44 @@ fn cross2(p: f32, q: f32, r: f32, s: f32) -> f32 {
     return f32(f64(p) * f64(q) - f64(r) * f64(s));
 }
 
+// |num - q det| as the CPU would have it: exact in f64 (q det of two f32 has
+// 48 bits; the difference of two nearby values with that few bits is exact).
+fn residual(num: f32, det: f32, q: f32) -> f64 {
+    return abs(f64(num) - f64(q) * f64(det));
+}
+
+// num / det rounded to nearest, ties to even: the CPU's f32 division. A
+// device's f32 division may be off by 2.5 ulp (Vulkan's precision table) and
+// the NVIDIA driver's is; the f64 quotient rounded to f32 lies within one
+// ulp of the right one, which of it and its two neighbours leaves the
+// smallest exact residual decides.
+fn div_rn(num: f32, det: f32) -> f32 {
+    let q = f32(f64(num) / f64(det));
+    let b = bitcast<u32>(q);
+    if q == 0.0 || (b & 0x7f800000u) == 0x7f800000u {
+        return q;
+    }
+    var best = q;
+    var r = residual(num, det, q);
+    for (var s = 0u; s < 2u; s = s + 1u) {
+        // The neighbours by bit pattern (same sign, one ulp each way).
+        var nb = b - 1u;
+        if s == 1u {
+            nb = b + 1u;
+        }
+        let c = bitcast<f32>(nb);
+        if (nb & 0x7f800000u) == 0x7f800000u {
+            continue;
+        }
+        let rc = residual(num, det, c);
+        if rc < r || (rc == r && (nb & 1u) == 0u) {
+            best = c;
+            r = rc;
+        }
+    }
+    return best;
+}
+
 // (num bits, det bits, scene triangle, 1) for a crossing, w = 0 for none.
 fn test_triangle(p: u32, org: vec3<f32>, s: vec3<f32>, ks: vec3<u32>, tmin: f32, tmax: f32) -> vec4<u32> {
     let a = tris[3u * p].xyz - org;
@@ -156,7 +194,7 @@ fn trace(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocatio
                     if closest {
                         if h.w == 1u {
                             // The exact test the host applies, in the same f32 division.
-                            let t = bitcast<f32>(h.x) / bitcast<f32>(h.y);
+                            let t = div_rn(bitcast<f32>(h.x), bitcast<f32>(h.y));
                             if t >= tmin && t <= tmax {
                                 if found == 0u || t < best_t || (t == best_t && h.z < best.z) {
                                     best = vec4<u32>(h.xyz, 0u);

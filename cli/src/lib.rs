@@ -11,11 +11,10 @@ pub mod options;
 pub mod output;
 pub mod plot;
 pub mod progress;
-pub use commands::{complexity, measure, radiosity, render, viewpoints, volume};
+pub use commands::{complexity, measure, radiosity, render, simplify, viewpoints, volume};
 pub mod report;
 pub mod scene;
 pub mod shard;
-pub mod simplify;
 pub mod values;
 
 use std::fmt;

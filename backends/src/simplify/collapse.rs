@@ -13,6 +13,13 @@ use super::place::Quadric;
 /// collapse: 0 refuses any triangle turned by more than 90°.
 pub const MIN_NORMAL_COSINE: f64 = 0.0;
 
+/// Weight of a boundary edge's plane in the quadrics, per squared edge
+/// length (a face's plane weighs its area): Garland and Heckbert's
+/// boundary constraint (SIGGRAPH 1997 §6), the plane through the edge
+/// perpendicular to its triangle, so that a vertex placed on an open
+/// boundary stays near the boundary's line.
+pub const BOUNDARY_WEIGHT: f64 = 10.0;
+
 /// A mesh being simplified: triangles keep their index while alive, so
 /// per-triangle data can be updated in place.
 #[derive(Clone, Debug)]
@@ -50,12 +57,31 @@ impl Dynamic {
     pub fn new(mesh: &IndexedMesh) -> Self {
         let mut around = vec![Vec::new(); mesh.positions.len()];
         let mut quadrics = vec![Quadric::default(); mesh.positions.len()];
+        let mut edges: std::collections::HashMap<(u32, u32), (u32, u32)> = std::collections::HashMap::new();
         for (f, t) in mesh.faces.iter().enumerate() {
             let q = Quadric::of_triangle(&mesh.corners(f));
             for &v in t {
                 around[v as usize].push(f as u32);
                 quadrics[v as usize] = quadrics[v as usize] + q;
             }
+            for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                edges.entry((a.min(b), a.max(b))).or_insert((f as u32, 0)).1 += 1;
+            }
+        }
+        // Boundary edges (one triangle), in a fixed order: the sums do not
+        // depend on the hash map's.
+        let mut boundary: Vec<((u32, u32), u32)> =
+            edges.into_iter().filter(|(_, (_, n))| *n == 1).map(|(e, (f, _))| (e, f)).collect();
+        boundary.sort_unstable();
+        for ((a, b), f) in boundary {
+            let q = Quadric::of_boundary_edge(
+                &mesh.corners(f as usize),
+                mesh.positions[a as usize],
+                mesh.positions[b as usize],
+            );
+            let q = q.scaled(BOUNDARY_WEIGHT);
+            quadrics[a as usize] = quadrics[a as usize] + q;
+            quadrics[b as usize] = quadrics[b as usize] + q;
         }
         Self {
             positions: mesh.positions.clone(),
@@ -102,7 +128,8 @@ impl Dynamic {
     /// `v` not joined by an edge; the link condition (the common neighbours
     /// of `u` and `v` are exactly the far corners of the triangles on the
     /// edge); a boundary vertex `u` moved off the boundary, or a boundary
-    /// vertex moved at all by a full-edge collapse; two triangles made
+    /// vertex moved by a full-edge collapse, unless the edge is a boundary
+    /// edge (both ends then merge on that boundary); two triangles made
     /// identical; a triangle left with no area or turned past
     /// [`MIN_NORMAL_COSINE`]; fewer than 4 triangles.
     #[must_use]
@@ -128,7 +155,7 @@ impl Dynamic {
             return None;
         }
         let placed = position != self.positions[v as usize];
-        if placed && (self.on_boundary(u) || self.on_boundary(v)) {
+        if placed && removed.len() == 2 && (self.on_boundary(u) || self.on_boundary(v)) {
             return None;
         }
         let mut moved: Vec<u32> = self.around[u as usize].iter().copied().filter(|f| !removed.contains(f)).collect();

@@ -1,5 +1,5 @@
 //! The indexed triangle mesh the simplifier works on: a scene's triangle
-//! soup welded into shared vertices (identical coordinates, bit for bit),
+//! soup welded into shared vertices (equal coordinates; `-0.0` is `0.0`),
 //! checked to be an edge- and vertex-manifold surface (with or without
 //! boundary), in the normalised frame of the original scene.
 
@@ -81,21 +81,7 @@ impl IndexedMesh {
     /// # Errors
     /// [`MeshError`] for an empty or non-manifold mesh.
     pub fn weld(triangles: &[[DVec3; 3]], centre: DVec3, scale: f64) -> Result<(Self, Repairs), MeshError> {
-        let key = |v: DVec3| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
-        let mut ids: HashMap<[u64; 3], u32> = HashMap::new();
-        let mut positions = Vec::new();
-        let faces = triangles
-            .iter()
-            .map(|t| {
-                t.map(|v| {
-                    *ids.entry(key(v)).or_insert_with(|| {
-                        positions.push((v - centre) / scale);
-                        (positions.len() - 1) as u32
-                    })
-                })
-            })
-            .collect();
-        let mut mesh = Self { positions, faces };
+        let mut mesh = Self::index(triangles, centre, scale);
         let repairs = mesh.repair();
         mesh.check()?;
         Ok((mesh, repairs))
@@ -110,7 +96,16 @@ impl IndexedMesh {
         if triangles.is_empty() {
             return Err(MeshError::Empty);
         }
-        let key = |v: DVec3| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+        Ok(Self::index(triangles, centre, scale))
+    }
+
+    /// One vertex per distinct coordinate triple, compared as numbers:
+    /// `-0.0` and `0.0` are the same coordinate (the Utah teapot's OBJ
+    /// writes both on its symmetry planes; keyed by their bits they left 20
+    /// zero-width slits along its seams). Mapped to `(p − centre) / scale`.
+    fn index(triangles: &[[DVec3; 3]], centre: DVec3, scale: f64) -> Self {
+        // `x + 0.0` turns -0.0 into 0.0 and leaves every other value as it is.
+        let key = |v: DVec3| [(v.x + 0.0).to_bits(), (v.y + 0.0).to_bits(), (v.z + 0.0).to_bits()];
         let mut ids: HashMap<[u64; 3], u32> = HashMap::new();
         let mut positions = Vec::new();
         let faces = triangles
@@ -124,7 +119,7 @@ impl IndexedMesh {
                 })
             })
             .collect();
-        Ok(Self { positions, faces })
+        Self { positions, faces }
     }
 
     /// Triangles.
@@ -470,6 +465,22 @@ mod tests {
         assert_eq!(fixed.check(), Ok(()));
         assert_eq!(fixed.positions.len(), 6);
         assert_eq!(fixed.positions[5], fixed.positions[0]);
+    }
+
+    #[test]
+    fn minus_zero_welds_with_zero() {
+        // Two triangles on the plane x = 0 sharing an edge, one written
+        // with -0.0 there (as the Utah teapot's OBJ is): one surface, the
+        // shared edge inside it, no boundary there.
+        let (z, m) = (0.0, -0.0);
+        let tris = [
+            [DVec3::new(z, 0.0, 0.0), DVec3::new(z, 1.0, 0.0), DVec3::new(1.0, 0.5, 0.0)],
+            [DVec3::new(m, 1.0, 0.0), DVec3::new(m, 0.0, 0.0), DVec3::new(-1.0, 0.5, 0.0)],
+        ];
+        let (w, r) = IndexedMesh::weld(&tris, DVec3::ZERO, 1.0).unwrap();
+        assert!(!r.any(), "{r}");
+        assert_eq!(w.positions.len(), 4);
+        assert_eq!(IndexedMesh::weld_any(&tris, DVec3::ZERO, 1.0).unwrap().positions.len(), 4);
     }
 
     #[test]

@@ -69,6 +69,29 @@ impl Quadric {
         Self::plane(n, -n.dot(t[0]), 0.5 * len)
     }
 
+    /// Garland and Heckbert's boundary constraint for the boundary edge
+    /// `a`–`b` of triangle `t`: the plane through the edge perpendicular to
+    /// the triangle, weighted by the edge's squared length (zero for a
+    /// triangle or edge without extent).
+    #[must_use]
+    pub fn of_boundary_edge(t: &[DVec3; 3], a: DVec3, b: DVec3) -> Self {
+        let n = (t[1] - t[0]).cross(t[2] - t[0]);
+        let e = b - a;
+        let m = e.cross(n);
+        let len = m.length();
+        if len <= 0.0 || !len.is_finite() {
+            return Self::default();
+        }
+        let m = m / len;
+        Self::plane(m, -m.dot(a), e.length_squared())
+    }
+
+    /// `w · Q`.
+    #[must_use]
+    pub fn scaled(self, w: f64) -> Self {
+        Self { a: self.a.map(|x| w * x), b: self.b.map(|x| w * x), c: w * self.c }
+    }
+
     /// `Q(p)`, clamped at 0 against rounding.
     #[must_use]
     pub fn error(&self, p: DVec3) -> f64 {

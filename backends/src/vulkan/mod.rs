@@ -11,6 +11,8 @@
 //! * [`reduce`]: entropy of large weight arrays with f64 accumulation.
 //! * [`volume`]: [`volume::VulkanVolumeCaster`], volume ray casting on the GPU.
 
+#[cfg(test)]
+mod no_contraction;
 pub mod reduce;
 pub mod tracer;
 pub mod volume;
@@ -259,11 +261,22 @@ impl Gpu {
         Ok(Self { shared, queue: Mutex::new(queue), pool: Mutex::new(pool), memory, info: infos[i].clone() })
     }
 
-    /// A host-visible, coherent storage buffer of `bytes`, mapped.
+    /// A host-visible, coherent storage buffer of `bytes`, mapped, for data
+    /// the host writes before each dispatch ([`Use::Stream`]).
     ///
     /// # Errors
     /// Allocation failures.
     pub fn buffer(&self, bytes: u64) -> Result<Buffer, BackendError> {
+        self.buffer_for(bytes, Use::Stream)
+    }
+
+    /// A mapped storage buffer of `bytes` in the memory that suits `usage`:
+    /// each preference of [`Use::memory_preferences`] in turn, the next one
+    /// where a device has no such memory type or its heap is full.
+    ///
+    /// # Errors
+    /// Allocation failures.
+    pub fn buffer_for(&self, bytes: u64, usage: Use) -> Result<Buffer, BackendError> {
         let bytes = bytes.max(16);
         if bytes > u64::from(self.info.max_storage_buffer_range) {
             return Err(BackendError::TooLarge {
@@ -283,20 +296,25 @@ impl Gpu {
         unsafe {
             let buffer = d.create_buffer(&info, None).map_err(|e| vk_err("vkCreateBuffer", e))?;
             let req = d.get_buffer_memory_requirements(buffer);
-            let want = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
-            let Some(ty) = (0..self.memory.memory_type_count).find(|&t| {
-                req.memory_type_bits & (1 << t) != 0
-                    && self.memory.memory_types[t as usize].property_flags.contains(want)
-            }) else {
-                d.destroy_buffer(buffer, None);
-                return Err(unavailable("no host-visible coherent memory type"));
-            };
-            let alloc = vk::MemoryAllocateInfo::default().allocation_size(req.size).memory_type_index(ty);
-            let memory = match d.allocate_memory(&alloc, None) {
+            let types = usage.memory_preferences().iter().filter_map(|&want| {
+                (0..self.memory.memory_type_count).find(|&t| {
+                    req.memory_type_bits & (1 << t) != 0
+                        && self.memory.memory_types[t as usize].property_flags.contains(want)
+                })
+            });
+            let mut memory = Err(unavailable("no host-visible coherent memory type"));
+            for ty in types {
+                let alloc = vk::MemoryAllocateInfo::default().allocation_size(req.size).memory_type_index(ty);
+                memory = d.allocate_memory(&alloc, None).map_err(|e| vk_err("vkAllocateMemory", e));
+                if memory.is_ok() {
+                    break;
+                }
+            }
+            let memory = match memory {
                 Ok(m) => m,
                 Err(e) => {
                     d.destroy_buffer(buffer, None);
-                    return Err(vk_err("vkAllocateMemory", e));
+                    return Err(e);
                 }
             };
             let mapped = d
@@ -516,6 +534,44 @@ unsafe impl Send for Buffer {}
 // only writes a buffer that `Gpu::dispatch` borrows `&mut` (it waits for the
 // dispatch to finish before returning), so no write overlaps a shared borrow.
 unsafe impl Sync for Buffer {}
+
+/// What a buffer holds, which decides the memory it lives in. On lavapipe
+/// every choice is the same host memory; on a discrete GPU the kernels read
+/// [`Use::Resident`] data from the card's own memory (through a resizable
+/// BAR) instead of across the bus, and the host reads [`Use::Readback`]
+/// results through its caches instead of from write-combined memory. On an
+/// H200 this measured neutral (the host's per-dispatch cost dominates:
+/// docs/VULKAN.md, *On a real GPU*), and is kept as the placement a
+/// discrete GPU wants.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Use {
+    /// Written by the host before each dispatch, read once by the device.
+    Stream,
+    /// Written once by the host, read by the device in every dispatch (a
+    /// scene's nodes and triangles, a volume's voxels).
+    Resident,
+    /// Written by the device, read by the host.
+    Readback,
+}
+
+impl Use {
+    /// Memory property flags to try, best first; every entry is mappable.
+    #[must_use]
+    pub fn memory_preferences(self) -> &'static [vk::MemoryPropertyFlags] {
+        const MAPPED: vk::MemoryPropertyFlags = vk::MemoryPropertyFlags::from_raw(
+            vk::MemoryPropertyFlags::HOST_VISIBLE.as_raw() | vk::MemoryPropertyFlags::HOST_COHERENT.as_raw(),
+        );
+        const RESIDENT: vk::MemoryPropertyFlags =
+            vk::MemoryPropertyFlags::from_raw(MAPPED.as_raw() | vk::MemoryPropertyFlags::DEVICE_LOCAL.as_raw());
+        const CACHED: vk::MemoryPropertyFlags =
+            vk::MemoryPropertyFlags::from_raw(MAPPED.as_raw() | vk::MemoryPropertyFlags::HOST_CACHED.as_raw());
+        match self {
+            Self::Stream => &[MAPPED],
+            Self::Resident => &[RESIDENT, MAPPED],
+            Self::Readback => &[CACHED, MAPPED],
+        }
+    }
+}
 
 impl Buffer {
     /// The mapped bytes.

@@ -14,7 +14,7 @@
 use itgfx_core::sum::Neumaier;
 use itgfx_core::{Base, Error};
 
-use super::{Buffer, Gpu, Kernel};
+use super::{Buffer, Gpu, Kernel, Use};
 use crate::tracer::BackendError;
 
 const XLOGY: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/xlogy.spv"));
@@ -99,9 +99,9 @@ impl Reducer {
             input: gpu.buffer((CHUNK * 4) as u64)?,
             second: gpu.buffer((CHUNK * 4) as u64)?,
             weights: gpu.buffer((CHUNK * 4) as u64)?,
-            partial: gpu.buffer((invocations * 32) as u64)?,
-            bad: gpu.buffer((CHUNK * 4) as u64)?,
-            sums: gpu.buffer((CHUNK * 8) as u64)?,
+            partial: gpu.buffer_for((invocations * 32) as u64, Use::Readback)?,
+            bad: gpu.buffer_for((CHUNK * 4) as u64, Use::Readback)?,
+            sums: gpu.buffer_for((CHUNK * 8) as u64, Use::Readback)?,
             gpu,
         })
     }

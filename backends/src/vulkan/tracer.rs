@@ -7,8 +7,12 @@
 //! shear constants from the host. It returns up to [`MAX_HITS`] raw hits per
 //! line (numerator and determinant of `t`, triangle). The host finishes each
 //! hit exactly as the CPU backend does (`t = num / det`, the `[tmin, tmax]`
-//! test, facing, patch, sorting and merging), so the two backends agree
-//! wherever the device's f32 products and sums round as the CPU's do. A line
+//! test, facing, patch, sorting and merging). Every float operation of the
+//! kernel is marked `NoContraction` (`build.rs`), so the device rounds each
+//! product and sum as the CPU does, and the device's choice of the closest
+//! hit divides with the CPU's correctly rounded f32 division (`div_rn`):
+//! the two backends agree bit for bit on lavapipe and on an NVIDIA H200
+//! (docs/VULKAN.md, *On a real GPU*). A line
 //! with more than [`MAX_HITS`] crossings, or whose traversal overflows the
 //! kernel's 64-entry stack, is retraced by the CPU backend (counted in
 //! [`VulkanTracer::host_retraced`]).
@@ -26,7 +30,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::{Vec3, Vec3A};
 
-use super::{Buffer, Gpu, Kernel};
+use super::{Buffer, Gpu, Kernel, Use};
 use crate::lines::Line;
 use crate::tracer::watertight::{Shear, finish, sphere_crossings, sphere_hit, triangle_hit};
 use crate::tracer::{BackendError, CpuTracer, Crossing, CrossingBuffer, Hit, Prepared, Tracer, bvh_input};
@@ -83,15 +87,15 @@ impl VulkanTracer {
             }
         }
         let upload = |words: &[u32]| -> Result<Buffer, BackendError> {
-            let mut b = gpu.buffer(4 * words.len() as u64)?;
+            let mut b = gpu.buffer_for(4 * words.len() as u64, Use::Resident)?;
             b.write_words(0, words.iter().copied());
             Ok(b)
         };
         let (nodes, triangles, prims) = (upload(&node_words)?, upload(&tri_words)?, upload(&prim_words)?);
         let staging = Staging {
             lines: gpu.buffer((CHUNK * 48) as u64)?,
-            counts: gpu.buffer((CHUNK * 4) as u64)?,
-            hits: gpu.buffer((CHUNK * MAX_HITS * 16) as u64)?,
+            counts: gpu.buffer_for((CHUNK * 4) as u64, Use::Readback)?,
+            hits: gpu.buffer_for((CHUNK * MAX_HITS * 16) as u64, Use::Readback)?,
         };
         Ok(Self {
             staging: Mutex::new(staging),

@@ -27,7 +27,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::DVec3;
 
-use super::{Buffer, DeviceInfo, Gpu, Kernel};
+use super::{Buffer, DeviceInfo, Gpu, Kernel, Use};
 use crate::backend::BackendError;
 use crate::camera::Camera;
 use crate::volume::cast::VolumeCaster;
@@ -165,15 +165,15 @@ impl<'a> VulkanVolumeCaster<'a> {
         }
         consts[9..14].copy_from_slice(&[lo, inv_range, skip_below, caster.step(), EARLY_TERMINATION]);
         consts.extend(table);
-        let mut consts_buf = gpu.buffer(consts_bytes)?;
+        let mut consts_buf = gpu.buffer_for(consts_bytes, Use::Resident)?;
         write_f64s(&mut consts_buf, 0, &consts);
-        let mut data = gpu.buffer(data_bytes)?;
+        let mut data = gpu.buffer_for(data_bytes, Use::Resident)?;
         data.write_words(0, v.data.iter().map(|x| x.to_bits()));
         let mut bits = vec![0u32; v.voxels().div_ceil(32)];
         for (c, _) in caster.active_cells().iter().enumerate().filter(|(_, a)| **a) {
             bits[c / 32] |= 1 << (c % 32);
         }
-        let mut active = gpu.buffer(active_bytes)?;
+        let mut active = gpu.buffer_for(active_bytes, Use::Resident)?;
         active.write_words(0, bits);
         Ok(Self {
             caster,
@@ -211,9 +211,9 @@ impl<'a> VulkanVolumeCaster<'a> {
             _ => Ok(Staging {
                 capacity: want,
                 rays: self.gpu.buffer((32 + want * 40) as u64)?,
-                samples: self.gpu.buffer((want * self.k * SAMPLE) as u64)?,
-                state: self.gpu.buffer((want * 16) as u64)?,
-                counts: self.gpu.buffer((want * 4) as u64)?,
+                samples: self.gpu.buffer_for((want * self.k * SAMPLE) as u64, Use::Readback)?,
+                state: self.gpu.buffer_for((want * 16) as u64, Use::Readback)?,
+                counts: self.gpu.buffer_for((want * 4) as u64, Use::Readback)?,
             }),
         }
     }

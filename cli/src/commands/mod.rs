@@ -1,6 +1,6 @@
 //! Commands laid out as `commands/<cmd>/{args,run}.rs`: the options clap
-//! parses, and the run. Every command is here but `simplify` (still
-//! `cli/src/simplify.rs`) and `devices`; `compare` lives with `render`.
+//! parses, and the run. Every command is here but `devices`; `compare`
+//! lives with `render`.
 
 pub mod complexity;
 pub mod measure;
@@ -9,6 +9,7 @@ pub mod radiosity;
 pub mod register;
 pub mod render;
 pub mod segment;
+pub mod simplify;
 pub mod viewpoints;
 pub mod volume;
 

@@ -39,15 +39,12 @@
 //! mirror-room even with the true deviations; averaged over 24 neighbours
 //! and taken in display space, the weights here are nearly flat there.
 
-use std::sync::atomic::{AtomicU64, Ordering};
-
 use itgfx_core::pixel::srgb_slope;
-use rayon::prelude::*;
 
-use super::frame::{Batch, Frame, View, moments, trace_geometry};
-use super::path::{PathTracer, strata};
+use super::frame::{Batch, PixelValue, View, moments};
+use super::path::strata;
+use super::sampler::{PilotRays, PixelSampler, Rays};
 use super::supersample::allocate;
-use crate::tracer::BackendError;
 
 /// Pilot samples a pixel (kept in its value). 8 measured better than 2, 4
 /// or 12 on the open scenes (seed 3 against a 512-spp reference of seed
@@ -79,7 +76,7 @@ pub struct AdaptiveSampling {
 /// One pixel's pilot: the sum and the sum of squares of its samples (linear
 /// RGB) and the mean per-sample variance of their display values.
 #[derive(Clone, Copy, Debug, Default)]
-struct Pilot {
+pub struct Pilot {
     sum: [f64; 3],
     squares: [f64; 3],
     display_variance: f64,
@@ -94,9 +91,6 @@ impl Pilot {
         }
     }
 }
-
-/// A pixel's estimate: mean, sample variance, samples.
-type Estimate = ([f64; 3], [f64; 3], u32);
 
 /// Display-space variance of one sample of a pixel with samples `s`, to
 /// first order: `Σ_c (255 · sRGB'(m_c))² s_c² / 3` with `m_c`, `s_c²` the
@@ -139,99 +133,92 @@ pub fn neighbour_weights(display_variance: &[f64], width: u32, height: u32) -> V
         .collect()
 }
 
-/// Renders `view` with the adaptive sampler. The pilot covers the whole
-/// image (a shard's counts depend on its neighbours' pilots across the
-/// shard's edges, so each shard traces the whole pilot); the shares are
-/// traced for `view.rows`. `progress` gets (rows done, rows) of both passes.
-///
-/// # Errors
-/// Backend failures only.
-pub fn render(
-    pt: &PathTracer,
-    view: &View,
-    a: &AdaptiveSampling,
-    progress: &(dyn Fn(u64, u64) + Sync),
-) -> Result<Frame, BackendError> {
-    let (w, h) = (view.width, view.height);
-    let h64 = u64::from(h);
-    let done = AtomicU64::new(0);
-    let n = PILOT as usize;
-    let pilot: Vec<Pilot> = (0..h)
-        .into_par_iter()
-        .map(|y| {
-            let batches: Vec<Batch> = (0..w)
-                .map(|x| Batch { pixel: y * w + x, slot: x, first: 0, n: PILOT, odd: false, pilot: false })
-                .collect();
-            let rgb = trace_geometry(pt, view, &batches, None)?;
-            let row: Vec<Pilot> = rgb
-                .chunks(n)
-                .map(|s| {
-                    let mut p = Pilot { display_variance: display_variance(s), ..Pilot::default() };
-                    s.iter().for_each(|c| p.add(c));
-                    p
-                })
-                .collect();
-            progress(done.fetch_add(1, Ordering::Relaxed) + 1, 2 * h64);
-            Ok(row)
-        })
-        .collect::<Result<Vec<Vec<Pilot>>, BackendError>>()?
-        .into_iter()
-        .flatten()
-        .collect();
-    let dv = clipped(&pilot.iter().map(|p| p.display_variance).collect::<Vec<f64>>());
-    let weights = neighbour_weights(&dv, w, h);
-    let total = u64::from(w) * u64::from(h) * u64::from(a.spp.saturating_sub(PILOT));
-    let extra = allocate(&weights, total, a.max.saturating_sub(PILOT));
-    let (first_row, end_row) = view.rows;
-    let mine = u64::from(end_row - first_row).max(1);
-    let done = AtomicU64::new(0);
-    let rows: Vec<Vec<Estimate>> = (first_row..end_row)
-        .into_par_iter()
-        .map(|y| {
-            let batches: Vec<Batch> = (0..w)
-                .map(|x| y * w + x)
-                .flat_map(|p| {
-                    let mut first = PILOT;
-                    near_square_batches(extra[p as usize]).enumerate().map(move |(k, n)| {
-                        first += n;
-                        Batch { pixel: p, slot: p % w, first: first - n, n, odd: k % 2 == 1, pilot: false }
-                    })
-                })
-                .collect();
-            let rgb = trace_geometry(pt, view, &batches, None)?;
-            let mut acc: Vec<Pilot> = (0..w).map(|x| pilot[(y * w + x) as usize]).collect();
-            let mut k = 0;
-            for b in &batches {
-                let p = &mut acc[b.slot as usize];
-                rgb[k..k + b.n as usize].iter().for_each(|c| p.add(c));
-                k += b.n as usize;
-            }
-            let row = (0..w)
-                .map(|x| {
-                    let count = PILOT + extra[(y * w + x) as usize];
-                    let (mean, var) = from_sums(&acc[x as usize], count);
-                    (mean, var, count)
-                })
-                .collect();
-            progress(h64 + (done.fetch_add(1, Ordering::Relaxed) + 1) * h64 / mine, 2 * h64);
-            Ok(row)
-        })
-        .collect::<Result<_, BackendError>>()?;
-    let mut frame = Frame {
-        width: w,
-        height: end_row - first_row,
-        rgb: Vec::new(),
-        samples: Vec::new(),
-        pilot_samples: Vec::new(),
-        variance: Vec::new(),
-    };
-    for (mean, var, count) in rows.into_iter().flatten() {
-        frame.rgb.push(mean);
-        frame.variance.push(var);
-        frame.samples.push(count);
-        frame.pilot_samples.push(0);
+/// The adaptive sampler's decisions: every pixel's pilot and its share
+/// beyond the pilot.
+pub struct AdaptivePlan {
+    pilots: Vec<Pilot>,
+    extra: Vec<u32>,
+}
+
+/// A set of pixels being sampled: each pixel's sums, its pilot's first.
+pub struct AdaptivePixels {
+    ids: Vec<u32>,
+    sums: Vec<Pilot>,
+    traced: bool,
+}
+
+/// The pilot covers the whole image (a shard's counts depend on its
+/// neighbours' pilots across the shard's edges, so each shard traces the
+/// whole pilot); the shares are traced for the rows asked for.
+impl PixelSampler for AdaptiveSampling {
+    type Pilot = Pilot;
+    type Plan = AdaptivePlan;
+    type Pixels = AdaptivePixels;
+
+    fn pilot_rays(&self) -> Option<PilotRays> {
+        Some(PilotRays { spp: PILOT, geometry: false })
     }
-    Ok(frame)
+
+    fn pilot(&self, rgb: &[[f64; 3]], _: &[f64]) -> Pilot {
+        let mut p = Pilot { display_variance: display_variance(rgb), ..Pilot::default() };
+        rgb.iter().for_each(|c| p.add(c));
+        p
+    }
+
+    fn counts(&self, view: &View, pilots: Vec<Pilot>) -> AdaptivePlan {
+        let dv = clipped(&pilots.iter().map(|p| p.display_variance).collect::<Vec<f64>>());
+        let weights = neighbour_weights(&dv, view.width, view.height);
+        let total = u64::from(view.width) * u64::from(view.height) * u64::from(self.spp.saturating_sub(PILOT));
+        let extra = allocate(&weights, total, self.max.saturating_sub(PILOT));
+        AdaptivePlan { pilots, extra }
+    }
+
+    fn start(&self, plan: &AdaptivePlan, _: &View, ids: &[u32]) -> AdaptivePixels {
+        AdaptivePixels {
+            ids: ids.to_vec(),
+            sums: ids.iter().map(|&p| plan.pilots[p as usize]).collect(),
+            traced: false,
+        }
+    }
+
+    /// One round: each pixel's share from index `PILOT` on, in near-square batches.
+    fn round(&self, plan: &AdaptivePlan, _: &View, px: &mut AdaptivePixels, estimate: bool) -> Option<Rays> {
+        if px.traced || !estimate {
+            return None;
+        }
+        px.traced = true;
+        let batches = (px.ids.iter().enumerate())
+            .flat_map(|(slot, &p)| {
+                let mut first = PILOT;
+                near_square_batches(plan.extra[p as usize]).enumerate().map(move |(k, n)| {
+                    first += n;
+                    Batch { pixel: p, slot: slot as u32, first: first - n, n, odd: k % 2 == 1, pilot: false }
+                })
+            })
+            .collect();
+        Some(Rays::Batches { batches, geometry: false })
+    }
+
+    fn absorb(&self, _: &AdaptivePlan, px: &mut AdaptivePixels, rays: Rays, rgb: &[[f64; 3]], _: &[f64]) {
+        let Rays::Batches { batches, .. } = rays else { return };
+        let mut k = 0;
+        for b in &batches {
+            let p = &mut px.sums[b.slot as usize];
+            rgb[k..k + b.n as usize].iter().for_each(|c| p.add(c));
+            k += b.n as usize;
+        }
+    }
+
+    /// Each pixel's value is the mean of all its samples, the pilot's included.
+    fn estimate(&self, plan: &AdaptivePlan, px: AdaptivePixels) -> Vec<PixelValue> {
+        (px.ids.iter().zip(&px.sums))
+            .map(|(&p, s)| {
+                let count = PILOT + plan.extra[p as usize];
+                let (rgb, var) = from_sums(s, count);
+                PixelValue { rgb, variance: Some(var), samples: count, pilot: 0 }
+            })
+            .collect()
+    }
 }
 
 /// Splits a pixel's share of `n` samples into stratified batches whose

@@ -25,7 +25,7 @@ use itgfx_core::pixel::{
     tree_colour_contrast,
 };
 
-use super::frame::{PixelSamples, Policy};
+use super::batch::{PixelSamples, Policy};
 
 /// Rays per batch (III-IV §5.2: 8 initial rays, then 8 more at a time).
 pub const BATCH: u32 = 8;

@@ -1,4 +1,6 @@
-//! The image plane: pixels sampled in stratified batches, rows in parallel.
+//! The image plane and the film: pixels sampled in stratified batches,
+//! their values gathered into a [`Frame`] (pooled across passes by
+//! [`Frame::pool`]); the loop that drives the samplers is [`super::sampler`].
 //!
 //! Sample `i` of pixel `p` draws its random numbers from
 //! `LineRng::new(seed, p · 2^24 + i)`, and a pixel's samples are summed in
@@ -8,10 +10,7 @@
 //! a uniform run of 64 spp is 8 × 8 jittered and each adaptive batch of 8 is
 //! 4 × 2 (alternating with 2 × 4).
 
-use std::sync::atomic::{AtomicU64, Ordering};
-
 use glam::DVec3;
-use rayon::prelude::*;
 
 use super::path::{PathTracer, Start, Stratum, strata};
 use crate::camera::Camera;
@@ -68,6 +67,68 @@ pub struct Frame {
 }
 
 impl Frame {
+    /// The frame of `width × height` pixels with these values (row-major);
+    /// its variance is kept only if every value has one.
+    pub(crate) fn of_values(width: u32, height: u32, values: impl Iterator<Item = PixelValue>) -> Self {
+        let n = (width * height) as usize;
+        let mut frame = Frame {
+            width,
+            height,
+            rgb: Vec::with_capacity(n),
+            samples: Vec::with_capacity(n),
+            pilot_samples: Vec::with_capacity(n),
+            variance: Vec::with_capacity(n),
+        };
+        let mut all_means = true;
+        for p in values {
+            frame.rgb.push(p.rgb);
+            frame.samples.push(p.samples);
+            frame.pilot_samples.push(p.pilot);
+            match p.variance {
+                Some(v) => frame.variance.push(v),
+                None => all_means = false,
+            }
+        }
+        if !all_means {
+            frame.variance.clear();
+        }
+        frame
+    }
+
+    /// Pools the samples of another pass `b` of the same pixels into this
+    /// frame: counts add, means are weighted by count, variances are those
+    /// of the pooled samples (kept only if both passes kept them).
+    pub fn pool(&mut self, b: &Frame) {
+        let a = self;
+        let keep_var = a.variance.len() == a.rgb.len() && b.variance.len() == b.rgb.len();
+        for i in 0..a.rgb.len() {
+            let (na, nb) = (f64::from(a.samples[i]), f64::from(b.samples[i]));
+            let n = na + nb;
+            if n == 0.0 {
+                continue;
+            }
+            let (ma, mb) = (a.rgb[i], b.rgb[i]);
+            let m: [f64; 3] = std::array::from_fn(|k| (na * ma[k] + nb * mb[k]) / n);
+            if keep_var {
+                let (va, vb) = (a.variance[i], b.variance[i]);
+                a.variance[i] = std::array::from_fn(|k| {
+                    // Sums of squared deviations about each pass's mean, then about the pooled mean.
+                    let ss = (na - 1.0).max(0.0) * va[k]
+                        + (nb - 1.0).max(0.0) * vb[k]
+                        + na * (ma[k] - m[k]).powi(2)
+                        + nb * (mb[k] - m[k]).powi(2);
+                    if n < 2.0 { 0.0 } else { ss / (n - 1.0) }
+                });
+            }
+            a.rgb[i] = m;
+            a.samples[i] += b.samples[i];
+            a.pilot_samples[i] += b.pilot_samples[i];
+        }
+        if !keep_var {
+            a.variance.clear();
+        }
+    }
+
     /// Average samples per pixel in the image values.
     #[must_use]
     pub fn mean_samples(&self) -> f64 {
@@ -79,44 +140,6 @@ impl Frame {
     pub fn mean_traced(&self) -> f64 {
         let p: f64 = self.pilot_samples.iter().map(|&s| f64::from(s)).sum();
         self.mean_samples() + p / self.samples.len().max(1) as f64
-    }
-}
-
-/// The radiance samples of one pixel so far, in index order.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct PixelSamples {
-    /// RGB of each sample.
-    pub rgb: Vec<[f64; 3]>,
-}
-
-/// A pixel a policy rendered its own way ([`Policy::render_own`]): mean
-/// RGB, image samples, pilot samples.
-pub type OwnPixel = ([f64; 3], u32, u32);
-
-/// How many samples a pixel takes: a first batch, then more while the
-/// policy asks for them.
-pub trait Policy: Sync {
-    /// Samples of the first batch.
-    fn first(&self) -> u32;
-    /// Samples of the next batch given those so far; 0 to stop.
-    fn more(&self, so_far: &PixelSamples) -> u32;
-    /// Whether decisions are taken on a separate pilot set: the pixel's value
-    /// is then the mean of as many fresh samples as the pilot run took.
-    fn unbiased(&self) -> bool {
-        false
-    }
-    /// A policy that renders its pixels its own way (the refinement tree of
-    /// Part IV §6) instead of in batches: (mean, image samples, pilot
-    /// samples) per pixel of `ids`. The hook keeps this file below the
-    /// policies that use its types.
-    fn render_own(
-        &self,
-        _pt: &PathTracer,
-        _view: &View,
-        _ids: &[u32],
-        _estimate: bool,
-    ) -> Option<Result<Vec<OwnPixel>, BackendError>> {
-        None
     }
 }
 
@@ -134,27 +157,29 @@ fn position(x: u32, y: u32, i: u32, first: u32, n: u32, rng: &LineRng, odd: bool
     (sx, sy)
 }
 
-/// One pending batch: pixel, first sample index, batch size, parity.
-#[derive(Clone, Copy)]
-pub(crate) struct Batch {
-    pub(crate) pixel: u32,
-    pub(crate) slot: u32,
-    pub(crate) first: u32,
-    pub(crate) n: u32,
-    pub(crate) odd: bool,
-    pub(crate) pilot: bool,
+/// One stratified batch of a pixel's samples: indices `first..first + n`
+/// on an `a × b` jittered grid ([`strata`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Batch {
+    /// The pixel, `y · width + x`.
+    pub pixel: u32,
+    /// Where the sampler keeps the pixel (its place in the set of pixels).
+    pub slot: u32,
+    /// Index of the batch's first sample.
+    pub first: u32,
+    /// Samples in the batch.
+    pub n: u32,
+    /// The grid turned, `b × a` (alternate batches of one pixel).
+    pub odd: bool,
+    /// Decision samples: their indices take the [`PILOT`] bit.
+    pub pilot: bool,
 }
 
-/// Traces the batches of a row; returns the RGB of every sample in order.
-fn trace(pt: &PathTracer, view: &View, batches: &[Batch]) -> Result<Vec<[f64; 3]>, BackendError> {
-    trace_geometry(pt, view, batches, None)
-}
-
-/// As [`trace`]; with `geometry`, also each sample's first-hit geometry
+/// Traces `batches`: the RGB of every sample in order; with `geometry`, also each sample's first-hit geometry
 /// factor (Part IV eq. (12)), in order. Each sample carries its place in
 /// its batch ([`Stratum`]): the path tracer stratifies its first diffuse
 /// vertex over the batch as the batch is stratified over the pixel.
-pub(crate) fn trace_geometry(
+pub fn trace_geometry(
     pt: &PathTracer,
     view: &View,
     batches: &[Batch],
@@ -196,181 +221,26 @@ pub(crate) fn trace_geometry(
     Ok(out)
 }
 
-/// Sampled state of one pixel of the row being rendered.
-struct Pixel {
-    samples: PixelSamples,
-    batches: u32,
-    next: u32,
-    image: u32,
-}
-
-/// Renders `view` with `policy` deciding each pixel's samples; `progress`
-/// is called with (rows done, rows).
-///
-/// # Errors
-/// Backend failures only.
-pub fn render(
-    pt: &PathTracer,
-    view: &View,
-    policy: &dyn Policy,
-    progress: &(dyn Fn(u64, u64) + Sync),
-) -> Result<Frame, BackendError> {
-    let w = view.width;
-    let (first, end) = view.rows;
-    let h = end - first;
-    let done = AtomicU64::new(0);
-    let rows: Vec<Vec<PixelValue>> = (first..end)
-        .into_par_iter()
-        .map(|y| {
-            let pixels: Vec<u32> = (y * w..(y + 1) * w).collect();
-            let row = render_pixels(pt, view, policy, &pixels, true);
-            progress(done.fetch_add(1, Ordering::Relaxed) + 1, u64::from(h));
-            row
-        })
-        .collect::<Result<_, _>>()?;
-    let mut frame = Frame {
-        width: w,
-        height: h,
-        rgb: Vec::with_capacity((w * h) as usize),
-        samples: Vec::with_capacity((w * h) as usize),
-        pilot_samples: Vec::with_capacity((w * h) as usize),
-        variance: Vec::with_capacity((w * h) as usize),
-    };
-    let mut all_means = true;
-    for p in rows.into_iter().flatten() {
-        frame.rgb.push(p.rgb);
-        frame.samples.push(p.samples);
-        frame.pilot_samples.push(p.pilot);
-        match p.variance {
-            Some(v) => frame.variance.push(v),
-            None => all_means = false,
-        }
-    }
-    if !all_means {
-        frame.variance.clear();
-    }
-    Ok(frame)
-}
-
-/// Rays traced for each of `pixels` (indices `y · width + x`) under
-/// `policy`, decision samples and image samples together: what [`render`]
-/// would spend there (the pixels of a pilot run). Only the decisions are
-/// traced: an unbiased policy's image samples are counted, not traced (as
-/// many as its pilot took, or 8 a leaf of the tree).
-///
-/// # Errors
-/// Backend failures only.
-pub fn sample_counts(
-    pt: &PathTracer,
-    view: &View,
-    policy: &dyn Policy,
-    pixels: &[u32],
-) -> Result<Vec<u32>, BackendError> {
-    let parts: Vec<Vec<PixelValue>> =
-        pixels.par_chunks(64).map(|c| render_pixels(pt, view, policy, c, false)).collect::<Result<_, _>>()?;
-    Ok(parts.into_iter().flatten().map(|p| p.samples + p.pilot).collect())
-}
-
 /// One rendered pixel: its value, the variance of the samples averaged into
 /// it (`None` when the value is not their mean), and the samples spent.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct PixelValue {
-    pub(crate) rgb: [f64; 3],
-    pub(crate) variance: Option<[f64; 3]>,
-    pub(crate) samples: u32,
-    pub(crate) pilot: u32,
+pub struct PixelValue {
+    /// The value, linear RGB.
+    pub rgb: [f64; 3],
+    /// The sample variance per channel of the samples averaged into it.
+    pub variance: Option<[f64; 3]>,
+    /// Samples in the value.
+    pub samples: u32,
+    /// Samples traced to decide only.
+    pub pilot: u32,
 }
 
 impl PixelValue {
     /// The mean and variance of `s`, with `pilot` decision samples besides.
-    fn of(s: &[[f64; 3]], pilot: u32) -> Self {
+    pub(crate) fn of(s: &[[f64; 3]], pilot: u32) -> Self {
         let (rgb, variance) = moments(s);
         Self { rgb, variance: Some(variance), samples: s.len() as u32, pilot }
     }
-}
-
-/// Renders the given pixels (indices `y · width + x`): (mean, image samples,
-/// pilot samples). With `estimate` false an unbiased policy only decides:
-/// the image samples are counted but not traced (the mean is the pilot's).
-fn render_pixels(
-    pt: &PathTracer,
-    view: &View,
-    policy: &dyn Policy,
-    ids: &[u32],
-    estimate: bool,
-) -> Result<Vec<PixelValue>, BackendError> {
-    if let Some(values) = policy.render_own(pt, view, ids, estimate) {
-        let values = values?;
-        return Ok(values
-            .into_iter()
-            .map(|(rgb, samples, pilot)| PixelValue { rgb, variance: None, samples, pilot })
-            .collect());
-    }
-    let unbiased = policy.unbiased();
-    let first = policy.first().clamp(1, MAX_PIXEL_SAMPLES);
-    let mut pixels: Vec<Pixel> =
-        ids.iter().map(|_| Pixel { samples: PixelSamples::default(), batches: 0, next: first, image: 0 }).collect();
-    // Decision rounds: every pixel still asking gets its next batch.
-    loop {
-        let batches: Vec<Batch> = pixels
-            .iter()
-            .enumerate()
-            .filter(|(_, p)| p.next > 0)
-            .map(|(k, p)| Batch {
-                pixel: ids[k],
-                slot: k as u32,
-                first: p.samples.rgb.len() as u32,
-                n: p.next,
-                odd: p.batches % 2 == 1,
-                pilot: unbiased,
-            })
-            .collect();
-        if batches.is_empty() {
-            break;
-        }
-        let rgb = trace(pt, view, &batches)?;
-        let mut k = 0;
-        for b in &batches {
-            let p = &mut pixels[b.slot as usize];
-            p.samples.rgb.extend_from_slice(&rgb[k..k + b.n as usize]);
-            k += b.n as usize;
-            p.batches += 1;
-            let room = MAX_PIXEL_SAMPLES - p.samples.rgb.len() as u32;
-            p.next = policy.more(&p.samples).min(room);
-        }
-    }
-    if !unbiased {
-        return Ok(pixels.into_iter().map(|p| PixelValue::of(&p.samples.rgb, 0)).collect());
-    }
-    if !estimate {
-        return Ok(pixels
-            .into_iter()
-            .map(|p| {
-                let n = p.samples.rgb.len() as u32;
-                PixelValue { pilot: n, ..PixelValue::of(&p.samples.rgb, 0) }
-            })
-            .collect());
-    }
-    // Unbiased: as many fresh samples as the pilot took, in one stratified batch.
-    let batches: Vec<Batch> = pixels
-        .iter_mut()
-        .enumerate()
-        .map(|(k, p)| {
-            p.image = p.samples.rgb.len() as u32;
-            Batch { pixel: ids[k], slot: k as u32, first: 0, n: p.image, odd: false, pilot: false }
-        })
-        .collect();
-    let rgb = trace(pt, view, &batches)?;
-    let mut k = 0;
-    Ok(pixels
-        .into_iter()
-        .map(|p| {
-            let n = p.image as usize;
-            let v = PixelValue::of(&rgb[k..k + n], p.samples.rgb.len() as u32);
-            k += n;
-            v
-        })
-        .collect())
 }
 
 /// Mean and sample variance (denominator `n − 1`; 0 below 2 samples) of
@@ -393,19 +263,6 @@ pub(crate) fn mean(s: &[[f64; 3]]) -> [f64; 3] {
         acc += DVec3::from_array(*c);
     }
     (acc / s.len().max(1) as f64).to_array()
-}
-
-/// A fixed number of samples per pixel in one stratified batch.
-#[derive(Clone, Copy, Debug)]
-pub struct Uniform(pub u32);
-
-impl Policy for Uniform {
-    fn first(&self) -> u32 {
-        self.0
-    }
-    fn more(&self, _: &PixelSamples) -> u32 {
-        0
-    }
 }
 
 #[cfg(test)]

@@ -7,8 +7,13 @@
 //! * [`criteria`]: the refinement criteria, each a call into
 //!   `itgfx_core::pixel`; [`tree`]: the entropy refinement tree of Part IV
 //!   §6; [`tune`]: thresholds for an equal average budget.
-//! * [`frame`]: the image plane, stratified batches per pixel, rows in
-//!   parallel, the same image for any thread count.
+//! * [`sampler`]: the [`PixelSampler`] trait and the one pixel loop that
+//!   drives every sampler (rows in parallel, shards, progress); its
+//!   implementations are [`batch`] (`uniform` and the batch criteria),
+//!   [`tree`], [`supersample`] (`es`) and [`adaptive`].
+//! * [`frame`]: the image plane and the film: stratified batches per
+//!   pixel, the frame their values land in, passes pooled; the same image
+//!   for any thread count.
 //! * [`lights`]: area lights and materials; [`views`]: default cameras and
 //!   the camera-inside-an-object check; [`room`]: the `mirror-room` scene;
 //!   [`open`]: the open scenes `open-blocks` and `open-sphere`.
@@ -17,6 +22,7 @@
 //! linear sRGB (Part III-IV §5.1) or the channels.
 
 pub mod adaptive;
+pub mod batch;
 pub mod criteria;
 pub mod first_hit;
 pub mod frame;
@@ -24,6 +30,7 @@ pub mod lights;
 pub mod open;
 pub mod path;
 pub mod room;
+pub mod sampler;
 pub mod shard_file;
 pub mod supersample;
 pub mod tree;
@@ -36,11 +43,13 @@ use crate::camera::Camera;
 use crate::scene::Scene;
 use crate::tracer::{BackendError, Prepared, Tracer};
 pub use adaptive::AdaptiveSampling;
+pub use batch::{Batches, Policy, Uniform};
 pub use criteria::{Adaptive, Criterion};
 pub use first_hit::{Priority, PriorityMap};
-pub use frame::{Frame, Policy, Uniform, View};
+pub use frame::{Frame, View};
 pub use lights::{Lights, Surfaces};
 pub use path::PathTracer;
+pub use sampler::PixelSampler;
 pub use supersample::{ContrastMap, Oracle, PixelMeasures};
 pub use tree::{Tree, TreeContrast};
 pub use tune::Tuned;
@@ -247,7 +256,7 @@ pub fn render(job: &Job, progress: &(dyn Fn(u64, u64) + Sync)) -> Result<Rendere
             let t = std::time::Instant::now();
             let v = View { seed: pass_seed(job.seed, k), ..view };
             let next = trace(&pt, &v, &sampling, &|_, _| {})?;
-            pool(&mut rendered.frame, &next.frame);
+            rendered.frame.pool(&next.frame);
             last = t.elapsed().as_secs_f64();
             k += 1;
         }
@@ -298,91 +307,51 @@ fn with_threshold(sampling: &Sampling, t: Option<f64>) -> Sampling {
     }
 }
 
-/// Pools the samples of pass `b` into `a` (same pixels): counts add, means
-/// are weighted by count, variances are those of the pooled samples (both
-/// kept only if both passes kept them).
-fn pool(a: &mut Frame, b: &Frame) {
-    let keep_var = a.variance.len() == a.rgb.len() && b.variance.len() == b.rgb.len();
-    for i in 0..a.rgb.len() {
-        let (na, nb) = (f64::from(a.samples[i]), f64::from(b.samples[i]));
-        let n = na + nb;
-        if n == 0.0 {
-            continue;
-        }
-        let (ma, mb) = (a.rgb[i], b.rgb[i]);
-        let m: [f64; 3] = std::array::from_fn(|k| (na * ma[k] + nb * mb[k]) / n);
-        if keep_var {
-            let (va, vb) = (a.variance[i], b.variance[i]);
-            a.variance[i] = std::array::from_fn(|k| {
-                // Sums of squared deviations about each pass's mean, then about the pooled mean.
-                let ss = (na - 1.0).max(0.0) * va[k]
-                    + (nb - 1.0).max(0.0) * vb[k]
-                    + na * (ma[k] - m[k]).powi(2)
-                    + nb * (mb[k] - m[k]).powi(2);
-                if n < 2.0 { 0.0 } else { ss / (n - 1.0) }
-            });
-        }
-        a.rgb[i] = m;
-        a.samples[i] += b.samples[i];
-        a.pilot_samples[i] += b.pilot_samples[i];
-    }
-    if !keep_var {
-        a.variance.clear();
-    }
-}
-
+/// One pass of `sampling` over `view`: a threshold tuned first where the
+/// sampler needs one, then the pixel loop ([`sampler::render`]).
 fn trace(
     pt: &PathTracer,
     view: &View,
     sampling: &Sampling,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<Rendered, RenderError> {
-    let view = *view;
+    let plain = |frame| Rendered { frame, threshold: None, tuned: None, map: None, passes: 1 };
     match *sampling {
-        Sampling::Uniform(n) => Ok(Rendered {
-            frame: frame::render(pt, &view, &Uniform(n), progress)?,
-            threshold: None,
-            tuned: None,
-            map: None,
-            passes: 1,
-        }),
-        Sampling::Neighbours(a) => Ok(Rendered {
-            frame: adaptive::render(pt, &view, &a, progress)?,
-            threshold: None,
-            tuned: None,
-            map: None,
-            passes: 1,
-        }),
+        Sampling::Uniform(n) => Ok(plain(sampler::render(pt, view, &Batches(Uniform(n)), progress)?.0)),
+        Sampling::Neighbours(a) => Ok(plain(sampler::render(pt, view, &a, progress)?.0)),
         Sampling::Adaptive { criterion, spp, max, unbiased, threshold } => {
-            let tuned = match threshold {
-                Some(_) => None,
-                None => Some(tune::tune(pt, &view, criterion, f64::from(spp), max, unbiased)?),
-            };
-            let threshold = threshold.or(tuned.map(|t| t.threshold)).unwrap_or(0.0);
-            let policy = Adaptive { criterion, threshold, max, unbiased };
-            Ok(Rendered {
-                frame: frame::render(pt, &view, &policy, progress)?,
-                threshold: Some(threshold),
-                tuned,
-                map: None,
-                passes: 1,
-            })
+            let make = |eps| Batches(Adaptive { criterion, threshold: eps, max, unbiased });
+            let (threshold, tuned) = tuned(pt, view, threshold, spp, make)?;
+            let (frame, ()) = sampler::render(pt, view, &make(threshold), progress)?;
+            Ok(Rendered { threshold: Some(threshold), tuned, ..plain(frame) })
         }
         Sampling::Tree { contrast, delta, spp, unbiased, threshold, node_samples } => {
-            let tuned = match threshold {
-                Some(_) => None,
-                None => Some(tune::tune_policy(pt, &view, f64::from(spp), &|eps| {
-                    Box::new(Tree { threshold: eps, unbiased, contrast, delta, node_samples })
-                })?),
-            };
-            let threshold = threshold.or(tuned.map(|t| t.threshold)).unwrap_or(0.0);
-            let frame =
-                frame::render(pt, &view, &Tree { threshold, unbiased, contrast, delta, node_samples }, progress)?;
-            Ok(Rendered { frame, threshold: Some(threshold), tuned, map: None, passes: 1 })
+            let make = |eps| Tree { threshold: eps, unbiased, contrast, delta, node_samples };
+            let (threshold, tuned) = tuned(pt, view, threshold, spp, make)?;
+            let (frame, ()) = sampler::render(pt, view, &make(threshold), progress)?;
+            Ok(Rendered { threshold: Some(threshold), tuned, ..plain(frame) })
         }
         Sampling::Supersample(es) => {
-            let (frame, map) = supersample::render(pt, &view, &es, progress)?;
-            Ok(Rendered { frame, threshold: None, tuned: None, map: Some(map), passes: 1 })
+            let (frame, plan) = sampler::render(pt, view, &es, progress)?;
+            Ok(Rendered { map: Some(plan.map), ..plain(frame) })
+        }
+    }
+}
+
+/// The threshold `given`, or one tuned so that `make(ε)` spends `spp` rays
+/// a pixel on average, with the tuning run.
+fn tuned<S: PixelSampler>(
+    pt: &PathTracer,
+    view: &View,
+    given: Option<f64>,
+    spp: u32,
+    make: impl Fn(f64) -> S,
+) -> Result<(f64, Option<Tuned>), RenderError> {
+    match given {
+        Some(t) => Ok((t, None)),
+        None => {
+            let t = tune::tune(pt, view, f64::from(spp), make)?;
+            Ok((t.threshold, Some(t)))
         }
     }
 }

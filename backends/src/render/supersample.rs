@@ -32,18 +32,16 @@
 //! Mitchell's (0.4, 0.3, 0.6), as the contrast maps of §4.1; the colour
 //! quality map uses equal weights, as Fig. 1.b.
 
-use std::sync::atomic::{AtomicU64, Ordering};
-
 use itgfx_core::Base;
 use itgfx_core::pixel::{
     ChannelContrast, MITCHELL_WEIGHTS, log_difference_contrast, mixed_contrast, pixel_colour_contrast,
     pixel_colour_quality, pixel_contrast, pixel_quality,
 };
-use rayon::prelude::*;
 
 use super::Supersampling;
-use super::frame::{Batch, Frame, View, trace_geometry};
+use super::frame::{Batch, PixelValue, View, moments};
 use super::path::PathTracer;
+use super::sampler::{self, PilotRays, PixelSampler, Rays};
 use crate::tracer::BackendError;
 
 /// Samples per pixel of the oracle, `n_s` (§5.1: "usual values are 2, 4, and 8").
@@ -128,7 +126,8 @@ pub struct ContrastMap {
 }
 
 /// Traces `ORACLE_SAMPLES` samples in every pixel of `view` (rows in
-/// parallel) and measures each pixel; `progress` gets (rows done, rows).
+/// parallel: the supersampler's pilot, [`sampler::pilot`]) and measures
+/// each pixel; `progress` gets (rows done, rows).
 ///
 /// # Errors
 /// Backend failures only.
@@ -138,29 +137,16 @@ pub fn contrast_map(
     oracle: Oracle,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<ContrastMap, BackendError> {
-    let (w, h) = (view.width, view.height);
-    let done = AtomicU64::new(0);
-    let n = ORACLE_SAMPLES as usize;
-    let rows: Vec<Vec<([f64; 3], PixelMeasures)>> = (0..h)
-        .into_par_iter()
-        .map(|y| {
-            let batches: Vec<Batch> = (0..w)
-                .map(|x| Batch { pixel: y * w + x, slot: x, first: 0, n: ORACLE_SAMPLES, odd: false, pilot: false })
-                .collect();
-            let mut g = Vec::new();
-            let rgb = trace_geometry(pt, view, &batches, Some(&mut g))?;
-            let row = (0..w as usize)
-                .map(|x| {
-                    let s = &rgb[x * n..(x + 1) * n];
-                    (sum(s, [0.0; 3]), measures(s, &g[x * n..(x + 1) * n], oracle))
-                })
-                .collect();
-            progress(done.fetch_add(1, Ordering::Relaxed) + 1, u64::from(h));
-            Ok(row)
-        })
-        .collect::<Result<_, BackendError>>()?;
-    let (sums, measures) = rows.into_iter().flatten().unzip();
-    Ok(ContrastMap { width: w, height: h, sums, measures })
+    let es = Supersampling { oracle, spp: ORACLE_SAMPLES, max: ORACLE_SAMPLES, unbiased: true };
+    let h = u64::from(view.height);
+    let pilots = sampler::pilot(pt, view, &es, &|d| progress(d, h))?;
+    Ok(map_of(view, pilots))
+}
+
+/// The contrast map of the oracle's pixels (row-major).
+fn map_of(view: &View, pilots: Vec<([f64; 3], PixelMeasures)>) -> ContrastMap {
+    let (sums, measures) = pilots.into_iter().unzip();
+    ContrastMap { width: view.width, height: view.height, sums, measures }
 }
 
 fn sum(s: &[[f64; 3]], mut acc: [f64; 3]) -> [f64; 3] {
@@ -231,90 +217,124 @@ pub fn allocate(weights: &[f64], total: u64, cap: u32) -> Vec<u32> {
     out
 }
 
-/// Renders `view` by entropy-based supersampling with an average of
-/// `es.spp` rays per pixel (the oracle's included), at most `es.max` in a
-/// pixel's estimate: the oracle's contrast map, then the rest of the budget
-/// shared by contrast, then the box filter (over the fresh samples in the
-/// unbiased form, over the oracle's and the share in the tutorial form).
-/// Returns the frame (of `view.rows`) and the contrast map (of the whole
-/// image: the share of every row depends on every pixel's contrast, so a
-/// shard traces the whole oracle and its own rows' shares). `progress` gets
-/// (rows done, rows) of both passes.
-///
-/// # Errors
-/// Backend failures only.
-pub fn render(
-    pt: &PathTracer,
-    view: &View,
-    es: &Supersampling,
-    progress: &(dyn Fn(u64, u64) + Sync),
-) -> Result<(Frame, ContrastMap), BackendError> {
-    let h = u64::from(view.height);
-    let first = |d: u64, _: u64| progress(d, 2 * h);
-    let mine = u64::from(view.rows.1 - view.rows.0);
-    let map = contrast_map(pt, view, es.oracle, &first)?;
-    let pixels = map.measures.len() as u64;
-    // Samples every pixel's estimate has before the shares: the oracle's own
-    // (tutorial form), or as many fresh ones (unbiased form, whose oracle
-    // samples are spent on the decision alone).
-    let base = ORACLE_SAMPLES;
-    let spent = if es.unbiased { 2 * ORACLE_SAMPLES } else { ORACLE_SAMPLES };
-    let extra_total = pixels * u64::from(es.spp.saturating_sub(spent));
-    let contrast: Vec<f64> = map.measures.iter().map(|m| m.contrast).collect();
-    let extra = allocate(&contrast, extra_total, es.max.saturating_sub(base));
-    let fresh = |p: usize| if es.unbiased { base + extra[p] } else { extra[p] };
-    let w = view.width;
-    let done = AtomicU64::new(0);
-    let (first_row, end_row) = view.rows;
-    let rows: Vec<Vec<([f64; 3], [f64; 3])>> = (first_row..end_row)
-        .into_par_iter()
-        .map(|y| {
-            let batches: Vec<Batch> = (0..w)
-                .map(|x| y * w + x)
-                .filter(|&p| fresh(p as usize) > 0)
-                .map(|p| Batch {
-                    pixel: p,
-                    slot: p % w,
-                    first: ORACLE_SAMPLES,
-                    n: fresh(p as usize),
-                    odd: false,
-                    pilot: false,
-                })
-                .collect();
-            let rgb = trace_geometry(pt, view, &batches, None)?;
-            let kept = |x: u32| if es.unbiased { [0.0; 3] } else { map.sums[(y * w + x) as usize] };
-            let mut row: Vec<[f64; 3]> = (0..w).map(kept).collect();
-            let mut var = vec![[0.0; 3]; w as usize];
-            let mut k = 0;
-            for b in &batches {
-                let n = b.n as usize;
-                row[b.slot as usize] = sum(&rgb[k..k + n], row[b.slot as usize]);
-                // The unbiased form's value is the mean of these fresh samples alone.
-                var[b.slot as usize] = super::frame::moments(&rgb[k..k + n]).1;
-                k += n;
-            }
-            for (x, c) in row.iter_mut().enumerate() {
-                let n = f64::from(base + extra[y as usize * w as usize + x]);
-                *c = c.map(|v| v / n);
-            }
-            progress(h + (done.fetch_add(1, Ordering::Relaxed) + 1) * h / mine.max(1), 2 * h);
-            Ok(row.into_iter().zip(var).collect())
-        })
-        .collect::<Result<_, BackendError>>()?;
-    let range = (first_row * w) as usize..(end_row * w) as usize;
-    let samples: Vec<u32> = extra[range].iter().map(|e| e + base).collect();
-    let decided = if es.unbiased { ORACLE_SAMPLES } else { 0 };
-    let (rgb, variance): (Vec<[f64; 3]>, Vec<[f64; 3]>) = rows.into_iter().flatten().unzip();
-    let frame = Frame {
-        width: view.width,
-        height: end_row - first_row,
-        rgb,
-        pilot_samples: vec![decided; samples.len()],
-        samples,
-        // The tutorial form's value also holds the oracle's samples, whose squares are not kept.
-        variance: if es.unbiased { variance } else { Vec::new() },
-    };
-    Ok((frame, map))
+/// The supersampler's decisions: the oracle's contrast map and each
+/// pixel's share of the rest of the budget.
+pub struct SharePlan {
+    /// The oracle's contrast map (of the whole image).
+    pub map: ContrastMap,
+    /// Each pixel's samples beyond the oracle's `n_s`.
+    pub extra: Vec<u32>,
+}
+
+/// A set of pixels being supersampled: each pixel's running sum (the
+/// oracle's own in the tutorial form) and the variance of its fresh samples.
+pub struct SharePixels {
+    ids: Vec<u32>,
+    sums: Vec<[f64; 3]>,
+    variance: Vec<[f64; 3]>,
+    traced: bool,
+}
+
+impl Supersampling {
+    /// Fresh samples pixel `p` traces: its share, and as many as the
+    /// oracle's in the unbiased form.
+    fn fresh(&self, plan: &SharePlan, p: u32) -> u32 {
+        let e = plan.extra[p as usize];
+        if self.unbiased { ORACLE_SAMPLES + e } else { e }
+    }
+}
+
+/// Entropy-based supersampling with an average of `spp` rays per pixel
+/// (the oracle's included), at most `max` in a pixel's estimate: the
+/// oracle's contrast map (the pilot, over the whole image: the share of
+/// every row depends on every pixel's contrast), then the rest of the
+/// budget shared by contrast, then the box filter (over the fresh samples
+/// in the unbiased form, over the oracle's and the share in the tutorial
+/// form).
+impl PixelSampler for Supersampling {
+    type Pilot = ([f64; 3], PixelMeasures);
+    type Plan = SharePlan;
+    type Pixels = SharePixels;
+
+    fn pilot_rays(&self) -> Option<PilotRays> {
+        Some(PilotRays { spp: ORACLE_SAMPLES, geometry: true })
+    }
+
+    fn pilot(&self, rgb: &[[f64; 3]], g: &[f64]) -> Self::Pilot {
+        (sum(rgb, [0.0; 3]), measures(rgb, g, self.oracle))
+    }
+
+    fn counts(&self, view: &View, pilots: Vec<Self::Pilot>) -> SharePlan {
+        let map = map_of(view, pilots);
+        let pixels = map.measures.len() as u64;
+        // Samples spent before the shares: the oracle's (its samples are also
+        // the estimate's first in the tutorial form; in the unbiased form as
+        // many fresh ones follow).
+        let spent = if self.unbiased { 2 * ORACLE_SAMPLES } else { ORACLE_SAMPLES };
+        let extra_total = pixels * u64::from(self.spp.saturating_sub(spent));
+        let contrast: Vec<f64> = map.measures.iter().map(|m| m.contrast).collect();
+        let extra = allocate(&contrast, extra_total, self.max.saturating_sub(ORACLE_SAMPLES));
+        SharePlan { map, extra }
+    }
+
+    fn start(&self, plan: &SharePlan, _: &View, ids: &[u32]) -> SharePixels {
+        let kept = |p: u32| if self.unbiased { [0.0; 3] } else { plan.map.sums[p as usize] };
+        SharePixels {
+            ids: ids.to_vec(),
+            sums: ids.iter().map(|&p| kept(p)).collect(),
+            variance: vec![[0.0; 3]; ids.len()],
+            traced: false,
+        }
+    }
+
+    /// One round: each pixel's fresh samples as one stratified batch from index 8.
+    fn round(&self, plan: &SharePlan, _: &View, px: &mut SharePixels, estimate: bool) -> Option<Rays> {
+        if px.traced || !estimate {
+            return None;
+        }
+        px.traced = true;
+        let batches = (px.ids.iter().enumerate())
+            .filter(|&(_, &p)| self.fresh(plan, p) > 0)
+            .map(|(k, &p)| Batch {
+                pixel: p,
+                slot: k as u32,
+                first: ORACLE_SAMPLES,
+                n: self.fresh(plan, p),
+                odd: false,
+                pilot: false,
+            })
+            .collect();
+        Some(Rays::Batches { batches, geometry: false })
+    }
+
+    fn absorb(&self, _: &SharePlan, px: &mut SharePixels, rays: Rays, rgb: &[[f64; 3]], _: &[f64]) {
+        let Rays::Batches { batches, .. } = rays else { return };
+        let mut k = 0;
+        for b in &batches {
+            let (n, slot) = (b.n as usize, b.slot as usize);
+            px.sums[slot] = sum(&rgb[k..k + n], px.sums[slot]);
+            // The unbiased form's value is the mean of these fresh samples alone.
+            px.variance[slot] = moments(&rgb[k..k + n]).1;
+            k += n;
+        }
+    }
+
+    fn estimate(&self, plan: &SharePlan, px: SharePixels) -> Vec<PixelValue> {
+        let decided = if self.unbiased { ORACLE_SAMPLES } else { 0 };
+        (px.ids.iter().zip(px.sums).zip(px.variance))
+            .map(|((&p, s), v)| {
+                let samples = ORACLE_SAMPLES + plan.extra[p as usize];
+                let n = f64::from(samples);
+                PixelValue {
+                    rgb: s.map(|v| v / n),
+                    // The tutorial form's value also holds the oracle's samples, whose squares are not kept.
+                    variance: self.unbiased.then_some(v),
+                    samples,
+                    pilot: decided,
+                }
+            })
+            .collect()
+    }
 }
 
 #[cfg(test)]

@@ -36,10 +36,10 @@ use itgfx_core::pixel::{
     mixed_contrast, pixel_contrast, priority_colour,
 };
 
-use super::frame::{OwnPixel, PILOT, PixelSamples, Policy, View};
-use super::path::{PathTracer, Start, strata};
+use super::frame::{PILOT, PixelValue, View};
+use super::path::{Start, strata};
+use super::sampler::{PixelSampler, Rays};
 use crate::lines::LineRng;
-use crate::tracer::BackendError;
 
 /// Samples per node `N_s^r` by default (the tutorial's Table 2; Fig. 13 used 4).
 pub const NODE_SAMPLES: u32 = 8;
@@ -107,27 +107,6 @@ pub struct Tree {
     pub node_samples: u32,
 }
 
-impl Policy for Tree {
-    fn first(&self) -> u32 {
-        self.node_samples
-    }
-    fn more(&self, _: &PixelSamples) -> u32 {
-        0
-    }
-    fn render_own(
-        &self,
-        pt: &PathTracer,
-        view: &View,
-        ids: &[u32],
-        estimate: bool,
-    ) -> Option<Result<Vec<OwnPixel>, BackendError>> {
-        Some(render_tree(pt, view, self, ids, estimate))
-    }
-    fn unbiased(&self) -> bool {
-        self.unbiased
-    }
-}
-
 /// The contrast of an `n`-node's samples (eq. (28)): `δ` times the colour
 /// contrast of `kind` plus `1 − δ` times the geometry contrast (eq. (20)) of
 /// the first-hit geometry factors `g`; infinite when the core refuses the
@@ -190,55 +169,104 @@ struct Node {
     children: Option<usize>,
 }
 
-/// Renders the pixels `ids` with the refinement tree: (colour, image
-/// samples, decision samples). With `estimate` false an unbiased tree is
-/// only built: its leaves' fresh samples are counted, not traced.
-pub(crate) fn render_tree(
-    pt: &PathTracer,
-    view: &View,
-    tree: &Tree,
-    ids: &[u32],
-    estimate: bool,
-) -> Result<Vec<([f64; 3], u32, u32)>, BackendError> {
-    let mut nodes: Vec<Node> = ids
-        .iter()
-        .enumerate()
-        .map(|(slot, &pixel)| Node {
-            slot,
-            pixel,
-            serial: 0,
-            level: 1,
-            x: f64::from(pixel % view.width),
-            y: f64::from(pixel / view.width),
-            size: 1.0,
-            colour: [0.0; 3],
-            children: None,
-        })
-        .collect();
-    let ns = tree.node_samples as usize;
-    let mut serials = vec![1u32; ids.len()];
-    let mut counts = vec![0u32; ids.len()];
-    let mut level_start = 0;
-    while level_start < nodes.len() {
-        let level_end = nodes.len();
-        let mut g = Vec::new();
-        let starts = node_starts(view, &nodes[level_start..level_end], tree.unbiased, tree.node_samples);
-        let rgb = pt.radiance_geometry(&starts, (tree.delta < 1.0).then_some(&mut g))?;
-        for k in level_start..level_end {
-            let span = (k - level_start) * ns..(k - level_start + 1) * ns;
+/// The refinement trees of a set of pixels being built.
+pub struct TreePixels {
+    nodes: Vec<Node>,
+    /// Each pixel's next node serial.
+    serials: Vec<u32>,
+    /// Each pixel's image samples.
+    counts: Vec<u32>,
+    /// Each pixel's decision samples (the unbiased form's tree).
+    pilot: Vec<u32>,
+    /// The level being traced: nodes `[start, end)`.
+    level: (usize, usize),
+    /// The unbiased form's leaves, once the tree is built.
+    leaves: Option<Vec<usize>>,
+}
+
+impl PixelSampler for Tree {
+    type Pilot = ();
+    type Plan = ();
+    type Pixels = TreePixels;
+
+    fn pilot(&self, _: &[[f64; 3]], _: &[f64]) {}
+
+    fn counts(&self, _: &View, _: Vec<()>) {}
+
+    /// Every pixel is a 1-node.
+    fn start(&self, (): &(), view: &View, ids: &[u32]) -> TreePixels {
+        let nodes = ids
+            .iter()
+            .enumerate()
+            .map(|(slot, &pixel)| Node {
+                slot,
+                pixel,
+                serial: 0,
+                level: 1,
+                x: f64::from(pixel % view.width),
+                y: f64::from(pixel / view.width),
+                size: 1.0,
+                colour: [0.0; 3],
+                children: None,
+            })
+            .collect();
+        let n = ids.len();
+        TreePixels { nodes, serials: vec![1; n], counts: vec![0; n], pilot: vec![0; n], level: (0, 0), leaves: None }
+    }
+
+    /// The tree is built level by level (one round a level); in the
+    /// unbiased form a last round samples every leaf afresh.
+    fn round(&self, (): &(), view: &View, t: &mut TreePixels, estimate: bool) -> Option<Rays> {
+        if t.leaves.is_some() {
+            return None;
+        }
+        let start = t.level.1;
+        if start < t.nodes.len() {
+            t.level = (start, t.nodes.len());
+            let starts = node_starts(view, &t.nodes[start..], self.unbiased, self.node_samples);
+            return Some(Rays::Starts { starts, geometry: self.delta < 1.0 });
+        }
+        if !self.unbiased {
+            return None;
+        }
+        // The tree's samples only decided: every leaf is sampled afresh.
+        t.pilot = std::mem::replace(&mut t.counts, vec![0; t.pilot.len()]);
+        let leaves: Vec<usize> = (0..t.nodes.len()).filter(|&k| t.nodes[k].children.is_none()).collect();
+        for &k in &leaves {
+            t.counts[t.nodes[k].slot] += self.node_samples;
+        }
+        let starts = leaves
+            .iter()
+            .flat_map(|&k| node_starts(view, std::slice::from_ref(&t.nodes[k]), false, self.node_samples))
+            .collect();
+        t.leaves = Some(leaves);
+        estimate.then_some(Rays::Starts { starts, geometry: false })
+    }
+
+    fn absorb(&self, (): &(), t: &mut TreePixels, _: Rays, rgb: &[[f64; 3]], g: &[f64]) {
+        let ns = self.node_samples as usize;
+        if let Some(leaves) = &t.leaves {
+            for (j, &k) in leaves.iter().enumerate() {
+                t.nodes[k].colour = reconstruct(&rgb[j * ns..(j + 1) * ns]);
+            }
+            return;
+        }
+        let (start, end) = t.level;
+        for k in start..end {
+            let span = (k - start) * ns..(k - start + 1) * ns;
             let s = &rgb[span.clone()];
             let gs = g.get(span).unwrap_or(&[]);
-            let (slot, level) = (nodes[k].slot, nodes[k].level);
-            counts[slot] += tree.node_samples;
-            nodes[k].colour = reconstruct(s);
-            if level < MAX_LEVEL && node_contrast(s, gs, level, tree.contrast, tree.delta) >= tree.threshold {
-                nodes[k].children = Some(nodes.len());
-                let (x, y, half) = (nodes[k].x, nodes[k].y, nodes[k].size * 0.5);
-                let pixel = nodes[k].pixel;
+            let (slot, level) = (t.nodes[k].slot, t.nodes[k].level);
+            t.counts[slot] += self.node_samples;
+            t.nodes[k].colour = reconstruct(s);
+            if level < MAX_LEVEL && node_contrast(s, gs, level, self.contrast, self.delta) >= self.threshold {
+                t.nodes[k].children = Some(t.nodes.len());
+                let (x, y, half) = (t.nodes[k].x, t.nodes[k].y, t.nodes[k].size * 0.5);
+                let pixel = t.nodes[k].pixel;
                 for q in 0..REGIONS {
-                    let serial = serials[slot];
-                    serials[slot] += 1;
-                    nodes.push(Node {
+                    let serial = t.serials[slot];
+                    t.serials[slot] += 1;
+                    t.nodes.push(Node {
                         slot,
                         pixel,
                         serial,
@@ -252,37 +280,27 @@ pub(crate) fn render_tree(
                 }
             }
         }
-        level_start = level_end;
     }
-    let mut pilot = vec![0u32; ids.len()];
-    if tree.unbiased {
-        // The tree's samples only decided: every leaf is sampled afresh.
-        pilot = counts.clone();
-        counts.iter_mut().for_each(|c| *c = 0);
-        let leaves: Vec<usize> = (0..nodes.len()).filter(|&k| nodes[k].children.is_none()).collect();
-        if !estimate {
-            for &k in &leaves {
-                counts[nodes[k].slot] += tree.node_samples;
+
+    /// A pixel's value is its 1-node's colour, each split node the mean of
+    /// its quadrants (eq. (29)): not a sample mean, so no variance.
+    fn estimate(&self, (): &(), mut t: TreePixels) -> Vec<PixelValue> {
+        // Ascent: children were pushed after their parents, so go backwards.
+        for k in (0..t.nodes.len()).rev() {
+            if let Some(c) = t.nodes[k].children {
+                let kids: Vec<[f64; 3]> = t.nodes[c..c + REGIONS as usize].iter().map(|n| n.colour).collect();
+                t.nodes[k].colour = reconstruct(&kids);
             }
-            return Ok((0..ids.len()).map(|slot| (nodes[slot].colour, counts[slot], pilot[slot])).collect());
         }
-        let chosen: Vec<&Node> = leaves.iter().map(|&k| &nodes[k]).collect();
-        let starts: Vec<Start> =
-            chosen.iter().flat_map(|n| node_starts(view, std::slice::from_ref(*n), false, tree.node_samples)).collect();
-        let rgb = pt.radiance(&starts)?;
-        for (j, &k) in leaves.iter().enumerate() {
-            nodes[k].colour = reconstruct(&rgb[j * ns..(j + 1) * ns]);
-            counts[nodes[k].slot] += tree.node_samples;
-        }
+        (0..t.counts.len())
+            .map(|slot| PixelValue {
+                rgb: t.nodes[slot].colour,
+                variance: None,
+                samples: t.counts[slot],
+                pilot: t.pilot[slot],
+            })
+            .collect()
     }
-    // Ascent: children were pushed after their parents, so go backwards.
-    for k in (0..nodes.len()).rev() {
-        if let Some(c) = nodes[k].children {
-            let kids: Vec<[f64; 3]> = nodes[c..c + REGIONS as usize].iter().map(|n| n.colour).collect();
-            nodes[k].colour = reconstruct(&kids);
-        }
-    }
-    Ok((0..ids.len()).map(|slot| (nodes[slot].colour, counts[slot], pilot[slot])).collect())
 }
 
 /// The camera rays of `nodes`: `ns` each on a jittered grid of the node's

@@ -9,9 +9,9 @@
 //! 40.9–55.6 rays for `ct`, `kl`, `hl-sqrt`, `cc` in the unbiased form;
 //! 1,849 give 58.7–60.3.
 
-use super::criteria::{Adaptive, Criterion};
-use super::frame::{Policy, View, sample_counts};
+use super::frame::View;
 use super::path::PathTracer;
+use super::sampler::{PixelSampler, counts};
 use crate::tracer::BackendError;
 
 /// Pixels of the pilot grid, at most.
@@ -45,41 +45,24 @@ pub fn pilot_pixels(width: u32, height: u32) -> Vec<u32> {
     out
 }
 
-/// The threshold at which `criterion` traces on average `target` rays per
-/// pixel (at most `max` samples a pixel in its estimate) on the pilot grid.
-/// In the `unbiased` form every decision sample is counted with the image's
-/// (a pixel that decides on `n` samples traces `2n`), so `target` is the
-/// whole cost in either form.
-///
-/// # Errors
-/// Backend failures only.
-pub fn tune(
-    pt: &PathTracer,
-    view: &View,
-    criterion: Criterion,
-    target: f64,
-    max: u32,
-    unbiased: bool,
-) -> Result<Tuned, BackendError> {
-    tune_policy(pt, view, target, &|eps| Box::new(Adaptive { criterion, threshold: eps, max, unbiased }))
-}
-
-/// The threshold at which the policy `make(ε)` traces on average `target`
+/// The threshold at which the sampler `make(ε)` traces on average `target`
 /// rays per pixel on the pilot grid, decision samples included (spend must
-/// fall as `ε` grows).
+/// fall as `ε` grows). In the unbiased form every decision sample is
+/// counted with the image's (a pixel that decides on `n` samples traces
+/// `2n`), so `target` is the whole cost in either form.
 ///
 /// # Errors
 /// Backend failures only.
-pub fn tune_policy(
+pub fn tune<S: PixelSampler>(
     pt: &PathTracer,
     view: &View,
     target: f64,
-    make: &dyn Fn(f64) -> Box<dyn Policy>,
+    make: impl Fn(f64) -> S,
 ) -> Result<Tuned, BackendError> {
     let pilot = View { seed: view.seed ^ 0x005E_ED0F_7E57, ..*view };
     let pixels = pilot_pixels(view.width, view.height);
     let mean = |eps: f64| -> Result<f64, BackendError> {
-        let n = sample_counts(pt, &pilot, make(eps).as_ref(), &pixels)?;
+        let n = counts(pt, &pilot, &make(eps), &pixels)?;
         Ok(n.iter().map(|&v| f64::from(v)).sum::<f64>() / n.len().max(1) as f64)
     };
     // Spend falls as ε grows: bracket in log space, then bisect.

@@ -1,12 +1,13 @@
 //! Commands laid out as `commands/<cmd>/{args,run}.rs`: the options clap
-//! parses, and the run. Every command is here but `render` and `compare`
-//! (still `cli/src/render/`) and `devices`.
+//! parses, and the run. Every command is here but `devices`; `compare`
+//! lives with `render`.
 
 pub mod complexity;
 pub mod measure;
 pub mod phantom;
 pub mod radiosity;
 pub mod register;
+pub mod render;
 pub mod segment;
 pub mod simplify;
 pub mod viewpoints;

@@ -20,7 +20,7 @@ use itgfx_core::pixel::{SRGB_LUMINANCE_WEIGHTS, image_error};
 use super::RadiosityOptions;
 use crate::CliError;
 use crate::progress::Progress;
-use crate::render::images::{Radiance, read_exr, write_exr};
+use crate::render::images::{Radiance, read_exr, read_pfm, write_exr, write_pfm};
 use crate::report::Report;
 use crate::scene::load_scene;
 
@@ -79,23 +79,18 @@ fn fits_f32(what: &str, px: &[Option<Rgb>]) -> Result<(), CliError> {
     }
 }
 
-/// A linear RGB picture as PFM (little-endian, bottom row first).
-fn pfm(px: &[Rgb], width: u32, height: u32) -> Vec<u8> {
-    let mut out = format!("PF\n{width} {height}\n-1.0\n").into_bytes();
-    for y in (0..height as usize).rev() {
-        for x in 0..width as usize {
-            for c in px[y * width as usize + x] {
-                out.extend_from_slice(&(c as f32).to_le_bytes());
-            }
-        }
-    }
-    out
-}
-
 /// A linear RGB picture as OpenEXR (f32, the renderer's writer).
 fn exr(px: &[Rgb], width: u32, height: u32, path: &Path) -> Result<(), CliError> {
-    let image = Radiance { width: width as usize, height: height as usize, rgb: px.to_vec() };
-    write_exr(&image, path)
+    write_exr(&radiance(px, width, height), path)
+}
+
+/// A linear RGB picture as PFM (the renderer's writer).
+fn pfm(px: &[Rgb], width: u32, height: u32, path: &Path) -> Result<(), CliError> {
+    write_pfm(&radiance(px, width, height), path)
+}
+
+fn radiance(px: &[Rgb], width: u32, height: u32) -> Radiance {
+    Radiance { width: width as usize, height: height as usize, rgb: px.to_vec() }
 }
 
 /// Reads `--reference`: OpenEXR (by its magic number) or the PFM of [`pfm`].
@@ -105,56 +100,14 @@ fn read_reference(path: &Path) -> Result<(u32, u32, Vec<Rgb>), CliError> {
         .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut magic))
         .is_ok_and(|()| magic == [0x76, 0x2f, 0x31, 0x01]);
     if !is_exr {
-        return read_pfm(path);
+        let image = read_pfm(path, "--reference")?;
+        return Ok((image.width as u32, image.height as u32, image.rgb));
     }
     let image = read_exr(path).map_err(|e| CliError::usage(format!("--reference {e}")))?;
     if let Some(bad) = image.rgb.iter().flatten().find(|v| !(v.is_finite() && **v >= 0.0)) {
         return Err(CliError::usage(format!("--reference {path:?}: a pixel value {bad} (want finite, >= 0)")));
     }
     Ok((image.width as u32, image.height as u32, image.rgb))
-}
-
-/// Reads a PFM written by [`pfm`] (colour, little-endian).
-fn read_pfm(path: &Path) -> Result<(u32, u32, Vec<Rgb>), CliError> {
-    let bad = |why: &str| CliError::usage(format!("--reference {path:?}: {why}"));
-    let bytes = itgfx_backends::files::read_regular(path).map_err(|e| bad(&e.to_string()))?;
-    let mut fields = Vec::new();
-    let mut at = 0;
-    while fields.len() < 4 && at < bytes.len().min(256) {
-        while at < bytes.len() && bytes[at].is_ascii_whitespace() {
-            at += 1;
-        }
-        let start = at;
-        while at < bytes.len() && !bytes[at].is_ascii_whitespace() {
-            at += 1;
-        }
-        fields.push(String::from_utf8_lossy(&bytes[start..at]).into_owned());
-    }
-    at += 1;
-    if fields.len() < 4 || fields[0] != "PF" {
-        return Err(bad("not a colour PFM (PF header)"));
-    }
-    let (w, h) = (fields[1].parse::<u32>(), fields[2].parse::<u32>());
-    let (Ok(w), Ok(h)) = (w, h) else { return Err(bad("bad size in the PFM header")) };
-    if fields[3].parse::<f64>().map_or(true, |s| s >= 0.0) {
-        return Err(bad("only little-endian PFM (negative scale) is read"));
-    }
-    let n = w as usize * h as usize;
-    if bytes.len().saturating_sub(at) != n * 12 {
-        return Err(bad(&format!("{w} x {h} pixels need {} bytes of data", n * 12)));
-    }
-    let mut px = vec![[0.0; 3]; n];
-    for (k, chunk) in bytes[at..].chunks_exact(12).enumerate() {
-        let (y, x) = (h as usize - 1 - k / w as usize, k % w as usize);
-        for c in 0..3 {
-            let v = f64::from(f32::from_le_bytes(chunk[4 * c..4 * c + 4].try_into().unwrap_or_default()));
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(bad("a pixel is negative or not finite"));
-            }
-            px[y * w as usize + x][c] = v;
-        }
-    }
-    Ok((w, h, px))
 }
 
 fn png(px: &[[u8; 3]], w: u32, h: u32, path: &Path) -> Result<(), CliError> {
@@ -381,7 +334,7 @@ impl Pictures {
             exr(&dense(&self.gouraud), size, size, &p)?;
         }
         if let Some(p) = file("radiosity.pfm") {
-            crate::output::write(&p, &pfm(&dense(&self.gouraud), size, size))?;
+            pfm(&dense(&self.gouraud), size, size, &p)?;
         }
         if let Some(p) = file("mesh.ply") {
             super::mesh::write(&leaf_mesh(h, &solution.radiosity), name, white, &p)?;
@@ -463,13 +416,13 @@ fn reference_report(
         exr(&mean, w, h, &p)?;
     }
     if let Some(p) = file("reference.pfm") {
-        crate::output::write(&p, &pfm(&mean, w, h))?;
+        pfm(&mean, w, h, &p)?;
     }
     if let Some(p) = file("reference-even.pfm") {
-        crate::output::write(&p, &pfm(&reference.halves[0], w, h))?;
+        pfm(&reference.halves[0], w, h, &p)?;
     }
     if let Some(p) = file("reference-odd.pfm") {
-        crate::output::write(&p, &pfm(&reference.halves[1], w, h))?;
+        pfm(&reference.halves[1], w, h, &p)?;
     }
     if let Some(p) = file("reference.png") {
         let px: Vec<[u8; 3]> = reference

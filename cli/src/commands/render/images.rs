@@ -1,5 +1,6 @@
-//! Image files of `itgfx render` and `itgfx compare`: linear radiance as
-//! OpenEXR (f32 RGB, lossless), sRGB-encoded PNG, and the sampling-density map.
+//! Image files of `itgfx render`, `itgfx compare` and `itgfx radiosity`
+//! (the film's output): linear radiance as OpenEXR (f32 RGB, lossless) and
+//! PFM, sRGB-encoded PNG, and the sampling-density map.
 
 use std::io::Cursor;
 use std::path::Path;
@@ -80,6 +81,78 @@ pub fn read_exr(path: &Path) -> Result<Radiance, CliError> {
     Ok(Radiance { width: size.width(), height: size.height(), rgb })
 }
 
+/// `image` as PFM bytes: colour, little-endian (scale −1), bottom row
+/// first, f32 values.
+#[must_use]
+pub fn pfm_bytes(image: &Radiance) -> Vec<u8> {
+    let (width, height) = (image.width, image.height);
+    let mut out = format!("PF\n{width} {height}\n-1.0\n").into_bytes();
+    for y in (0..height).rev() {
+        for x in 0..width {
+            for c in image.rgb[y * width + x] {
+                out.extend_from_slice(&(c as f32).to_le_bytes());
+            }
+        }
+    }
+    out
+}
+
+/// Writes `image` as a PFM file ([`pfm_bytes`]).
+///
+/// # Errors
+/// A one-line error naming the path.
+pub fn write_pfm(image: &Radiance, path: &Path) -> Result<(), CliError> {
+    crate::output::write(path, &pfm_bytes(image))
+}
+
+/// Reads a colour PFM as [`write_pfm`] writes it (little-endian): linear
+/// radiance, so every value finite and `>= 0`. Errors name `what` (the
+/// option that gave the file) and the path.
+///
+/// # Errors
+/// A one-line error naming `what` and the path.
+pub fn read_pfm(path: &Path, what: &str) -> Result<Radiance, CliError> {
+    let bad = |why: &str| CliError::usage(format!("{what} {path:?}: {why}"));
+    let bytes = itgfx_backends::files::read_regular(path).map_err(|e| bad(&e.to_string()))?;
+    let mut fields = Vec::new();
+    let mut at = 0;
+    while fields.len() < 4 && at < bytes.len().min(256) {
+        while at < bytes.len() && bytes[at].is_ascii_whitespace() {
+            at += 1;
+        }
+        let start = at;
+        while at < bytes.len() && !bytes[at].is_ascii_whitespace() {
+            at += 1;
+        }
+        fields.push(String::from_utf8_lossy(&bytes[start..at]).into_owned());
+    }
+    at += 1;
+    if fields.len() < 4 || fields[0] != "PF" {
+        return Err(bad("not a colour PFM (PF header)"));
+    }
+    let (w, h) = (fields[1].parse::<u32>(), fields[2].parse::<u32>());
+    let (Ok(w), Ok(h)) = (w, h) else { return Err(bad("bad size in the PFM header")) };
+    if fields[3].parse::<f64>().map_or(true, |s| s >= 0.0) {
+        return Err(bad("only little-endian PFM (negative scale) is read"));
+    }
+    let n = w as usize * h as usize;
+    if bytes.len().saturating_sub(at) != n * 12 {
+        return Err(bad(&format!("{w} x {h} pixels need {} bytes of data", n * 12)));
+    }
+    let mut px = vec![[0.0; 3]; n];
+    for (k, chunk) in bytes[at..].chunks_exact(12).enumerate() {
+        let (y, x) = (h as usize - 1 - k / w as usize, k % w as usize);
+        for c in 0..3 {
+            let v = f64::from(f32::from_le_bytes(chunk[4 * c..4 * c + 4].try_into().unwrap_or_default()));
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(bad("a pixel is negative or not finite"));
+            }
+            px[y * w as usize + x][c] = v;
+        }
+    }
+    Ok(Radiance { width: w as usize, height: h as usize, rgb: px })
+}
+
 pub use itgfx_core::pixel::srgb_encode;
 
 /// The displayed image, `255 · sRGB(clamp(2^exposure · L))` per channel, as reals.
@@ -145,6 +218,26 @@ mod tests {
                 assert_eq!(b[c], f64::from(a[c] as f32));
             }
         }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn pfm_round_trips_bottom_row_first() {
+        let dir = std::env::temp_dir().join(format!("itgfx-pfm-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("a.pfm");
+        let img = Radiance { width: 2, height: 3, rgb: (0..6).map(|i| [f64::from(i), 0.25, 0.1]).collect() };
+        let bytes = pfm_bytes(&img);
+        let header = b"PF\n2 3\n-1.0\n";
+        assert_eq!(&bytes[..header.len()], header);
+        // The first pixel stored is the bottom row's first, pixel 4.
+        assert_eq!(&bytes[header.len()..header.len() + 4], &4f32.to_le_bytes());
+        write_pfm(&img, &p).unwrap();
+        let back = read_pfm(&p, "--x").unwrap();
+        let want: Vec<[f64; 3]> = img.rgb.iter().map(|c| c.map(|v| f64::from(v as f32))).collect();
+        assert_eq!((back.width, back.height, back.rgb), (2, 3, want));
+        std::fs::write(&p, b"P6\n1 1\n255\n").unwrap();
+        assert!(read_pfm(&p, "--x").unwrap_err().to_string().starts_with("--x "));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -14,6 +14,7 @@ use itgfx_backends::render::{Frame, Sampling};
 use itgfx_backends::tracer::Prepared;
 
 use super::RenderOptions;
+use super::run::{frame_stats, image_files, out_dir, read_reference, write_frame};
 use crate::CliError;
 use crate::report::Report;
 use crate::shard::{MAX_SHARD_BYTES, Shard};
@@ -148,7 +149,7 @@ pub fn run_merge(o: &RenderOptions) -> Result<Report, CliError> {
     if let Some(r) = &o.reference {
         crate::input::regular("--reference", r)?;
     }
-    let (dir, made) = super::out_dir(o)?;
+    let (dir, made) = out_dir(o)?;
     let result = merge_into(o, &dir);
     if result.is_err() && made {
         let _ = std::fs::remove_dir(&dir);
@@ -157,19 +158,19 @@ pub fn run_merge(o: &RenderOptions) -> Result<Report, CliError> {
 }
 
 fn merge_into(o: &RenderOptions, dir: &Path) -> Result<Report, CliError> {
-    for f in super::image_files(dir) {
+    for f in image_files(dir) {
         crate::output::check("--out", &f)?;
     }
     let (first, frame, seconds) = merged(&o.shards.merge)?;
     let (h, st) = (&first.header, &first.header.settings);
-    let reference = super::read_reference(o, (st.width, st.height))?;
-    let (image, wrote) = super::write_frame(&frame, o.exposure, dir)?;
+    let reference = read_reference(o, (st.width, st.height))?;
+    let (image, wrote) = write_frame(&frame, o.exposure, dir)?;
     let mut r = Report::new();
     r.text("scene", h.scene.name.clone()).text("backend", st.backend.clone()).text("sampler", st.sampler.clone());
     r.count("width", u64::from(st.width)).count("height", u64::from(st.height)).count("seed", st.seed);
     r.count("shards", h.shards).maybe_real("threshold", first.threshold_used, None);
     r.count("spp_requested", u64::from(st.spp));
-    super::frame_stats(&mut r, &frame, Some(&image), reference.as_ref(), o.exposure)?;
+    frame_stats(&mut r, &frame, Some(&image), reference.as_ref(), o.exposure)?;
     r.real("seconds", seconds, Some("s"));
     r.texts("wrote", wrote.iter().map(|p| p.display().to_string()).collect());
     Ok(r)

@@ -42,10 +42,11 @@ pub(super) struct MeshEdges {
 }
 
 impl MeshEdges {
-    /// The edges of `triangles`, vertices matched exactly (as
-    /// [`super::solid_angle::triangle_adjacency`]).
+    /// The edges of `triangles`, vertices matched by exact position, with
+    /// -0.0 the same coordinate as 0.0 (`x + 0.0` turns the one into the
+    /// other and leaves every other value as it is).
     pub(super) fn new(triangles: &[[Vec3A; 3]], tris: &[[DVec3; 3]]) -> Self {
-        let key = |v: Vec3A| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+        let key = |v: Vec3A| [(v.x + 0.0).to_bits(), (v.y + 0.0).to_bits(), (v.z + 0.0).to_bits()];
         let mut ids = std::collections::HashMap::new();
         let vid: Vec<[u32; 3]> = triangles
             .iter()
@@ -409,6 +410,21 @@ fn edges_cross(a: &[DVec3; 3], b: &[DVec3; 3]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Two triangles sharing an edge whose vertices are written once with
+    /// -0.0 and once with 0.0 (as the Utah teapot's OBJ does): one manifold
+    /// edge between them, not two boundary edges.
+    #[test]
+    fn minus_zero_is_the_same_vertex() {
+        let (z, m) = (0.0f32, -0.0f32);
+        let a = [Vec3A::new(z, 0.0, 0.0), Vec3A::new(1.0, 0.0, 0.0), Vec3A::new(z, 1.0, 0.0)];
+        let b = [Vec3A::new(m, 1.0, 0.0), Vec3A::new(1.0, 0.0, 0.0), Vec3A::new(1.0, 1.0, 0.0)];
+        let d = |t: [Vec3A; 3]| t.map(|v| DVec3::new(f64::from(v.x), f64::from(v.y), f64::from(v.z)));
+        let e = MeshEdges::new(&[a, b], &[d(a), d(b)]);
+        assert_eq!(e.owners.len(), 5, "five edges, the diagonal shared");
+        assert_eq!(e.owners.iter().filter(|o| matches!(o, Some([x, y]) if x != y)).count(), 1);
+        assert_eq!(e.vertices.len(), 4);
+    }
 
     #[test]
     fn segments_cross_the_open_interior_only() {

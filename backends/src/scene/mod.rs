@@ -16,7 +16,9 @@ pub use builtin::{BUILT_IN, BuiltIn, DefaultCamera, built_in};
 pub use error::{Limits, SceneError};
 pub(crate) use model::sphere_patches;
 pub use model::{Material, Patch, Scene, SphereCells};
+pub use vertex_key::{vertex_key, vertex_key32};
 
 mod builtin;
 mod error;
 mod model;
+mod vertex_key;

@@ -104,8 +104,7 @@ impl IndexedMesh {
     /// writes both on its symmetry planes; keyed by their bits they left 20
     /// zero-width slits along its seams). Mapped to `(p − centre) / scale`.
     fn index(triangles: &[[DVec3; 3]], centre: DVec3, scale: f64) -> Self {
-        // `x + 0.0` turns -0.0 into 0.0 and leaves every other value as it is.
-        let key = |v: DVec3| [(v.x + 0.0).to_bits(), (v.y + 0.0).to_bits(), (v.z + 0.0).to_bits()];
+        let key = crate::scene::vertex_key;
         let mut ids: HashMap<[u64; 3], u32> = HashMap::new();
         let mut positions = Vec::new();
         let faces = triangles

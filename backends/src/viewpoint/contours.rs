@@ -42,11 +42,10 @@ pub(super) struct MeshEdges {
 }
 
 impl MeshEdges {
-    /// The edges of `triangles`, vertices matched by exact position, with
-    /// -0.0 the same coordinate as 0.0 (`x + 0.0` turns the one into the
-    /// other and leaves every other value as it is).
+    /// The edges of `triangles`, vertices matched by exact position
+    /// ([`crate::scene::vertex_key32`]: -0.0 is 0.0).
     pub(super) fn new(triangles: &[[Vec3A; 3]], tris: &[[DVec3; 3]]) -> Self {
-        let key = |v: Vec3A| [(v.x + 0.0).to_bits(), (v.y + 0.0).to_bits(), (v.z + 0.0).to_bits()];
+        let key = crate::scene::vertex_key32;
         let mut ids = std::collections::HashMap::new();
         let vid: Vec<[u32; 3]> = triangles
             .iter()

@@ -36,10 +36,8 @@ pub fn patch_adjacency(scene: &Scene) -> Vec<Vec<u32>> {
             }
         }
     } else {
-        // Vertex ids by exact position; `x + 0.0` makes -0.0 the same
-        // coordinate as 0.0 (the Utah teapot's OBJ writes both on its
-        // symmetry planes) and leaves every other value as it is.
-        let key = |p: glam::DVec3| [(p.x + 0.0).to_bits(), (p.y + 0.0).to_bits(), (p.z + 0.0).to_bits()];
+        // Vertex ids by exact position (-0.0 is 0.0).
+        let key = crate::scene::vertex_key;
         let mut verts: Vec<([u64; 3], u32)> = Vec::with_capacity(scene.triangles.len() * 3);
         for (t, tri) in scene.triangles.iter().enumerate() {
             for (k, p) in tri.iter().enumerate() {

@@ -31,6 +31,16 @@ pub const PROCESS_BYTES: u64 = 16 << 20;
 /// byte of label.
 pub const HELD_BYTES_PER_VOXEL: u64 = 5;
 
+/// Bytes the channel of `views` viewpoints over `caster`'s volume and its
+/// measures may need ([`channel_memory`]), with the buffers `backend`
+/// allocates to cast `rays` rays a view ([`volume_memory`]; none for 0
+/// rays: the rows come from shards).
+#[must_use]
+pub fn cast_memory(caster: &Caster<'_>, backend: BackendChoice, views: usize, rays: u64) -> u64 {
+    let buffers = if rays > 0 { volume_memory(backend, caster, rays) } else { 0 };
+    channel_memory(caster, seeable_voxels(caster), views) + buffers
+}
+
 /// The viewpoint channel of a volume, as shards.
 #[derive(Clone, Copy)]
 pub struct VolumeShards<'a> {
@@ -69,22 +79,18 @@ impl VolumeShards<'_> {
 
     /// Bytes a run over viewpoints `first..end` may need at its peak: the
     /// process and the volume it holds ([`PROCESS_BYTES`],
-    /// [`HELD_BYTES_PER_VOXEL`]), the channel and its measures
-    /// ([`channel_memory`]) and, when it `casts` (not a merge), the
-    /// backend's buffers ([`volume_memory`]: on lavapipe the device's are
-    /// host memory). A bound on the measured peak: `hydrogen:3,2,0,64` at
-    /// 162 views peaks at 112.4 MiB against 127.5 estimated, `hydrogen:3,2,0,128`
-    /// at 774.3 MiB against 823.5 (release, `/usr/bin/time -v`, maximum RSS),
-    /// and `hydrogen:3,2,0,256` at 5,597 MiB against 6,074 (docs/VOLUME.md).
+    /// [`HELD_BYTES_PER_VOXEL`]) and the channel ([`cast_memory`]; without
+    /// the backend's buffers when it does not `casts`, a merge). A bound on
+    /// the measured peak: `hydrogen:3,2,0,64` at 162 views peaks at 112.4
+    /// MiB against 127.5 estimated, `hydrogen:3,2,0,128` at 774.3 MiB
+    /// against 823.5 (release, `/usr/bin/time -v`, maximum RSS), and
+    /// `hydrogen:3,2,0,256` at 5,597 MiB against 6,074 (docs/VOLUME.md).
     #[must_use]
     pub fn memory(&self, backend: BackendChoice, (first, end): (usize, usize), casts: bool) -> u64 {
-        let voxels = self.caster.volume.voxels() as u64;
-        let cast =
-            if casts { volume_memory(backend, self.caster, u64::from(self.rays) * u64::from(self.rays)) } else { 0 };
+        let rays = if casts { u64::from(self.rays) * u64::from(self.rays) } else { 0 };
         PROCESS_BYTES
-            + voxels * HELD_BYTES_PER_VOXEL
-            + channel_memory(self.caster, seeable_voxels(self.caster), end - first)
-            + cast
+            + self.caster.volume.voxels() as u64 * HELD_BYTES_PER_VOXEL
+            + cast_memory(self.caster, backend, end - first, rays)
     }
 
     /// [`VolumeShards::memory`] checked against what the process may use.

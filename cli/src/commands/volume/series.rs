@@ -14,13 +14,12 @@ use std::path::Path;
 use std::time::Instant;
 
 use glam::DVec3;
-use itgfx_backends::backend::{open_volume, volume_memory};
+use itgfx_backends::backend::open_volume;
 use itgfx_backends::viewpoint::{ViewpointWeights, icosphere};
-use itgfx_backends::volume::channel::{channel_memory, seeable_voxels};
 use itgfx_backends::volume::paths::{dynamic_path, static_view, turn};
 use itgfx_backends::volume::raycast::Caster;
 use itgfx_backends::volume::series::{check_frames, common_range, is_series_built_in, series_built_in};
-use itgfx_backends::volume::shard_job::{HELD_BYTES_PER_VOXEL, PROCESS_BYTES};
+use itgfx_backends::volume::shard_job::{HELD_BYTES_PER_VOXEL, PROCESS_BYTES, cast_memory};
 use itgfx_backends::volume::{TransferFunction, Volume, VolumeChannelOptions, volume_channel, volume_measures};
 
 use super::VolumeOptions;
@@ -231,8 +230,7 @@ fn memory_need(
             )));
         }
         radius = radius.max(caster.content_radius());
-        let one = channel_memory(&caster, seeable_voxels(&caster), views)
-            + volume_memory(o.backend, &caster, u64::from(rays) * u64::from(rays));
+        let one = cast_memory(&caster, o.backend, views, u64::from(rays) * u64::from(rays));
         need = need.max(held + one);
     }
     itgfx_backends::memory::check(|| "--time: the series".into(), need)

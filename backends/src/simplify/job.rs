@@ -1,5 +1,5 @@
 //! A simplification as one job (`itgfx simplify`): planned before any
-//! work (the channel's weights, [`ViewState::bytes`], checked against
+//! work (the channel's weights, [`ViewState::bytes`](super::ViewState::bytes), checked against
 //! [`MAX_BYTES`](super::MAX_BYTES) and the memory budget by
 //! [`check_memory`]), then run: the input rendered from the evaluation
 //! views, the collapses down to every target ([`simplify`]) or the mesh

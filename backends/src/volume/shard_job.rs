@@ -83,7 +83,8 @@ impl VolumeShards<'_> {
     /// the backend's buffers when it does not `casts`, a merge). A bound on
     /// the measured peak: `hydrogen:3,2,0,64` at 162 views peaks at 112.4
     /// MiB against 127.5 estimated, `hydrogen:3,2,0,128` at 774.3 MiB
-    /// against 823.5 (release, `/usr/bin/time -v`, maximum RSS), and
+    /// against 823.5 (release, `/usr/bin/time -v`, maximum RSS; debug
+    /// build 117.9 and 779.9 MiB), and
     /// `hydrogen:3,2,0,256` at 5,597 MiB against 6,074 (docs/VOLUME.md).
     #[must_use]
     pub fn memory(&self, backend: BackendChoice, (first, end): (usize, usize), casts: bool) -> u64 {

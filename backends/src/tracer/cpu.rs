@@ -86,8 +86,10 @@ pub struct CpuTracer {
     /// `ordered` as a structure of arrays for the 8-wide triangle test.
     lanes: TriangleLanes,
     /// `bvh` uncompressed (`wide8.rs`): the tree `closest_hit` and
-    /// `occluded` walk one ray at a time.
-    wide: Option<Wide8>,
+    /// `occluded` walk one ray at a time, built at their first call (a
+    /// tracer used only for `trace_all` never allocates it); `None` inside
+    /// where [`Wide8::new`] declines, and the CWBVH walk serves.
+    wide: std::sync::OnceLock<Option<Wide8>>,
     /// Whether the 8-lane AVX2 node test is used (`node8`).
     avx2: bool,
     /// Whether `trace_all` interleaves walks (`interleave.rs`): AVX2 and
@@ -143,8 +145,14 @@ impl CpuTracer {
         let avx2 = node8::has_avx2();
         let interleave = avx2 && scene.sphere.is_none();
         let lanes = TriangleLanes::new(&ordered);
-        let wide = bvh.as_ref().and_then(Wide8::new);
+        let wide = std::sync::OnceLock::new();
         Self { scene: scene.clone(), bvh, ordered, lanes, wide, avx2, interleave, bounds }
+    }
+
+    /// The uncompressed tree, built at the first call.
+    #[inline]
+    fn wide(&self) -> Option<&Wide8> {
+        self.wide.get_or_init(|| self.bvh.as_ref().and_then(Wide8::new)).as_ref()
     }
 
     /// The first crossing of one line: the walk shrinks the interval as hits
@@ -160,9 +168,9 @@ impl CpuTracer {
             // SAFETY: `self.avx2` came from `has_avx2()`.
             return unsafe { self.closest_avx2(l) };
         }
-        match self.wide {
-            Some(_) => self.closest_with::<false, true>(l, &()),
-            None => self.closest_with::<false, false>(l, &()),
+        match self.wide() {
+            Some(w) => self.closest_with::<false, true>(l, Some(w), &()),
+            None => self.closest_with::<false, false>(l, None, &()),
         }
     }
 
@@ -174,17 +182,22 @@ impl CpuTracer {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     unsafe fn closest_avx2(&self, l: &Line) -> Option<Hit> {
-        match self.wide {
-            Some(_) => self.closest_with::<true, true>(l, &()),
-            None => self.closest_with::<true, false>(l, &()),
+        match self.wide() {
+            Some(w) => self.closest_with::<true, true>(l, Some(w), &()),
+            None => self.closest_with::<true, false>(l, None, &()),
         }
     }
 
-    /// The closest hit with the AVX2 tests or not, walking `self.wide`
-    /// (`WIDE`, which must then be `Some`) or the CWBVH: one walk per
+    /// The closest hit with the AVX2 tests or not, walking `wide` (where
+    /// `WIDE`; it must then be `Some`) or the CWBVH: one walk per
     /// instance, so that the leaf closure is inlined into the AVX2 caller.
     #[inline(always)]
-    fn closest_with<const AVX2: bool, const WIDE: bool>(&self, l: &Line, tally: &impl Tally) -> Option<Hit> {
+    fn closest_with<const AVX2: bool, const WIDE: bool>(
+        &self,
+        l: &Line,
+        wide: Option<&Wide8>,
+        tally: &impl Tally,
+    ) -> Option<Hit> {
         if let Some(s) = &self.scene.sphere {
             return sphere_hit(s, l);
         }
@@ -215,7 +228,7 @@ impl CpuTracer {
         // SAFETY: `AVX2` is true only in `closest_avx2`, entered after `has_avx2()`.
         unsafe {
             if WIDE {
-                wide8::walk::<AVX2, _>(self.wide.as_ref()?, &ray, tally, group);
+                wide8::walk::<AVX2, _>(wide?, &ray, tally, group);
             } else {
                 node8::walk_groups::<AVX2, _>(bvh, &ray, tally, group);
             }
@@ -241,9 +254,9 @@ impl CpuTracer {
             // SAFETY: `self.avx2` came from `has_avx2()`.
             return unsafe { self.any_avx2(l) };
         }
-        match self.wide {
-            Some(_) => self.any_with::<false, true>(l, &()),
-            None => self.any_with::<false, false>(l, &()),
+        match self.wide() {
+            Some(w) => self.any_with::<false, true>(l, Some(w), &()),
+            None => self.any_with::<false, false>(l, None, &()),
         }
     }
 
@@ -254,15 +267,15 @@ impl CpuTracer {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     unsafe fn any_avx2(&self, l: &Line) -> bool {
-        match self.wide {
-            Some(_) => self.any_with::<true, true>(l, &()),
-            None => self.any_with::<true, false>(l, &()),
+        match self.wide() {
+            Some(w) => self.any_with::<true, true>(l, Some(w), &()),
+            None => self.any_with::<true, false>(l, None, &()),
         }
     }
 
     /// Occlusion, as [`CpuTracer::closest_with`].
     #[inline(always)]
-    fn any_with<const AVX2: bool, const WIDE: bool>(&self, l: &Line, tally: &impl Tally) -> bool {
+    fn any_with<const AVX2: bool, const WIDE: bool>(&self, l: &Line, wide: Option<&Wide8>, tally: &impl Tally) -> bool {
         if let Some(s) = &self.scene.sphere {
             return sphere_hit(s, l).is_some();
         }
@@ -277,7 +290,7 @@ impl CpuTracer {
         // SAFETY: `AVX2` is true only in `any_avx2`, entered after `has_avx2()`.
         unsafe {
             if WIDE {
-                let Some(w) = &self.wide else { return false };
+                let Some(w) = wide else { return false };
                 wide8::walk::<AVX2, _>(w, &ray, tally, group);
             } else {
                 node8::walk_groups::<AVX2, _>(bvh, &ray, tally, group);
@@ -663,8 +676,9 @@ mod tests {
                 let t = CpuTracer::with_params(&p, *params);
                 let build = clock.elapsed().as_secs_f64();
                 let (c, s) = (Counts::default(), Counts::default());
-                let mut hits: Vec<Option<Hit>> = closest.iter().map(|l| t.closest_with::<false, true>(l, &c)).collect();
-                let blocked: Vec<bool> = shadow.iter().map(|l| t.any_with::<false, true>(l, &s)).collect();
+                let mut hits: Vec<Option<Hit>> =
+                    closest.iter().map(|l| t.closest_with::<false, true>(l, t.wide(), &c)).collect();
+                let blocked: Vec<bool> = shadow.iter().map(|l| t.any_with::<false, true>(l, t.wide(), &s)).collect();
                 // The batch calls, as the renderer makes them (packets included): best of 5.
                 let (mut tc, mut ts) = (f64::MAX, f64::MAX);
                 for _ in 0..5 {
@@ -681,7 +695,7 @@ mod tests {
                 }
                 // The same rays one at a time, no packets, the wide walk
                 // and the CWBVH walk (`wide: None`) alternating: best of 5.
-                let cwbvh = CpuTracer { wide: None, ..t.clone() };
+                let cwbvh = CpuTracer { wide: None.into(), ..t.clone() };
                 let mut best = [f64::MAX; 4];
                 for _ in 0..5 {
                     for (k, tracer) in [&t, &cwbvh].into_iter().enumerate() {
@@ -712,14 +726,14 @@ mod tests {
                 let bvh = t.bvh.as_ref().unwrap();
                 let per = |x: &std::cell::Cell<u64>, n: usize| x.get() as f64 / n as f64;
                 // The CWBVH walk's counts on the same tree (the walk before `wide8`).
-                let cw = CpuTracer { wide: None, ..t.clone() };
+                let cw = CpuTracer { wide: None.into(), ..t.clone() };
                 let (cc, cs) = (Counts::default(), Counts::default());
-                closest.iter().for_each(|l| assert_eq!(cw.closest_with::<false, false>(l, &cc), t.closest(l)));
-                shadow.iter().for_each(|l| assert_eq!(cw.any_with::<false, false>(l, &cs), t.any(l)));
+                closest.iter().for_each(|l| assert_eq!(cw.closest_with::<false, false>(l, None, &cc), t.closest(l)));
+                shadow.iter().for_each(|l| assert_eq!(cw.any_with::<false, false>(l, None, &cs), t.any(l)));
                 eprintln!(
                     "{spec} | {name} | wide nodes {} ({} bytes, {} CWBVH bytes) | CWBVH walk: closest {:.2} nodes {:.2} tris | shadow {:.2} nodes {:.2} tris",
-                    t.wide.as_ref().map_or(0, Wide8::len),
-                    t.wide.as_ref().map_or(0, Wide8::bytes),
+                    t.wide().map_or(0, Wide8::len),
+                    t.wide().map_or(0, Wide8::bytes),
                     bvh.nodes.len() * size_of::<obvhs::cwbvh::node::CwBvhNode>(),
                     per(&cc.nodes, closest.len()),
                     per(&cc.triangles, closest.len()),

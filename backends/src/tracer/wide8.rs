@@ -160,13 +160,13 @@ impl Consts {
 fn test_scalar(n: &Node, c: &Consts, tmax: f32) -> (u32, [f32; 8]) {
     let mut hit = 0;
     let mut near = [0.0f32; 8];
-    for i in 0..8 {
+    for (i, entry) in near.iter_mut().enumerate() {
         let t = |row: usize, a: usize| (n.bounds[row][i] - c.org[a]) * c.inv[a];
         let (nx, ny, nz) = (t(c.near[0], 0), t(c.near[1], 1), t(c.near[2], 2));
         let (fx, fy, fz) = (t(c.near[0] ^ 1, 0), t(c.near[1] ^ 1, 1), t(c.near[2] ^ 1, 2));
         let lo = nx.max(ny).max(nz.max(NODE_EPSILON));
         let hi = fx.min(fy).min(fz.min(tmax));
-        near[i] = lo;
+        *entry = lo;
         hit |= u32::from(lo <= hi) << i;
     }
     (hit, near)

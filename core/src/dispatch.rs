@@ -185,9 +185,10 @@ mod x86 {
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "alloc"))]
 mod tests {
     use super::*;
+    use alloc::{vec, vec::Vec};
 
     /// The batched logarithm is the scalar one to the bit, in whichever
     /// build `ITGFX_SIMD` selects (CI runs each), on random bit patterns

@@ -13,6 +13,34 @@ use crate::matrix::{MatrixRef, for_column_blocks};
 use crate::sum::{BLOCK, Neumaier};
 use crate::{Error, Real};
 
+/// `out[i] = ln(xs[i])` over the shorter slice, element by element (what
+/// [`crate::dispatch::ln_into`] compiles per build).
+#[inline(always)]
+pub(crate) fn ln_into_body(xs: &[f64], out: &mut [f64]) {
+    for (o, &x) in out.iter_mut().zip(xs) {
+        *o = ln(x);
+    }
+}
+
+/// `out[i] = kl_term(x[i], y[i])` ([`kl_term`]) over the shortest slice:
+/// first `x ln(x/y)` on every element without branches (the lanes where
+/// [`kl_term`] takes that path: `x, y > 0` and `x/y` positive and finite),
+/// then [`kl_term`] itself on the other lanes. What
+/// [`crate::dispatch::kl_terms_into`] compiles per build.
+#[inline(always)]
+pub(crate) fn kl_terms_body(x: &[f64], y: &[f64], out: &mut [f64]) {
+    let fast = |x: f64, y: f64, r: f64| x > 0.0 && y > 0.0 && r > 0.0 && r <= f64::MAX;
+    for ((o, &x), &y) in out.iter_mut().zip(x).zip(y) {
+        let r = x / y;
+        *o = x * ln(if fast(x, y, r) { r } else { 1.0 });
+    }
+    for ((o, &x), &y) in out.iter_mut().zip(x).zip(y) {
+        if !fast(x, y, x / y) {
+            *o = kl_term(x, y);
+        }
+    }
+}
+
 /// `Σ x` and `Σ x ln x` of a validated slice (nats).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Mass {

@@ -82,6 +82,7 @@ pub use channel::{Channel, ChannelMeasures, cascade_into, row_entropies_into};
 pub use coding::huffman_expected_length;
 #[cfg(feature = "alloc")]
 pub use coding::{HUFFMAN_MAX_BLOCKS, huffman_block_length};
+pub use dispatch::kl_terms_into;
 pub use divergence::{
     ArithmeticGeometric, ChiSquare, ConvexFunction, Divergences, FGenerator, Hellinger, KullbackLeibler, Square,
     TotalVariation, ULogU, arithmetic_geometric, bregman, burbea_rao, chi_square, divergences, f_divergence, f_term,

@@ -166,13 +166,25 @@ impl<'a, T: Real> SparseChannel<'a, T> {
     pub fn specific_information_into(&self, output: &[T], base: Base, out: &mut [T]) -> Result<(), Error> {
         same_len(self.outputs, output.len())?;
         same_len(self.inputs(), out.len())?;
+        // Each row in batches: its `p` and `q`, their logarithms in one
+        // vectorised pass each ([`crate::dispatch::ln_into`], the same bits
+        // as [`ln`]), then the terms added in order.
+        let (mut ps, mut qs, mut lp, mut lq) = ([0.0f64; BATCH], [0.0; BATCH], [0.0; BATCH], [0.0; BATCH]);
         for (x, o) in out.iter_mut().enumerate() {
             let (c, v) = self.row(x);
             let mut acc = Neumaier::new();
-            for (&j, p) in c.iter().zip(v) {
-                let (p, q) = (p.to_f64(), output[j as usize].to_f64());
-                if p > 0.0 {
-                    acc.add(if q > 0.0 { p * (ln(p) - ln(q)) } else { f64::INFINITY });
+            for (c, v) in c.chunks(BATCH).zip(v.chunks(BATCH)) {
+                let n = c.len();
+                for (k, (&j, p)) in c.iter().zip(v).enumerate() {
+                    (ps[k], qs[k]) = (p.to_f64(), output[j as usize].to_f64());
+                }
+                crate::dispatch::ln_into(&ps[..n], &mut lp[..n]);
+                crate::dispatch::ln_into(&qs[..n], &mut lq[..n]);
+                for k in 0..n {
+                    let (p, q) = (ps[k], qs[k]);
+                    if p > 0.0 {
+                        acc.add(if q > 0.0 { p * (lp[k] - lq[k]) } else { f64::INFINITY });
+                    }
                 }
             }
             let d = acc.value();
@@ -307,8 +319,9 @@ pub fn jensen_shannon_sparse<T: Real>(
 /// ln(a.1[k])`, as the core's own `ln` computes it: pass
 /// [`sparse_logs`]'s output), so that rows compared with many others take
 /// their logarithms once. Bit for bit the same value as
-/// [`jensen_shannon_sparse`] for such logs (one definition: both run the
-/// same merge).
+/// [`jensen_shannon_sparse`] for such logs: the same merge in batches
+/// ([`js_merge_batched`], tested against [`js_merge`] bit for bit), each
+/// batch's mixture logarithms taken in one vectorised pass.
 ///
 /// # Errors
 /// Those of [`jensen_shannon_sparse`], and [`Error::LengthMismatch`] when a
@@ -325,14 +338,19 @@ pub fn jensen_shannon_sparse_logs<T: Real>(
         }
     }
     check_pair(weights, (a.0, a.1), (b.0, b.1))?;
-    let (la, lb) = (a.2, b.2);
-    Ok(js_merge(weights, (a.0, a.1), (b.0, b.1), |k| la[k], |k| lb[k], base))
+    Ok(js_merge_batched(weights, a, b, base))
 }
 
 /// `ln p` of every value, as [`jensen_shannon_sparse_logs`] takes them.
 pub fn sparse_logs<T: Real>(values: &[T], out: &mut [f64]) {
-    for (o, v) in out.iter_mut().zip(values) {
-        *o = ln(v.to_f64());
+    // In batches, one vectorised pass each ([`crate::dispatch::ln_into`]).
+    let mut x = [0.0f64; BATCH];
+    for (o, v) in out.chunks_mut(BATCH).zip(values.chunks(BATCH)) {
+        let n = o.len().min(v.len());
+        for (x, v) in x.iter_mut().zip(v) {
+            *x = v.to_f64();
+        }
+        crate::dispatch::ln_into(&x[..n], &mut o[..n]);
     }
 }
 
@@ -361,7 +379,7 @@ fn js_merge<T: Real>(
     base: Base,
 ) -> T {
     let (wa, wb) = (weights.0.to_f64(), weights.1.to_f64());
-    let term = |w: f64, p: f64, lp: f64, lm: f64| if w > 0.0 && p > 0.0 { w * p * (lp - lm) } else { 0.0 };
+    let term = js_term;
     let (mut i, mut j) = (0, 0);
     let mut acc = Neumaier::new();
     while i < a.0.len() || j < b.0.len() {
@@ -389,6 +407,61 @@ fn js_merge<T: Real>(
         let ta = ka.map_or(0.0, |k| term(wa, pa, la(k), lm));
         let tb = kb.map_or(0.0, |k| term(wb, pb, lb(k), lm));
         acc.add(ta + tb);
+    }
+    let d = acc.value();
+    T::from_f64(if d < 0.0 { 0.0 } else { d * base.per_nat() })
+}
+
+/// One index's term of the Jensen–Shannon divergence (Part II eq. (17)):
+/// `π_i p_i (ln p_i − ln m)`, 0 where `π_i` or `p_i` is (an index absent
+/// from `p_i` has `p_i = 0`).
+#[inline(always)]
+fn js_term(w: f64, p: f64, lp: f64, lm: f64) -> f64 {
+    if w > 0.0 && p > 0.0 { w * p * (lp - lm) } else { 0.0 }
+}
+
+/// Entries a batch of [`js_merge_batched`] (merged indices) and of
+/// [`SparseChannel::specific_information_into`] (a row's) holds: arrays on
+/// the stack whose logarithms are taken in one pass.
+const BATCH: usize = 128;
+
+/// [`js_merge`] on given logarithms, bit for bit (the same mixture, terms and
+/// compensated sum in the same order): the merge fills a batch of mixture
+/// values, their logarithms are taken in one pass ([`crate::dispatch::ln_into`],
+/// vectorised: [`ln`] has no branches), then the terms are summed in order.
+/// An index present in one row only reads `p = 0` for the other, whose
+/// term is then 0, as [`js_merge`]'s absent term is.
+fn js_merge_batched<T: Real>(weights: (T, T), a: (&[u32], &[T], &[f64]), b: (&[u32], &[T], &[f64]), base: Base) -> T {
+    let (wa, wb) = (weights.0.to_f64(), weights.1.to_f64());
+    let (na, nb) = (a.0.len(), b.0.len());
+    let (mut i, mut j) = (0, 0);
+    let mut acc = Neumaier::new();
+    let mut m = [0.0f64; BATCH];
+    let mut lm = [0.0f64; BATCH];
+    let mut pa = [0.0f64; BATCH];
+    let mut pb = [0.0f64; BATCH];
+    let mut lpa = [0.0f64; BATCH];
+    let mut lpb = [0.0f64; BATCH];
+    while i < na || j < nb {
+        let mut n = 0;
+        while n < BATCH && (i < na || j < nb) {
+            let ia = if i < na { a.0[i] } else { u32::MAX };
+            let ib = if j < nb { b.0[j] } else { u32::MAX };
+            // `js_merge`'s choice: the smaller index, both when equal; an
+            // exhausted row is never taken.
+            let take_a = i < na && (ia <= ib || j >= nb);
+            let take_b = j < nb && (ib <= ia || i >= na);
+            (pa[n], lpa[n]) = if take_a { (a.1[i].to_f64(), a.2[i]) } else { (0.0, 0.0) };
+            (pb[n], lpb[n]) = if take_b { (b.1[j].to_f64(), b.2[j]) } else { (0.0, 0.0) };
+            i += usize::from(take_a);
+            j += usize::from(take_b);
+            m[n] = wa * pa[n] + wb * pb[n];
+            n += 1;
+        }
+        crate::dispatch::ln_into(&m[..n], &mut lm[..n]);
+        for k in 0..n {
+            acc.add(js_term(wa, pa[k], lpa[k], lm[k]) + js_term(wb, pb[k], lpb[k], lm[k]));
+        }
     }
     let d = acc.value();
     T::from_f64(if d < 0.0 { 0.0 } else { d * base.per_nat() })

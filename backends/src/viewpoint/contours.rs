@@ -292,22 +292,19 @@ impl Contours {
             d.abs() > tol && d * eye_side < 0.0
         };
         let r = self.tile_range(&proj);
+        // The tiles of one row of the range are consecutive in `members`
+        // (tile order): one slice, the members in the same order as tile
+        // by tile.
         for y in r[2]..=r[3] {
             let row = y * self.tiles;
             let (first, last) = (self.starts[row + r[0]] as usize, self.starts[row + r[1] + 1] as usize);
-            if first == last {
-                continue;
-            }
-            for x in r[0]..=r[1] {
-                let k = row + x;
-                for (s, i) in &self.members[self.starts[k] as usize..self.starts[k + 1] as usize] {
-                    if outside(s) || !crosses_interior(&proj, sign, *s) {
-                        continue;
-                    }
-                    let e = &self.ends[*i as usize];
-                    if !(behind(e[0]) && behind(e[1])) {
-                        return true;
-                    }
+            for (s, i) in &self.members[first..last] {
+                if outside(s) || !crosses_interior(&proj, sign, *s) {
+                    continue;
+                }
+                let e = &self.ends[*i as usize];
+                if !(behind(e[0]) && behind(e[1])) {
+                    return true;
                 }
             }
         }

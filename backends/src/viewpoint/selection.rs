@@ -7,7 +7,7 @@
 //! greedy selection and the exploration path add, at each step, the view that
 //! brings `I(v̂;O)` lowest.
 
-use itgfx_core::{Base, Error, kl_nats_of_sums, kl_term, ln};
+use itgfx_core::{Base, Error, kl_nats_of_sums, kl_term, kl_terms_into, ln};
 use rayon::prelude::*;
 
 use super::{ViewpointAnalysis, ViewpointMeasures};
@@ -31,18 +31,30 @@ impl<'a> Merged<'a> {
         Self { an, m: vec![0.0; an.outputs()], terms: vec![0.0; an.outputs()], w: 0.0, a: 0.0 }
     }
 
-    /// `I(v̂;O)` in nats of the merged view with row `x` added.
+    /// `I(v̂;O)` in nats of the merged view with row `x` added. The row is
+    /// read in batches whose KL terms are taken in one vectorised pass
+    /// ([`kl_terms_into`], [`itgfx_core::kl_term`]'s bits); every sum runs
+    /// in row order.
     fn kl_with(&self, x: usize) -> f64 {
+        const BATCH: usize = 256;
         let (cols, p) = self.an.row(x);
         let pv = self.an.p_v[x];
         let w2 = self.w + pv;
         let (mut a_out, mut m_out, mut inside) = (self.a, self.w, 0.0);
-        for (&o, &q) in cols.iter().zip(p) {
-            let (mo, po) = (self.m[o as usize], self.an.p_o[o as usize]);
-            a_out -= self.terms[o as usize];
-            m_out -= mo;
-            let mn = (mo + pv * q) / w2;
-            inside += kl_term(mn, po);
+        let (mut mn, mut po, mut t) = ([0.0; BATCH], [0.0; BATCH], [0.0; BATCH]);
+        for (cols, p) in cols.chunks(BATCH).zip(p.chunks(BATCH)) {
+            let n = cols.len();
+            for (k, (&o, &q)) in cols.iter().zip(p).enumerate() {
+                let mo = self.m[o as usize];
+                po[k] = self.an.p_o[o as usize];
+                a_out -= self.terms[o as usize];
+                m_out -= mo;
+                mn[k] = (mo + pv * q) / w2;
+            }
+            kl_terms_into(&mn[..n], &po[..n], &mut t[..n]);
+            for &t in &t[..n] {
+                inside += t;
+            }
         }
         ((a_out - m_out * ln(w2)) / w2 + inside).max(0.0)
     }
@@ -56,9 +68,11 @@ impl<'a> Merged<'a> {
         self.w += pv;
         // Recomputed in full: no drift from incremental updates (each term
         // alone, so on every thread; the sum below stays in order).
-        self.terms.par_iter_mut().zip(&self.m).zip(&self.an.p_o).with_min_len(4096).for_each(|((t, &m), &q)| {
-            *t = kl_term(m, q);
-        });
+        self.terms.par_chunks_mut(4096).zip(self.m.par_chunks(4096)).zip(self.an.p_o.par_chunks(4096)).for_each(
+            |((t, m), q)| {
+                kl_terms_into(m, q, t);
+            },
+        );
         self.a = self.terms.iter().sum();
     }
 
@@ -121,9 +135,12 @@ pub fn best_views(
     while let Some(s) = next {
         merged.add(s);
         chosen[s] = true;
+        // A chosen row (`s` too, now) is its own nearest at 0, which no
+        // dissimilarity undercuts: its divergence to `s` is not needed.
         let d: Vec<f64> = (0..n)
             .into_par_iter()
             .map(|x| match logs {
+                _ if chosen[x] => Ok(f64::INFINITY),
                 Some(l) => an.dissimilarity_logs(x, s, l, Base::Nats),
                 None => an.dissimilarity(x, s, Base::Nats),
             })

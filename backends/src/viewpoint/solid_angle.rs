@@ -361,8 +361,8 @@ impl View {
 
     /// (Re)samples every boundary triangle at the current `m`.
     fn sample(&mut self, tracer: &dyn Tracer, tris: &[[DVec3; 3]]) -> Result<(), BackendError> {
-        let mut lines = Vec::new();
-        let mut weights = Vec::new();
+        let points = self.sampled.len() * (self.m * self.m) as usize;
+        let (mut lines, mut weights) = (Vec::with_capacity(points), Vec::with_capacity(points));
         for s in &self.sampled {
             let v = &tris[s.tri as usize];
             let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();

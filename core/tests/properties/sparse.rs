@@ -117,6 +117,29 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// Rows of hundreds of entries (a viewpoint's `p(O|v)`), so that the
+    /// merge with logarithms runs over several of its batches (128 merged
+    /// indices each), with indices in one row only and both: the batched
+    /// merge and the scalar one agree to the bit.
+    #[test]
+    fn long_sparse_js_with_logs_is_bit_identical((a, b) in pmf_pair_len(300..=700), w in 0.0f64..=1.0) {
+        let n = a.len();
+        let (_, ia, va) = compress(&a, n);
+        let (_, ib, vb) = compress(&b, n);
+        let (mut la, mut lb) = (vec![0.0; va.len()], vec![0.0; vb.len()]);
+        sparse_logs(&va, &mut la);
+        sparse_logs(&vb, &mut lb);
+        for w in [w, 0.0, 1.0] {
+            let s = jensen_shannon_sparse((w, 1.0 - w), (&ia, &va), (&ib, &vb), Base::Nats).unwrap();
+            let l = jensen_shannon_sparse_logs((w, 1.0 - w), (&ia, &va, &la), (&ib, &vb, &lb), Base::Nats).unwrap();
+            prop_assert_eq!(s.to_bits(), l.to_bits());
+        }
+    }
+}
+
 #[test]
 fn bad_structure_is_refused() {
     let input = [0.5, 0.5];

@@ -27,6 +27,11 @@ pub fn pmf_pair(max: usize) -> impl Strategy<Value = (Vec<f64>, Vec<f64>)> {
     (2..=max).prop_flat_map(|n| (weights(n).prop_map(normalize), weights(n).prop_map(normalize)))
 }
 
+/// Two distributions of one length drawn from `len`.
+pub fn pmf_pair_len(len: std::ops::RangeInclusive<usize>) -> impl Strategy<Value = (Vec<f64>, Vec<f64>)> {
+    len.prop_flat_map(|n| (weights(n).prop_map(normalize), weights(n).prop_map(normalize)))
+}
+
 /// Strictly positive distribution pairs (no infinities), length `2..=max`.
 pub fn positive_pair(max: usize) -> impl Strategy<Value = (Vec<f64>, Vec<f64>)> {
     (2..=max).prop_flat_map(|n| {

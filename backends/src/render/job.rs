@@ -36,11 +36,18 @@ const TREE_NODES: u64 = 85;
 /// Simmons' colour weight of the priority `p_v` (Part IV eq. (4)), unless δ is given.
 const SIMMONS_DELTA: f64 = 0.9;
 
-/// Bytes of the image a pixel holds at the peak (see [`Settings::memory`]).
-const PIXEL_BYTES: u64 = 120;
-/// More for `adaptive`: each pixel's pilot sums, weight and share.
+/// Bytes a pixel holds at the peak, a bound on the measured: the frame
+/// (radiance, variance, counts: 56 B), the rows' values before they are
+/// gathered into it (64 B), the EXR's and PNG's copies, and what the
+/// allocator keeps of the freed ones. Peak resident memory less an 8×8
+/// run's, `cornell-box --spp 1 --threads 2`: 117 B a pixel at 1024², 181 B
+/// at 1448² and 160 B at 2048² (docs/RENDER.md); 224 bounds them by 24%.
+const PIXEL_BYTES: u64 = 224;
+/// More for `adaptive`, which keeps each pixel's pilot sums, weight and
+/// share: measured 190 B a pixel in all at 1024², 162 B at 2048² (`--spp 8`).
 const ADAPTIVE_PIXEL_BYTES: u64 = 80;
-/// Bytes per sample of the row a worker renders at once.
+/// Bytes per sample of the row a worker renders at once (the samples'
+/// radiance and the paths' starts): measured 36 B (`--size 2048x2 --spp 4096`).
 const SAMPLE_BYTES: u64 = 48;
 
 /// What one render is asked to do: the sampler (by name and its
@@ -152,12 +159,10 @@ impl Settings {
     }
 
     /// A bound on the memory the run holds at its peak, beyond the program
-    /// and the scene, on `workers` threads: 120 bytes a pixel (radiance,
-    /// counts and variance in the frame, display values, the PNG; 200 for
-    /// `adaptive`, which keeps each pixel's pilot sums, weight and share),
-    /// and 48 bytes a sample of the row each worker holds at once
-    /// ([`Settings::samples_held`]: the samples' radiance and the paths'
-    /// starts). Measured against the peak resident memory in docs/RENDER.md.
+    /// and the scene, on `workers` threads: 224 bytes a pixel (304 for
+    /// `adaptive`) and 48 bytes a sample of the row each worker holds at
+    /// once ([`Settings::samples_held`]), each a bound on the peak resident
+    /// memory measured at two sizes (see the constants).
     #[must_use]
     pub fn memory(&self, workers: usize) -> u64 {
         let (w, h) = (u64::from(self.size.0), u64::from(self.size.1));
@@ -308,5 +313,56 @@ impl RenderJob<'_> {
             )
         });
         Ok(Outcome { rendered, sampling, camera, backend, priority, shard, seconds })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn settings(sampler: &str, spp: u32) -> Settings {
+        Settings {
+            sampler: sampler.into(),
+            spp,
+            max_spp: None,
+            threshold: None,
+            tutorial_form: false,
+            delta: None,
+            binary_contrast: false,
+            node_samples: None,
+            maps: false,
+            size: (1024, 512),
+            seed: 1,
+            camera: None,
+            shard: None,
+            time_budget: None,
+        }
+    }
+
+    #[test]
+    fn the_sampler_is_chosen_by_name_with_its_cap() {
+        assert_eq!(settings("uniform", 64).sampling(), Sampling::Uniform(64));
+        let Sampling::Adaptive { max, unbiased, threshold: None, .. } = settings("kl", 64).sampling() else {
+            panic!("kl is a batch criterion")
+        };
+        assert_eq!((max, unbiased), (1024, true));
+        assert_eq!(settings("adaptive", 8192).sampling(), Sampling::Neighbours(AdaptiveSampling { spp: 8192, max: MAX_SPP }));
+        let Sampling::Supersample(es) = settings("es", 16).sampling() else { panic!("es supersamples") };
+        assert_eq!((es.max, es.oracle.delta), (256, 1.0));
+        let Sampling::Tree { node_samples, .. } = settings("ec", 16).sampling() else { panic!("ec is a tree") };
+        assert_eq!(node_samples, tree::NODE_SAMPLES);
+    }
+
+    #[test]
+    fn the_estimate_counts_every_pixel_and_each_worker_s_row_of_samples() {
+        let (w, h) = (1024, 512);
+        assert_eq!(settings("uniform", 4).memory(2), w * h * 224 + 2 * w * 4 * 48);
+        assert_eq!(settings("adaptive", 8).memory(2), w * h * 304 + 2 * w * 128 * 48);
+        assert_eq!(settings("ec", 16).memory(1), w * h * 224 + w * 85 * u64::from(tree::NODE_SAMPLES) * 48);
+        // No more rows at once than the image has.
+        let thin = Settings { size: (1024, 1), ..settings("uniform", 4) };
+        assert_eq!(thin.memory(16), thin.memory(1));
+        let st = Settings { shard: Some(Place { index: 1, count: 2 }), ..settings("uniform", 4) };
+        assert_eq!(st.rows(), Some((256, 512)));
     }
 }

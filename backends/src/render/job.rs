@@ -346,7 +346,10 @@ mod tests {
             panic!("kl is a batch criterion")
         };
         assert_eq!((max, unbiased), (1024, true));
-        assert_eq!(settings("adaptive", 8192).sampling(), Sampling::Neighbours(AdaptiveSampling { spp: 8192, max: MAX_SPP }));
+        assert_eq!(
+            settings("adaptive", 8192).sampling(),
+            Sampling::Neighbours(AdaptiveSampling { spp: 8192, max: MAX_SPP })
+        );
         let Sampling::Supersample(es) = settings("es", 16).sampling() else { panic!("es supersamples") };
         assert_eq!((es.max, es.oracle.delta), (256, 1.0));
         let Sampling::Tree { node_samples, .. } = settings("ec", 16).sampling() else { panic!("ec is a tree") };

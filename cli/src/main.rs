@@ -51,8 +51,8 @@ fn run(cli: Cli) -> Result<String, CliError> {
         Command::Register(o) => Ok(render(&register::run_register(&o)?, o.common.json)),
         Command::Segment(o) => Ok(render(&segment::run_segment(&o)?, o.common.json)),
         Command::Render(o) => {
-            threads(o.tracing.threads)?;
-            Ok(render(&itgfx_cli::render::run(&o)?, o.common.json))
+            threads(o.run.tracing.threads)?;
+            Ok(render(&itgfx_cli::render::run(&o)?, o.run.common.json))
         }
         Command::Compare(o) => Ok(render(&itgfx_cli::render::run_compare(&o)?, o.common.json)),
         Command::Shapes(o) => {

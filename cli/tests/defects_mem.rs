@@ -6,7 +6,7 @@ mod common;
 use std::collections::HashMap;
 use std::path::Path;
 
-use common::{fails, itgfx, json, s, temp};
+use common::{fails, itgfx, json, refused_for_memory, s, temp, under_ulimit};
 
 /// Edges of an OBJ's faces (fan-triangulated) with one face: cracks.
 fn boundary_edges(path: &Path) -> usize {
@@ -116,28 +116,6 @@ fn infinite_or_absurd_emission_is_refused_naming_file_line_and_material() {
         assert!(f32::from_le_bytes(w.try_into().unwrap()).is_finite());
     }
     let _ = std::fs::remove_dir_all(&d);
-}
-
-/// Runs `itgfx args` under `ulimit -v kib` (address space, KiB), on two
-/// worker threads whatever the machine (each thread maps a stack and a
-/// 64 MiB allocator arena, so the limits below hold for two).
-fn under_ulimit(kib: u64, args: &[&str]) -> std::process::Output {
-    let mut cmd = std::process::Command::new("sh");
-    cmd.env("RAYON_NUM_THREADS", "2");
-    cmd.arg("-c").arg(format!("ulimit -v {kib} && exec \"$0\" \"$@\"")).arg(env!("CARGO_BIN_EXE_itgfx")).args(args);
-    cmd.output().expect("run sh")
-}
-
-/// A refusal for memory: exit 2, one line; `(needed MiB, budget MiB)`.
-fn refused_for_memory(out: &std::process::Output, what: &str) -> (u64, u64) {
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{what}: {err}");
-    assert_eq!(err.trim_end().lines().count(), 1, "{what}: one line: {err}");
-    let number = |after: &str| -> u64 {
-        let rest = &err[err.find(after).unwrap_or_else(|| panic!("{what}: {err:?} lacks {after:?}")) + after.len()..];
-        rest.split_whitespace().next().unwrap().parse().unwrap()
-    };
-    (number("needs about "), number(" leaves "))
 }
 
 #[test]

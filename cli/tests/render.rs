@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{fails, itgfx, json, s};
+use common::{fails, itgfx, json, refused_for_memory, s, under_ulimit};
 
 fn temp(name: &str) -> PathBuf {
     common::temp("render", name)
@@ -271,7 +271,7 @@ fn bad_input_is_one_line_exit_2() {
     fails(&["render", "sphere", "--out", o, "--size", "8x8"], "analytic sphere");
     fails(&["render", "cornell-box", "--out", o, "--size", "0x8"], "--size");
     fails(&["render", "cornell-box", "--out", o, "--size", "8"], "--size");
-    fails(&["render", "cornell-box", "--out", o, "--size", "8192x8192", "--spp", "65536"], "GiB");
+    fails(&["render", "cornell-box", "--out", o, "--size", "8192x8192", "--spp", "65536"], "needs about");
     fails(&["render", "cornell-box", "--out", o, "--spp", "0"], "--spp");
     fails(&["render", "cornell-box", "--out", o, "--camera", "0,0,0,0,0,0,0,1,0,40"], "--camera");
     fails(&["render", "cornell-box", "--out", o, "--camera", "1,2,3"], "--camera");
@@ -336,4 +336,24 @@ fn vulkan_renders_the_cpu_image_where_a_device_exists() {
         assert_eq!(run("vulkan", scene, sampler, spp), run("cpu", scene, sampler, spp), "{sampler}: EXRs differ");
     }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_render_over_the_memory_budget_is_refused_before_any_work() {
+    // 4096 x 4096 pixels: about 3.5 GiB by the estimate (224 bytes a
+    // pixel, render::job::Settings::memory), against the 2 GiB of address
+    // space left to the process: refused at once with the real budget (the
+    // fixed 4 GiB ceiling of before let it start and abort).
+    let o = temp("memory").join("o");
+    let t = std::time::Instant::now();
+    let args = ["render", "cornell-box", "--size", "4096x4096", "--spp", "1", "--out", s(&o)];
+    let out = under_ulimit(2 << 20, &args);
+    let (need, left) = refused_for_memory(&out, "render");
+    assert!(need >= 3 << 10 && left < 2 << 10, "{need} MiB against {left} MiB");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("ulimit -v") && err.contains("lower --size"), "{err}");
+    assert!(t.elapsed().as_secs() < 20, "refused before tracing");
+    assert!(!o.exists(), "nothing made");
+    // Far past any machine's memory (60 GiB): refused alike, without a limit.
+    fails(&["render", "cornell-box", "--out", s(&o), "--size", "8192x8192", "--spp", "65536"], "lower --size");
 }

@@ -82,6 +82,27 @@ impl Tracer for Counting<'_> {
     }
 }
 
+/// What a reference traces: the scene's pixels of `view` (seen with
+/// `camera`), `walks` walks each, from `seed` (one settings struct, not
+/// seven parameters).
+#[derive(Clone, Copy)]
+pub struct ReferenceJob<'a> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// Its prepared geometry.
+    pub prepared: &'a Prepared,
+    /// The tracing backend.
+    pub tracer: &'a dyn Tracer,
+    /// What each pixel sees.
+    pub view: &'a View,
+    /// The camera of `view`, in scene units.
+    pub camera: &'a Camera,
+    /// Walks a pixel.
+    pub walks: u32,
+    /// Seed of every walk.
+    pub seed: u64,
+}
+
 /// Path-traces `walks` walks from every pixel of `view` (seen with
 /// `camera`), reporting `(walks done, walks)`. Walk `w` of pixel `p` draws
 /// from the stream `(seed, p · walks + w)` only and the sums are made in
@@ -89,17 +110,8 @@ impl Tracer for Counting<'_> {
 ///
 /// # Errors
 /// Tracing errors; a scene the renderer cannot shade (no light).
-#[allow(clippy::too_many_arguments)]
-pub fn path_traced(
-    scene: &Scene,
-    prepared: &Prepared,
-    tracer: &dyn Tracer,
-    view: &View,
-    camera: &Camera,
-    walks: u32,
-    seed: u64,
-    progress: &mut dyn FnMut(u64, u64),
-) -> Result<Reference, RenderError> {
+pub fn path_traced(job: &ReferenceJob, progress: &mut dyn FnMut(u64, u64)) -> Result<Reference, RenderError> {
+    let ReferenceJob { scene, prepared, tracer, view, camera, walks, seed } = *job;
     let n = view.sights.len();
     let shading = Shading::new(scene, prepared)?;
     let counting = Counting { inner: tracer, lines: AtomicU64::new(0) };
@@ -190,7 +202,9 @@ mod tests {
         let h = Hierarchy::new(&scene);
         let camera = Camera::look_at(DVec3::new(0.5, 0.5, 0.1), DVec3::new(0.5, 0.5, 1.0), DVec3::Y, 60.0).unwrap();
         let v = view(&scene, &p, &t, &h, &camera, (8, 8)).unwrap();
-        let r = path_traced(&scene, &p, &t, &v, &camera, 256, 7, &mut |_, _| {}).unwrap();
+        let job =
+            ReferenceJob { scene: &scene, prepared: &p, tracer: &t, view: &v, camera: &camera, walks: 256, seed: 7 };
+        let r = path_traced(&job, &mut |_, _| {}).unwrap();
         assert!(r.rays > 64 * 256, "every walk traced: {} rays", r.rays);
         let (mut sum, mut n) = (0.0, 0.0);
         for (m, se) in r.mean.iter().zip(&r.stderr) {
@@ -201,7 +215,7 @@ mod tests {
         }
         assert!((sum / n - 2.0).abs() < 0.02, "mean {}", sum / n);
         // The same seed gives the same picture.
-        let again = path_traced(&scene, &p, &t, &v, &camera, 256, 7, &mut |_, _| {}).unwrap();
+        let again = path_traced(&job, &mut |_, _| {}).unwrap();
         assert_eq!(again.mean, r.mean);
     }
 }

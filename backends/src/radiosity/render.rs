@@ -12,7 +12,7 @@ use super::element::{ElementId, Hierarchy};
 use crate::backend::BackendError;
 use crate::camera::Camera;
 use crate::lines::Line;
-use crate::scene::Scene;
+use crate::scene::{BuiltIn, Scene, scene_camera};
 use crate::tracer::{Hit, Prepared, Tracer};
 
 /// The surface point a pixel sees.
@@ -41,22 +41,16 @@ pub struct View {
     pub sights: Vec<Option<Sight>>,
 }
 
-/// The camera pictures use: the Cornell box's published camera (eye
-/// (278, 273, −800) looking down +z, 39.3°; its closed front wall faces away
-/// and is looked through), a corner of `chairs-room` seen from inside,
-/// otherwise a view from a corner of the bounding box's front-right-top,
-/// framing the scene. Subdivided scenes keep their built-in's camera.
+/// The camera pictures use: the scene's own view ([`scene_camera`] with
+/// [`BuiltIn::radiosity_camera`]: a file's camera, else the registry
+/// entry's: the Cornell box's published camera outside its front wall,
+/// the views of `render` for the other built-ins that have one), otherwise
+/// a view from a corner of the bounding box's front-right-top framing the
+/// scene (wider than `render`'s, since the pictures may look through the
+/// walls that face away). Subdivided scenes keep their built-in's camera.
 #[must_use]
 pub fn default_camera(scene: &Scene) -> Camera {
-    if scene.base_name() == "cornell-box" {
-        let d = DVec3::new;
-        if let Ok(c) = Camera::look_at(d(278.0, 273.0, -800.0), d(278.0, 273.0, 0.0), DVec3::Y, 39.3) {
-            return c;
-        }
-    }
-    if scene.base_name() == "chairs-room"
-        && let Ok(c) = Camera::look_at(DVec3::new(2.3, 1.8, 2.3), DVec3::new(0.0, 0.45, 0.0), DVec3::Y, 55.0)
-    {
+    if let Some(c) = scene_camera(scene, BuiltIn::radiosity_camera) {
         return c;
     }
     let (lo, hi) = scene.bounds();

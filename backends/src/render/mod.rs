@@ -14,6 +14,9 @@
 //! * [`frame`]: the image plane and the film: stratified batches per
 //!   pixel, the frame their values land in, passes pooled; the same image
 //!   for any thread count.
+//! * [`job`]: a render as one job, [`RenderJob`]: its [`job::Settings`]
+//!   (built once from the arguments: the sampler by name, the memory
+//!   estimate against the budget, a shard's rows and file), then the run.
 //! * [`lights`]: area lights and materials; [`views`]: default cameras and
 //!   the camera-inside-an-object check; [`room`]: the `mirror-room` scene;
 //!   [`open`]: the open scenes `open-blocks` and `open-sphere`.
@@ -26,6 +29,7 @@ pub mod batch;
 pub mod criteria;
 pub mod first_hit;
 pub mod frame;
+pub mod job;
 pub mod lights;
 pub mod open;
 pub mod path;
@@ -47,6 +51,7 @@ pub use batch::{Batches, Policy, Uniform};
 pub use criteria::{Adaptive, Criterion};
 pub use first_hit::{Priority, PriorityMap};
 pub use frame::{Frame, View};
+pub use job::{JobError, Outcome, RenderJob};
 pub use lights::{Lights, Surfaces};
 pub use path::PathTracer;
 pub use sampler::PixelSampler;

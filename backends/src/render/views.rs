@@ -5,31 +5,24 @@ use glam::DVec3;
 
 use crate::camera::Camera;
 use crate::lines::Line;
-use crate::scene::Scene;
+use crate::scene::{Scene, scene_camera};
 use crate::tracer::{BackendError, Prepared, Tracer};
 
 /// Probe rays cast from the eye by [`eye_place`].
 const PROBES: u32 = 64;
 
-/// The default camera of a scene, in scene units: a built-in's own view from
-/// its registry entry ([`BuiltIn::camera`](crate::scene::BuiltIn::camera)),
-/// else a view from outside framing the bounding box.
+/// The default camera of a scene, in scene units: its own view
+/// ([`scene_camera`]: the file's camera, else its registry entry's
+/// [`BuiltIn::camera`](crate::scene::BuiltIn::camera)), else a view from
+/// outside framing the bounding box.
 #[must_use]
 pub fn default_camera(scene: &Scene) -> Camera {
-    if let Some(c) = scene.camera {
-        return c;
-    }
-    let d = DVec3::new;
-    // The registry entry of the scene before any --subdivide suffix.
-    let (eye, target, fov) = match crate::scene::BuiltIn::of(scene.base_name()).and_then(|b| b.camera) {
-        Some(c) => (DVec3::from_array(c.eye), DVec3::from_array(c.target), c.fov_deg),
-        None => {
-            let (lo, hi) = scene.bounds();
-            let (c, r) = ((lo + hi) * 0.5, ((hi - lo) * 0.5).length().max(f64::MIN_POSITIVE));
-            (c + d(0.35, 0.45, 2.6).normalize() * (2.8 * r), c, 45.0)
-        }
-    };
-    Camera::look_at(eye, target, DVec3::Y, fov).expect("built-in cameras are valid")
+    scene_camera(scene, |b| b.camera).unwrap_or_else(|| {
+        let (lo, hi) = scene.bounds();
+        let (c, r) = ((lo + hi) * 0.5, ((hi - lo) * 0.5).length().max(f64::MIN_POSITIVE));
+        let eye = c + DVec3::new(0.35, 0.45, 2.6).normalize() * (2.8 * r);
+        Camera::look_at(eye, c, DVec3::Y, 45.0).expect("a view from outside a validated scene's box is valid")
+    })
 }
 
 /// Where a camera's eye is, as 64 probe rays spread over the sphere see it.

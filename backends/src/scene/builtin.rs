@@ -7,6 +7,7 @@ use std::ops::RangeInclusive;
 use glam::DVec3;
 
 use super::{Limits, Material, Scene, SceneError, SphereCells, sphere_patches};
+use crate::camera::Camera;
 
 /// One built-in scene.
 pub struct BuiltIn {
@@ -16,8 +17,15 @@ pub struct BuiltIn {
     pub syntax: &'static str,
     /// One-line description with parameter ranges and defaults.
     pub description: &'static str,
-    /// The default camera for rendering (scene units), if the scene has its own view.
+    /// The scene's own view (scene units), if it has one: the default
+    /// camera of `render` and of `radiosity`'s pictures.
     pub camera: Option<DefaultCamera>,
+    /// `radiosity`'s pictures' camera where it is not [`BuiltIn::camera`]:
+    /// those pictures see the first surface that faces the eye and look
+    /// through back faces, so they can stand outside a closed scene and
+    /// look through its wall, which the path tracer cannot (it refuses an
+    /// eye that sees the scene's walls from behind). `None`: `camera`.
+    pub picture_camera: Option<DefaultCamera>,
     build: fn(&Args) -> Result<Scene, SceneError>,
 }
 
@@ -32,7 +40,34 @@ pub struct DefaultCamera {
     pub fov_deg: f64,
 }
 
+impl DefaultCamera {
+    /// The camera, up +y.
+    ///
+    /// # Panics
+    /// Never for the registry's cameras (a test builds every one).
+    #[must_use]
+    pub fn camera(&self) -> Camera {
+        let d = DVec3::from_array;
+        Camera::look_at(d(self.eye), d(self.target), DVec3::Y, self.fov_deg).expect("the registry's cameras are valid")
+    }
+}
+
+/// A scene's own view: the camera its file gives (glTF, Mitsuba 3), else
+/// `pick` of its built-in's registry entry (the entry of
+/// [`Scene::base_name`], so a subdivided scene keeps its view); `None` when
+/// it has neither.
+#[must_use]
+pub fn scene_camera(scene: &Scene, pick: fn(&BuiltIn) -> Option<DefaultCamera>) -> Option<Camera> {
+    scene.camera.or_else(|| BuiltIn::of(scene.base_name()).and_then(pick).map(|c| c.camera()))
+}
+
 impl BuiltIn {
+    /// The camera of `radiosity`'s pictures: [`BuiltIn::picture_camera`], else [`BuiltIn::camera`].
+    #[must_use]
+    pub fn radiosity_camera(&self) -> Option<DefaultCamera> {
+        self.picture_camera.or(self.camera)
+    }
+
     /// The registry entry of a scene spec (`"mirror-room:3"` → `mirror-room`), if it is a built-in
     /// (give [`Scene::base_name`] for a subdivided scene).
     #[must_use]
@@ -49,6 +84,7 @@ pub const BUILT_IN: &[BuiltIn] = &[
         syntax: "cube-enclosure[:N]",
         description: "inside of the unit cube, each face split into N x N squares, N in 1..=1000 (default 10; Part III Fig. 13)",
         camera: None,
+        picture_camera: None,
         build: cube_enclosure,
     },
     BuiltIn {
@@ -56,6 +92,7 @@ pub const BUILT_IN: &[BuiltIn] = &[
         syntax: "tetrahedron",
         description: "regular tetrahedron seen from inside, one patch per face (Table 4)",
         camera: None,
+        picture_camera: None,
         build: solid,
     },
     BuiltIn {
@@ -63,6 +100,7 @@ pub const BUILT_IN: &[BuiltIn] = &[
         syntax: "cube",
         description: "cube seen from inside, one patch per face (Table 4)",
         camera: None,
+        picture_camera: None,
         build: solid,
     },
     BuiltIn {
@@ -70,6 +108,7 @@ pub const BUILT_IN: &[BuiltIn] = &[
         syntax: "octahedron",
         description: "regular octahedron seen from inside, one patch per face (Table 4)",
         camera: None,
+        picture_camera: None,
         build: solid,
     },
     BuiltIn {
@@ -77,6 +116,7 @@ pub const BUILT_IN: &[BuiltIn] = &[
         syntax: "dodecahedron",
         description: "regular dodecahedron seen from inside, one patch per face (Table 4)",
         camera: None,
+        picture_camera: None,
         build: solid,
     },
     BuiltIn {
@@ -84,6 +124,7 @@ pub const BUILT_IN: &[BuiltIn] = &[
         syntax: "icosahedron",
         description: "regular icosahedron seen from inside, one patch per face (Table 4)",
         camera: None,
+        picture_camera: None,
         build: solid,
     },
     BuiltIn {
@@ -91,6 +132,7 @@ pub const BUILT_IN: &[BuiltIn] = &[
         syntax: "sphere[:B,S]",
         description: "exact sphere seen from inside, B z-bands x S sectors of equal area, B and S in 1..=4096 (default 8,16)",
         camera: None,
+        picture_camera: None,
         build: sphere,
     },
     BuiltIn {
@@ -99,6 +141,8 @@ pub const BUILT_IN: &[BuiltIn] = &[
         description: "closed Cornell box from the published measurements: 5 walls, front closed, light, two blocks (after Fig. 20a)",
         // Just inside the closed front wall.
         camera: Some(DefaultCamera { eye: [278.0, 273.0, 15.0], target: [278.0, 273.0, 559.2], fov_deg: 54.0 }),
+        // The published camera (Fig. 20a): outside, looking through the closed front wall.
+        picture_camera: Some(DefaultCamera { eye: [278.0, 273.0, -800.0], target: [278.0, 273.0, 0.0], fov_deg: 39.3 }),
         build: cornell_box,
     },
     BuiltIn {
@@ -106,6 +150,7 @@ pub const BUILT_IN: &[BuiltIn] = &[
         syntax: "geosphere[:L]",
         description: "unit geodesic sphere seen from outside, 20*4^(L-1) triangles, L in 1..=9 (default 2: 80)",
         camera: None,
+        picture_camera: None,
         build: geosphere,
     },
     BuiltIn {
@@ -113,6 +158,7 @@ pub const BUILT_IN: &[BuiltIn] = &[
         syntax: "torus[:U,V]",
         description: "ring torus (radii 1 and 0.4) seen from outside, U x V quads, U and V in 3..=4096 (default 48,24)",
         camera: None,
+        picture_camera: None,
         build: torus,
     },
     BuiltIn {
@@ -120,6 +166,7 @@ pub const BUILT_IN: &[BuiltIn] = &[
         syntax: "table-chairs[:N]",
         description: "a table with four chairs, 29 boxes seen from outside, faces split N x N, N in 1..=256 (default 2)",
         camera: None,
+        picture_camera: None,
         build: table_chairs,
     },
     BuiltIn {
@@ -127,6 +174,7 @@ pub const BUILT_IN: &[BuiltIn] = &[
         syntax: "cubes-room[:K][:clustered|random][:SEED]",
         description: "cube enclosure 10x10 per face with K cubes of side 0.05, random (K in 1..=1000, default) or clustered (K in 1..=2197); default K = 27, SEED = 1 (Figs. 11, 15, 16)",
         camera: None,
+        picture_camera: None,
         build: cubes_room,
     },
     BuiltIn {
@@ -135,6 +183,7 @@ pub const BUILT_IN: &[BuiltIn] = &[
         description: "closed 4x3x5 room with a ceiling area light, a mirrored pyramid, a mirrored sphere (geodesic, level L in 1..=6, default 5: 5,120 triangles) and two diffuse blocks (after Part IV Figs. 7, 11)",
         // From the front wall.
         camera: Some(DefaultCamera { eye: [2.0, 1.45, 0.25], target: [2.0, 1.05, 5.0], fov_deg: 62.0 }),
+        picture_camera: None,
         build: mirror_room,
     },
     BuiltIn {
@@ -142,6 +191,7 @@ pub const BUILT_IN: &[BuiltIn] = &[
         syntax: "open-blocks",
         description: "three diffuse blocks on a 4 x 4 floor under a small 0.5 x 0.5 area light, open to a black background (adaptive sampling's open scene)",
         camera: Some(DefaultCamera { eye: [0.0, 2.3, 4.2], target: [0.0, 0.3, 0.0], fov_deg: 40.0 }),
+        picture_camera: None,
         build: open_blocks,
     },
     BuiltIn {
@@ -149,13 +199,16 @@ pub const BUILT_IN: &[BuiltIn] = &[
         syntax: "open-sphere[:L]",
         description: "a diffuse geodesic sphere (level L in 1..=6, default 4: 1,280 triangles) and a cube on a 4 x 4 floor under a small area light, open to a black background",
         camera: Some(DefaultCamera { eye: [0.0, 2.3, 4.2], target: [0.0, 0.3, 0.0], fov_deg: 40.0 }),
+        picture_camera: None,
         build: open_sphere,
     },
     BuiltIn {
         name: "chairs-room",
         syntax: "chairs-room",
         description: "the table with four chairs (wood) in a 5 x 2.6 x 5 m white room lit by a 1 x 1 m ceiling light (after Part III Fig. 18a; radiosity test scene)",
-        camera: None,
+        // A corner of the room, inside, looking down at the table.
+        camera: Some(DefaultCamera { eye: [2.3, 1.8, 2.3], target: [0.0, 0.45, 0.0], fov_deg: 55.0 }),
+        picture_camera: None,
         build: chairs_room,
     },
 ];
@@ -360,4 +413,31 @@ fn chairs_room(a: &Args) -> Result<Scene, SceneError> {
         [DVec3::new(-0.5, y, -0.5), DVec3::new(0.5, y, -0.5), DVec3::new(0.5, y, 0.5), DVec3::new(-0.5, y, 0.5)];
     s.add_polygon("light", &light, 2);
     Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_registry_camera_is_valid_and_subdivided_scenes_keep_theirs() {
+        for b in BUILT_IN {
+            for c in [b.camera, b.picture_camera].into_iter().flatten() {
+                assert!(
+                    Camera::look_at(DVec3::from(c.eye), DVec3::from(c.target), DVec3::Y, c.fov_deg).is_ok(),
+                    "{}",
+                    b.name
+                );
+            }
+        }
+        let mut s = built_in("chairs-room").unwrap();
+        s.name = "chairs-room/2".into();
+        let want = BuiltIn::of("chairs-room").and_then(|b| b.camera).map(|c| c.camera());
+        assert_eq!(scene_camera(&s, |b| b.camera), want);
+        let cornell = built_in("cornell-box").unwrap();
+        let (render, pictures) =
+            (scene_camera(&cornell, |b| b.camera), scene_camera(&cornell, BuiltIn::radiosity_camera));
+        assert!(render.unwrap().eye.z > 0.0 && pictures.unwrap().eye.z < 0.0, "inside the box; outside its front wall");
+        assert_eq!(scene_camera(&built_in("cube").unwrap(), |b| b.camera), None);
+    }
 }

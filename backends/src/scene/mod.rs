@@ -12,7 +12,7 @@
 //! are built from [`crate::solids`], [`crate::meshes`] and the render rooms,
 //! which use the types), and this file only re-exports both.
 
-pub use builtin::{BUILT_IN, BuiltIn, DefaultCamera, built_in};
+pub use builtin::{BUILT_IN, BuiltIn, DefaultCamera, built_in, scene_camera};
 pub use error::{Limits, SceneError};
 pub(crate) use model::sphere_patches;
 pub use model::{Material, Patch, Scene, SphereCells};

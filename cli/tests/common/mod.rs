@@ -98,3 +98,25 @@ pub fn no_hang(args: &[&str]) -> std::process::Output {
     }
     child.wait_with_output().unwrap()
 }
+
+/// Runs `itgfx args` under `ulimit -v kib` (address space, KiB), on two
+/// worker threads whatever the machine (each thread maps a stack and a
+/// 64 MiB allocator arena, so the limits below hold for two).
+pub fn under_ulimit(kib: u64, args: &[&str]) -> std::process::Output {
+    let mut cmd = std::process::Command::new("sh");
+    cmd.env("RAYON_NUM_THREADS", "2");
+    cmd.arg("-c").arg(format!("ulimit -v {kib} && exec \"$0\" \"$@\"")).arg(env!("CARGO_BIN_EXE_itgfx")).args(args);
+    cmd.output().expect("run sh")
+}
+
+/// A refusal for memory: exit 2, one line; `(needed MiB, budget MiB)`.
+pub fn refused_for_memory(out: &std::process::Output, what: &str) -> (u64, u64) {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{what}: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{what}: one line: {err}");
+    let number = |after: &str| -> u64 {
+        let rest = &err[err.find(after).unwrap_or_else(|| panic!("{what}: {err:?} lacks {after:?}")) + after.len()..];
+        rest.split_whitespace().next().unwrap().parse().unwrap()
+    };
+    (number("needs about "), number(" leaves "))
+}

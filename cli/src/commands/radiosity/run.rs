@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use itgfx_backends::open;
-use itgfx_backends::radiosity::reference::{Reference, path_traced};
+use itgfx_backends::radiosity::reference::{Reference, ReferenceJob, path_traced};
 use itgfx_backends::radiosity::refine::{RadiosityError, check_scene};
 use itgfx_backends::radiosity::render::{
     View, default_camera, leaf_mesh, mesh_picture, picture, tonemap, view, white_point,
@@ -164,12 +164,9 @@ pub fn run(o: &RadiosityOptions) -> Result<Report, CliError> {
     r.count("polygons", h0.roots.len() as u64).count("pixels", u64::from(o.size) * u64::from(o.size));
     if let Some(walks) = o.path_trace {
         let v = view(&scene, &prepared, tracer.as_ref(), &h0, &camera, (o.size, o.size)).map_err(usage)?;
-        let mut progress = Progress::new();
-        let reference = path_traced(&scene, &prepared, tracer.as_ref(), &v, &camera, walks, o.seed, &mut |d, t| {
-            progress.update(d, t)
-        })
-        .map_err(usage)?;
-        return reference_report(r, &reference, &v, walks, t0, &file);
+        let (tracer, seed) = (tracer.as_ref(), o.seed);
+        let job = ReferenceJob { scene: &scene, prepared: &prepared, tracer, view: &v, camera: &camera, walks, seed };
+        return reference_run(r, &job, t0, &file);
     }
     let (solution, trials) = solve_or_search(o, &scene, &prepared, tracer.as_ref())?;
     solution_report(&mut r, o, &solution, trials, t0.elapsed().as_secs_f64());
@@ -369,6 +366,18 @@ fn elements_csv(solution: &Solution) -> String {
         ));
     }
     s
+}
+
+/// The path-traced reference of `job` (with a progress bar), its report and files.
+fn reference_run(
+    r: Report,
+    job: &ReferenceJob,
+    t0: Instant,
+    file: &dyn Fn(&str) -> Option<PathBuf>,
+) -> Result<Report, CliError> {
+    let mut progress = Progress::new();
+    let reference = path_traced(job, &mut |d, t| progress.update(d, t)).map_err(usage)?;
+    reference_report(r, &reference, job.view, job.walks, t0, file)
 }
 
 fn reference_report(

@@ -8,13 +8,13 @@ use itgfx_backends::camera::Camera;
 use itgfx_backends::render::{Criterion, TreeContrast, criteria, tree};
 
 use super::shard;
-use crate::options::{Common, Tracing};
+use crate::options::Traced;
 use crate::values::{count, finite, out_path};
 
 /// Largest image side.
 pub(super) const MAX_SIDE: u32 = 8192;
 /// Most samples per pixel (average) a run may ask for.
-pub(super) const MAX_SPP: u32 = 1 << 16;
+pub(super) const MAX_SPP: u32 = itgfx_backends::render::job::MAX_SPP;
 
 /// `itgfx render SCENE`.
 #[derive(Debug, Args)]
@@ -116,13 +116,10 @@ pub struct RenderOptions {
     pub export_scene: bool,
     #[command(flatten)]
     #[allow(missing_docs)]
-    pub tracing: Tracing,
-    #[command(flatten)]
-    #[allow(missing_docs)]
     pub shards: crate::shard::ShardArgs,
     #[command(flatten)]
     #[allow(missing_docs)]
-    pub common: Common,
+    pub run: Traced,
 }
 
 /// `itgfx compare A.exr B.exr`.

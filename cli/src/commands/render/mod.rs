@@ -1,9 +1,11 @@
 //! `itgfx render SCENE`: path-traced images with the tutorial's adaptive
 //! pixel criteria (Part IV; Part III-IV §5), and `itgfx compare A.exr B.exr`.
-//! `args.rs` holds the options, `run.rs` the run, `shard.rs` its `--shard`
-//! and `--merge`.
+//! `args.rs` holds the options, `check.rs` their checks, `run.rs` the run
+//! (the job itself is `itgfx_backends::render::RenderJob`), `shard.rs` its
+//! `--shard` and `--merge`.
 
 mod args;
+mod check;
 mod export_scene;
 pub mod images;
 pub mod maps;

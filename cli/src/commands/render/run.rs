@@ -3,55 +3,20 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
-use std::time::Instant;
 
-use itgfx_backends::open;
+use itgfx_backends::render::job::Settings;
 use itgfx_backends::render::{
-    self, AdaptiveSampling, Criterion, Frame, Oracle, Sampling, Shading, Supersampling, TreeContrast, adaptive,
-    criteria, supersample, tree, views,
+    self, AdaptiveSampling, Frame, JobError, Outcome, RenderJob, Sampling, adaptive, supersample,
 };
-use itgfx_backends::tracer::Prepared;
 
-use super::args::{CompareOptions, MAX_SPP, RenderOptions};
+use super::args::{CompareOptions, RenderOptions};
 use super::images::Radiance;
 use super::metrics::compare_images;
-use super::{export_scene, images, maps, metrics, shard};
+use super::{check, export_scene, images, maps, metrics, shard};
 use crate::CliError;
 use crate::progress::Progress;
 use crate::report::Report;
 use crate::scene::load_scene;
-
-/// Nodes of a full refinement tree of `MAX_LEVEL` = 4 levels (1 + 4 + 16 + 64).
-const TREE_NODES: u64 = 85;
-
-/// Most memory a run may plan to use.
-const MEMORY_LIMIT: u64 = 4 << 30;
-
-/// Refuses a run whose image or per-row sample buffers would pass
-/// [`MEMORY_LIMIT`]: about 120 bytes a pixel (radiance, counts, display
-/// values, PNG; 200 for `adaptive`), and 48 bytes a sample of the row each
-/// worker holds (a tree's pixel: its 85 nodes of `N_s^r` samples).
-fn memory_check(o: &RenderOptions) -> Result<(), CliError> {
-    let (w, h) = (u64::from(o.size.0), u64::from(o.size.1));
-    let per_pixel = match o.sampler.as_str() {
-        "uniform" => u64::from(o.spp),
-        "ec" | "ic" | "cc-tree" | "ec-binary" => TREE_NODES * u64::from(o.node_samples.unwrap_or(tree::NODE_SAMPLES)),
-        _ => u64::from(o.max_spp.unwrap_or(o.spp.saturating_mul(16).min(MAX_SPP))),
-    };
-    let workers = o.tracing.threads.unwrap_or_else(rayon::current_num_threads) as u64;
-    // adaptive also keeps every pixel's pilot sums, weight and share (about 80 bytes).
-    let image = if o.sampler == "adaptive" { 200 } else { 120 };
-    let bytes = w * h * image + workers * w * per_pixel * 48;
-    if bytes > MEMORY_LIMIT {
-        return Err(CliError::usage(format!(
-            "{w} x {h} at up to {per_pixel} samples a pixel needs about {:.1} GiB (limit {} GiB): lower --size, --spp or --max-spp",
-            bytes as f64 / f64::from(1u32 << 30),
-            MEMORY_LIMIT >> 30
-        )));
-    }
-    itgfx_backends::memory::check(|| format!("{w} x {h} at up to {per_pixel} samples a pixel"), bytes)
-        .map_err(|e| CliError::usage(format!("{e}: lower --size, --spp or --max-spp")))
-}
 
 /// The output directory: must be a directory or not exist; made if missing.
 /// Returns it and whether it was made here.
@@ -61,24 +26,14 @@ pub(super) fn out_dir(o: &RenderOptions) -> Result<(PathBuf, bool), CliError> {
     Ok((d, made))
 }
 
-/// Runs `itgfx render`.
+/// Runs `itgfx render`: the options checked, the settings built once and
+/// their memory estimate checked against the budget, then the render into
+/// `--out` (or a shard's file); a merge with `--merge`.
 ///
 /// # Errors
 /// Usage, scene, camera and backend errors, one line each.
 pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
-    if o.unbiased {
-        return Err(CliError::usage(
-            "--unbiased is gone: the unbiased form is the default now, and --spp counts its decision samples too (an old --spp N --unbiased run is --spp 2N); --tutorial-form gives the tutorial's biased form",
-        ));
-    }
-    if o.variance && (o.out.is_none() || o.shards.shard.is_some() || !o.shards.merge.is_empty()) {
-        return Err(CliError::usage(
-            "--variance writes variance.exr beside image.exr: give --out DIR (and no --shard or --merge)",
-        ));
-    }
-    if o.time_budget.is_some() && (o.shards.shard.is_some() || !o.shards.merge.is_empty()) {
-        return Err(CliError::usage("--time-budget is for a single run, not --shard or --merge"));
-    }
+    check::run_options(o)?;
     if !o.shards.merge.is_empty() {
         return shard::run_merge(o);
     }
@@ -88,93 +43,42 @@ pub fn run(o: &RenderOptions) -> Result<Report, CliError> {
     if let Some(r) = &o.reference {
         crate::input::regular("--reference", r)?;
     }
-    let adaptive = o.sampler != "uniform";
-    if !adaptive && (o.max_spp.is_some() || o.threshold.is_some() || o.tutorial_form) {
-        return Err(CliError::usage(
-            "--max-spp, --threshold and --tutorial-form are for adaptive samplers (--sampler cc, kl, ...)",
-        ));
-    }
-    let is_tree = TreeContrast::from_name(&o.sampler).is_some();
-    if o.variance && (is_tree || (o.sampler == "es" && o.tutorial_form)) {
-        return Err(CliError::usage(format!(
-            "--variance: --sampler {}{} gives pixels that are not the mean of the samples it keeps (eq. (29) or the oracle's samples); use another sampler",
-            o.sampler,
-            if o.tutorial_form { " --tutorial-form" } else { "" }
-        )));
-    }
-    if o.sampler == "adaptive" && (o.threshold.is_some() || o.tutorial_form) {
-        return Err(CliError::usage(
-            "--sampler adaptive has no threshold and one (unbiased) form: it spends exactly --spp on average",
-        ));
-    }
-    if is_tree && o.max_spp.is_some() {
-        return Err(CliError::usage(format!(
-            "--sampler {}: the refinement tree is capped by its depth (4 levels), not --max-spp",
-            o.sampler
-        )));
-    }
-    if o.node_samples.is_some() && !is_tree {
-        return Err(CliError::usage(
-            "--node-samples is for the refinement trees (--sampler ec, ic, cc-tree, ec-binary)",
-        ));
-    }
-    let oracle_maps = o.sampler == "es" || o.maps;
-    if o.delta.is_some() && !(is_tree || oracle_maps) {
-        return Err(CliError::usage(
-            "--delta is for the contrast samplers (--sampler ec, ic, cc-tree, ec-binary, es) and --maps",
-        ));
-    }
-    if o.binary_contrast && !oracle_maps {
-        return Err(CliError::usage("--binary-contrast is for --sampler es and --maps"));
-    }
-    if o.sampler == "es" && o.threshold.is_some() {
-        return Err(CliError::usage("--sampler es spends exactly --spp on average: no --threshold"));
-    }
-    if let Some(m) = o.max_spp
-        && m < o.spp
-    {
-        return Err(CliError::usage(format!("--max-spp {m} is below --spp {}", o.spp)));
-    }
-    if o.sampler == "adaptive" && o.spp < adaptive::PILOT {
-        return Err(CliError::usage(format!(
-            "--spp {}: --sampler adaptive takes a pilot of {} a pixel; give --spp {} or more",
-            o.spp,
-            adaptive::PILOT,
-            adaptive::PILOT
-        )));
-    }
-    if adaptive && o.sampler != "adaptive" && o.spp < criteria::BATCH {
-        return Err(CliError::usage(format!(
-            "--spp {}: adaptive samplers take at least {} per pixel",
-            o.spp,
-            criteria::BATCH
-        )));
-    }
-    // The unbiased form traces at least 8 samples to decide and 8 to estimate.
-    let floor = 2 * criteria::BATCH;
-    if adaptive
-        && o.sampler != "adaptive"
-        && !o.tutorial_form
-        && o.spp < floor
-        && (o.threshold.is_none() || o.sampler == "es")
-    {
-        return Err(CliError::usage(format!(
-            "--spp {}: the unbiased form traces at least {floor} a pixel (8 to decide, 8 for the image): give --spp {floor} or more, or --tutorial-form",
-            o.spp
-        )));
-    }
+    check::sampler_options(o)?;
+    check::budget(o)?;
     shard::check(o)?;
-    memory_check(o)?;
+    let settings = settings(o);
+    let workers = o.run.tracing.threads.unwrap_or_else(rayon::current_num_threads);
+    settings.plan(workers).map_err(|e| CliError::usage(format!("{e}: lower --size, --spp or --max-spp")))?;
     if o.shards.shard.is_some() {
-        return render_into(o, &spec, None);
+        return render_into(o, &spec, &settings, None);
     }
     let (dir, made) = out_dir(o)?;
-    let result = render_into(o, &spec, Some(&dir));
+    let result = render_into(o, &spec, &settings, Some(&dir));
     if result.is_err() && made {
         // Leave nothing behind: the directory made for --out goes again (only if still empty).
         let _ = std::fs::remove_dir(&dir);
     }
     result
+}
+
+/// The render's settings, built once from the options.
+fn settings(o: &RenderOptions) -> Settings {
+    Settings {
+        sampler: o.sampler.clone(),
+        spp: o.spp,
+        max_spp: o.max_spp,
+        threshold: o.threshold,
+        tutorial_form: o.tutorial_form,
+        delta: o.delta,
+        binary_contrast: o.binary_contrast,
+        node_samples: o.node_samples,
+        maps: o.maps,
+        size: o.size,
+        seed: o.seed,
+        camera: o.camera,
+        shard: o.shards.shard,
+        time_budget: o.time_budget,
+    }
 }
 
 /// The image files of a render in `dir`.
@@ -240,103 +144,81 @@ pub(super) fn frame_stats(
     Ok(())
 }
 
-fn render_into(o: &RenderOptions, spec: &str, dir: Option<&Path>) -> Result<Report, CliError> {
+/// Renders into `dir` (or a shard's file): the outputs checked, the
+/// reference read, the job run with a progress bar, the files written, the
+/// report.
+fn render_into(o: &RenderOptions, spec: &str, settings: &Settings, dir: Option<&Path>) -> Result<Report, CliError> {
     if let Some(dir) = dir {
-        let variance = if o.variance { vec![dir.join("variance.exr")] } else { Vec::new() };
-        let maps = if o.maps { maps::files(dir) } else { Vec::new() };
-        for f in image_files(dir).iter().chain(&maps).chain(&variance) {
-            crate::output::check("--out", f)?;
-        }
+        check_outputs(o, dir)?;
     }
     let reference = read_reference(o, o.size)?;
     let scene = load_scene(spec, 1)?;
-    let prepared = Prepared::new(&scene);
-    let shading = Shading::new(&scene, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
-    let tracer = open(o.tracing.backend, &prepared).map_err(|e| CliError::usage(e.to_string()))?;
-    let camera = o.camera.unwrap_or_else(|| views::default_camera(&scene));
-    let delta = o.delta.unwrap_or(1.0);
-    let sampling = match (Criterion::from_name(&o.sampler), TreeContrast::from_name(&o.sampler)) {
-        (None, Some(contrast)) => Sampling::Tree {
-            contrast,
-            delta,
-            spp: o.spp,
-            unbiased: !o.tutorial_form,
-            threshold: o.threshold,
-            node_samples: o.node_samples.unwrap_or(tree::NODE_SAMPLES),
-        },
-        (None, None) if o.sampler == "es" => Sampling::Supersample(Supersampling {
-            oracle: Oracle { delta, binary: o.binary_contrast },
-            spp: o.spp,
-            max: o.max_spp.unwrap_or(o.spp.saturating_mul(16).min(MAX_SPP)),
-            unbiased: !o.tutorial_form,
-        }),
-        (None, None) if o.sampler == "adaptive" => Sampling::Neighbours(AdaptiveSampling {
-            spp: o.spp,
-            max: o.max_spp.unwrap_or(o.spp.saturating_mul(16).min(MAX_SPP)),
-        }),
-        (None, None) => Sampling::Uniform(o.spp),
-        (Some(criterion), _) => Sampling::Adaptive {
-            criterion,
-            spp: o.spp,
-            max: o.max_spp.unwrap_or(o.spp.saturating_mul(16).min(MAX_SPP)),
-            unbiased: !o.tutorial_form,
-            threshold: o.threshold,
-        },
-    };
-    let t0 = Instant::now();
+    let job = RenderJob { settings, scene: &scene, backend: o.run.tracing.backend };
     let progress = Mutex::new(Progress::new());
     let tick = |d: u64, t: u64| {
         if let Ok(mut p) = progress.lock() {
             p.update(d, t);
         }
     };
-    let job = render::Job {
-        tracer: tracer.as_ref(),
-        scene: &scene,
-        prepared: &prepared,
-        shading: &shading,
-        camera: &camera,
-        size: o.size,
-        seed: o.seed,
-        sampling: &sampling,
-        maps: o.maps.then_some(Oracle { delta, binary: o.binary_contrast }),
-        rows: o.shards.shard.map(|s| shard::rows(s, o.size.1)),
-        time_budget: o.time_budget,
-    };
-    let rendered = render::render(&job, &tick).map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
-    let frame = &rendered.frame;
-    let seconds = t0.elapsed().as_secs_f64();
+    let done = job.run(&tick).map_err(|e| match e {
+        JobError::Setup(e) => CliError::usage(e.to_string()),
+        JobError::Render(e) => CliError::usage(format!("{spec}: {e}")),
+    })?;
     let mut r = Report::new();
-    let (image, wrote) = match (dir, o.shards.shard, &o.shards.save_shard) {
-        (_, Some(s), Some(path)) => {
-            let st = shard::settings(o, &sampling, delta, &camera, tracer.name());
-            shard::save(path, &scene.name, &prepared, st, s, rendered.threshold, frame, &mut r)?;
-            (None, vec![path.clone()])
-        }
-        (Some(dir), _, _) => {
-            let (image, mut wrote) = write_frame(frame, o.exposure, dir)?;
-            if o.maps
-                && let Some(map) = &rendered.map
-            {
-                // p_v's colour weight: --delta, else Simmons' 0.9 (eq. (4)).
-                let priority = render::priority_map(&job, o.delta.unwrap_or(0.9))
-                    .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
-                maps::write_maps(map, &priority, dir)?;
-                wrote.extend(maps::files(dir));
-            }
-            if o.export_scene {
-                wrote.extend(export_scene::export_scene(&scene, &camera, o.size, o.spp, dir)?);
-            }
-            if o.variance {
-                wrote.push(write_variance(frame, dir)?);
-            }
-            (Some(image), wrote)
-        }
-        _ => return Err(CliError::usage("give --out DIR for the images")),
-    };
+    let (image, wrote) = write_outputs(o, &scene, &done, dir, &mut r)?;
+    report_settings(&mut r, o, &scene.name, &done);
+    frame_stats(&mut r, &done.rendered.frame, image.as_ref(), reference.as_ref(), o.exposure)?;
+    let frame = &done.rendered.frame;
+    let traced: f64 = frame.samples.iter().chain(&frame.pilot_samples).map(|&s| f64::from(s)).sum();
+    r.real("seconds", done.seconds, Some("s")).real("Msamples_per_s", traced / done.seconds.max(1e-9) / 1e6, None);
+    r.texts("wrote", wrote.iter().map(|p| p.display().to_string()).collect());
+    Ok(r)
+}
 
-    let adaptive = o.sampler != "uniform";
-    r.text("scene", scene.name.clone()).text("backend", tracer.name()).text("sampler", o.sampler.clone());
+/// Checks every file `--out` will receive, before any work.
+fn check_outputs(o: &RenderOptions, dir: &Path) -> Result<(), CliError> {
+    let variance = if o.variance { vec![dir.join("variance.exr")] } else { Vec::new() };
+    let maps = if o.maps { maps::files(dir) } else { Vec::new() };
+    for f in image_files(dir).iter().chain(&maps).chain(&variance) {
+        crate::output::check("--out", f)?;
+    }
+    Ok(())
+}
+
+/// Writes a shard's file, or the images, maps, exported scene and variance
+/// into `dir`; returns the image as the EXR holds it and the files written.
+fn write_outputs(
+    o: &RenderOptions,
+    scene: &itgfx_backends::scene::Scene,
+    done: &Outcome,
+    dir: Option<&Path>,
+    r: &mut Report,
+) -> Result<(Option<Radiance>, Vec<PathBuf>), CliError> {
+    let frame = &done.rendered.frame;
+    if let (Some(file), Some(path)) = (&done.shard, &o.shards.save_shard) {
+        shard::save(path, file, r)?;
+        return Ok((None, vec![path.clone()]));
+    }
+    let dir = dir.ok_or_else(|| CliError::usage("give --out DIR for the images"))?;
+    let (image, mut wrote) = write_frame(frame, o.exposure, dir)?;
+    if let (Some(map), Some(priority)) = (&done.rendered.map, &done.priority) {
+        maps::write_maps(map, priority, dir)?;
+        wrote.extend(maps::files(dir));
+    }
+    if o.export_scene {
+        wrote.extend(export_scene::export_scene(scene, &done.camera, o.size, o.spp, dir)?);
+    }
+    if o.variance {
+        wrote.push(write_variance(frame, dir)?);
+    }
+    Ok((Some(image), wrote))
+}
+
+/// The report's settings: the scene, backend, sampler and its parameters,
+/// the image, the camera, and what the sampler decided.
+fn report_settings(r: &mut Report, o: &RenderOptions, scene: &str, done: &Outcome) {
+    let (frame, camera, sampling) = (&done.rendered.frame, &done.camera, done.sampling);
+    r.text("scene", scene.to_string()).text("backend", done.backend).text("sampler", o.sampler.clone());
     r.count("width", u64::from(frame.width)).count("height", u64::from(frame.height)).count("seed", o.seed);
     r.reals("camera_eye", camera.eye.to_array().to_vec())
         .reals("camera_forward", camera.forward.to_array().to_vec())
@@ -348,9 +230,9 @@ fn render_into(o: &RenderOptions, spec: &str, dir: Option<&Path>) -> Result<Repo
         r.count("pilot_spp", u64::from(adaptive::PILOT));
     }
     if let Some(b) = o.time_budget {
-        r.real("time_budget", b, Some("s")).count("passes", rendered.passes);
+        r.real("time_budget", b, Some("s")).count("passes", done.rendered.passes);
     }
-    if adaptive {
+    if o.sampler != "uniform" {
         // Which form ran: decisions kept out of the image, or the tutorial's shared samples.
         r.text("form", if o.tutorial_form { "tutorial" } else { "unbiased" }).flag("unbiased", !o.tutorial_form);
     }
@@ -358,12 +240,12 @@ fn render_into(o: &RenderOptions, spec: &str, dir: Option<&Path>) -> Result<Repo
         r.count("max_spp", u64::from(es.max)).count("oracle_spp", u64::from(supersample::ORACLE_SAMPLES));
     }
     if matches!(sampling, Sampling::Tree { .. } | Sampling::Supersample(_)) || o.maps {
-        r.real("delta", delta, None);
+        r.real("delta", o.delta.unwrap_or(1.0), None);
     }
     if let Sampling::Tree { node_samples, .. } = sampling {
         r.count("node_samples", u64::from(node_samples));
     }
-    if let Some(map) = &rendered.map {
+    if let Some(map) = &done.rendered.map {
         let mean = |g: fn(&render::PixelMeasures) -> f64| {
             map.measures.iter().map(g).sum::<f64>() / map.measures.len().max(1) as f64
         };
@@ -372,17 +254,12 @@ fn render_into(o: &RenderOptions, spec: &str, dir: Option<&Path>) -> Result<Repo
             .real("mean_contrast", mean(|m| m.contrast), None);
     }
     if o.sampler != "uniform" {
-        r.maybe_real("threshold", rendered.threshold, None);
-        if let Some(t) = rendered.tuned {
+        r.maybe_real("threshold", done.rendered.threshold, None);
+        if let Some(t) = done.rendered.tuned {
             r.count("pilot_pixels", u64::from(t.pilot_pixels)).real("pilot_spp_mean", t.pilot_mean, None);
         }
     }
     r.count("spp_requested", u64::from(o.spp));
-    frame_stats(&mut r, frame, image.as_ref(), reference.as_ref(), o.exposure)?;
-    let traced: f64 = frame.samples.iter().chain(&frame.pilot_samples).map(|&s| f64::from(s)).sum();
-    r.real("seconds", seconds, Some("s")).real("Msamples_per_s", traced / seconds.max(1e-9) / 1e6, None);
-    r.texts("wrote", wrote.iter().map(|p| p.display().to_string()).collect());
-    Ok(r)
 }
 
 /// Runs `itgfx compare`.

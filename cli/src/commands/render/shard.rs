@@ -8,16 +8,14 @@ use std::path::{Path, PathBuf};
 
 use std::time::Instant;
 
-use itgfx_backends::camera::Camera;
-use itgfx_backends::render::shard_file::{MeshFingerprint, RenderSettings, RenderShard, merge, shard_rows};
-use itgfx_backends::render::{Frame, Sampling};
-use itgfx_backends::tracer::Prepared;
+use itgfx_backends::render::Frame;
+use itgfx_backends::render::shard_file::{RenderShard, merge};
 
 use super::RenderOptions;
 use super::run::{frame_stats, image_files, out_dir, read_reference, write_frame};
 use crate::CliError;
 use crate::report::Report;
-use crate::shard::{MAX_SHARD_BYTES, Shard};
+use crate::shard::MAX_SHARD_BYTES;
 
 /// `--shard`'s help.
 pub const SHARD_HELP: &str =
@@ -70,59 +68,16 @@ pub fn check(o: &RenderOptions) -> Result<(), CliError> {
     Ok(())
 }
 
-/// The settings a shard's pixels depend on.
-#[must_use]
-pub fn settings(o: &RenderOptions, sampling: &Sampling, delta: f64, camera: &Camera, backend: &str) -> RenderSettings {
-    let max_spp = match sampling {
-        Sampling::Adaptive { max, .. } => *max,
-        Sampling::Supersample(es) => es.max,
-        Sampling::Neighbours(a) => a.max,
-        _ => 0,
-    };
-    let (e, f, u) = (camera.eye, camera.forward, camera.up);
-    RenderSettings {
-        sampler: o.sampler.clone(),
-        spp: o.spp,
-        max_spp,
-        threshold: o.threshold,
-        unbiased: o.sampler != "uniform" && !o.tutorial_form,
-        delta,
-        binary_contrast: o.binary_contrast,
-        node_samples: if let Sampling::Tree { node_samples, .. } = sampling { *node_samples } else { 0 },
-        width: o.size.0,
-        height: o.size.1,
-        seed: o.seed,
-        camera: [e.x, e.y, e.z, f.x, f.y, f.z, u.x, u.y, u.z, camera.fov_y],
-        backend: backend.to_string(),
-    }
-}
-
-/// The rows shard `s` renders.
-#[must_use]
-pub fn rows(s: Shard, height: u32) -> (u32, u32) {
-    shard_rows(s.index, s.count, height)
-}
-
-/// Saves a shard's rendered rows to `--save-shard`.
+/// Saves a shard's file ([`RenderShard`], made by the render job) to
+/// `--save-shard`, and reports it.
 ///
 /// # Errors
 /// Output errors.
-#[allow(clippy::too_many_arguments)]
-pub fn save(
-    path: &Path,
-    name: &str,
-    prepared: &Prepared,
-    st: RenderSettings,
-    s: Shard,
-    threshold: Option<f64>,
-    frame: &Frame,
-    r: &mut Report,
-) -> Result<(), CliError> {
-    let shard = RenderShard::new(MeshFingerprint::of(name, prepared), st, (s.index, s.count), threshold, frame);
+pub fn save(path: &Path, shard: &RenderShard, r: &mut Report) -> Result<(), CliError> {
     let text = shard.to_json().map_err(|e| CliError::runtime(format!("--save-shard: {e}")))?;
     crate::output::write(path, text.as_bytes())?;
-    r.text("shard", s.to_string()).count("first_row", u64::from(shard.first_row));
-    r.count("end_row", u64::from(shard.end_row));
+    r.text("shard", format!("{}/{}", shard.header.shard, shard.header.shards));
+    r.count("first_row", u64::from(shard.first_row)).count("end_row", u64::from(shard.end_row));
     r.text("saved", path.display().to_string()).count("bytes", text.len() as u64);
     Ok(())
 }

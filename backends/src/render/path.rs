@@ -135,59 +135,6 @@ impl Stratum {
     }
 }
 
-/// Laine and Karras's hash as Burley improved it ("Practical Hash-based
-/// Owen Scrambling", 2020): each output bit depends on the same and lower
-/// input bits only, so on the low `m` bits it is a bijection of `0..2^m`;
-/// applied to bit-reversed coordinates it is a nested uniform (Owen)
-/// scramble.
-#[inline(always)]
-fn laine_karras(mut x: u32, seed: u32) -> u32 {
-    x = x.wrapping_add(seed);
-    x ^= x.wrapping_mul(0x6c50_b47c);
-    x ^= x.wrapping_mul(0xb82f_1e52);
-    x ^= x.wrapping_mul(0xc7af_e638);
-    x ^= x.wrapping_mul(0x8d22_f6e6);
-    x
-}
-
-/// The second Sobol dimension of point `i`, bit-reversed: the XOR of the
-/// reversed direction numbers `r_0 = 1`, `r_j = r_{j−1} ^ (r_{j−1} << 1)`
-/// (Pascal's triangle mod 2) of `i`'s set bits.
-#[inline(always)]
-fn sobol1_reversed(mut i: u32) -> u32 {
-    let (mut x, mut r) = (0u32, 1u32);
-    while i != 0 {
-        if i & 1 != 0 {
-            x ^= r;
-        }
-        i >>= 1;
-        r ^= r << 1;
-    }
-    x
-}
-
-/// A 32-bit word's top 23 bits as an f32 in `(0, 1)` (as [`LineRng::uniform32`]).
-#[inline(always)]
-fn unit(x: u32) -> f32 {
-    ((x >> 9) as f32 + 0.5) * (1.0 / 8_388_608.0)
-}
-
-impl Stratum {
-    /// This sample's point of its batch's Owen-scrambled Sobol (0, 2)-net
-    /// under permutation `hashed` (`pcg(key ^ which)`): the sample's index
-    /// shuffled within the batch's power of two by a [`laine_karras`]
-    /// hash, the first two Sobol dimensions of it, each scrambled by its
-    /// own seed. Each point is uniform in the unit square; a batch of a
-    /// power of two covers every elementary interval of its size once.
-    #[inline(always)]
-    fn sobol_hashed(&self, hashed: u32) -> (f32, f32) {
-        let mask = self.count.next_power_of_two() - 1;
-        let i = laine_karras(self.index, hashed) & mask;
-        let (sx, sy) = (pcg(hashed ^ 0x536f_626c), pcg(hashed ^ 0x4f77_656e));
-        (unit(laine_karras(i, sx).reverse_bits()), unit(laine_karras(sobol1_reversed(i), sy).reverse_bits()))
-    }
-}
-
 /// The first permutation words of a bounce's two stratified pairs (light
 /// point, BSDF direction) at `depth`: `key ^` these, hashed, key them.
 #[inline]
@@ -529,7 +476,7 @@ fn vertex_draws(
     #[allow(unused_mut)]
     let mut done = 0;
     #[cfg(target_arch = "x86_64")]
-    if draw_mode() == 0 && std::arch::is_x86_feature_detected!("avx2") {
+    if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: AVX2 was detected just above.
         done = unsafe { vertex_draws_avx2(live, diffuse, rng, strata, k, depth, draws) };
     }
@@ -538,30 +485,12 @@ fn vertex_draws(
     }
 }
 
-/// EXPERIMENT: `ITGFX_DRAWS` = `scalar` (no 8 lanes), `sobol` (scalar, Owen-scrambled Sobol pairs).
-fn draw_mode() -> u8 {
-    static MODE: std::sync::OnceLock<u8> = std::sync::OnceLock::new();
-    *MODE.get_or_init(|| match std::env::var("ITGFX_DRAWS").as_deref() {
-        Ok("scalar") => 1,
-        Ok("sobol") => 2,
-        _ => 0,
-    })
-}
-
 /// The five draws of path `p`'s vertex (see [`vertex_draws`]), `words` =
 /// [`which`] of its depth.
 #[inline(always)]
 fn vertex_draw(p: usize, rng: &[LineRng], strata: Option<&[Stratum]>, k: u32, [wl, wd]: [u32; 2]) -> [f32; 5] {
     let r = &rng[p];
     let u = |i: u32| r.uniform32(k + i);
-    if draw_mode() == 2
-        && let Some(s) = strata
-    {
-        let s = &s[p];
-        let (l1, l2) = s.sobol_hashed(pcg(s.key ^ wl));
-        let (d1, d2) = s.sobol_hashed(pcg(s.key ^ wd));
-        return [u(0), l1, l2, d1, d2];
-    }
     let (mut l1, mut l2, mut d1, mut d2) = (u(1), u(2), u(3), u(4));
     if let Some(s) = strata {
         let s = &s[p];
@@ -711,51 +640,6 @@ mod tests {
                         assert_eq!(d.map(f32::to_bits), want.map(f32::to_bits), "vertex {j}, sizes {sizes:?}");
                     }
                 }
-            }
-        }
-    }
-
-    /// A power-of-two batch's Sobol points are a (0, m, 2)-net: one point
-    /// in each elementary interval of every shape; other keys, other points.
-    #[test]
-    fn sobol_batches_are_nets() {
-        for count in [1u32, 2, 4, 16, 64, 256] {
-            let m = count.trailing_zeros();
-            for key in [1u32, 99, 0xdead_beef] {
-                let pts: Vec<(f32, f32)> =
-                    (0..count).map(|index| Stratum { index, count, key }.sobol_hashed(pcg(key))).collect();
-                for a in 0..=m {
-                    let (nx, ny) = (1u32 << a, 1u32 << (m - a));
-                    let mut seen = vec![false; count as usize];
-                    for &(x, y) in &pts {
-                        assert!(x > 0.0 && x < 1.0 && y > 0.0 && y < 1.0, "{x} {y}");
-                        let cell = (y * ny as f32) as u32 * nx + (x * nx as f32) as u32;
-                        assert!(!seen[cell as usize], "count {count} key {key}: {nx}x{ny} cell {cell} twice");
-                        seen[cell as usize] = true;
-                    }
-                }
-            }
-        }
-        let first = |key| Stratum { index: 0, count: 64, key }.sobol_hashed(pcg(key));
-        assert_ne!(first(1), first(2));
-    }
-
-    /// Over random keys, a sample's Sobol point is uniform in the unit
-    /// square (the estimator stays unbiased): each of a 4 × 4 grid's cells
-    /// holds 1/16 of the points within 5 standard errors.
-    #[test]
-    fn sobol_points_are_uniform_over_keys() {
-        let n = 64_000u32;
-        for (index, count) in [(0u32, 64u32), (37, 64), (5, 60)] {
-            let mut cells = [0u32; 16];
-            for key in 0..n {
-                let (x, y) = Stratum { index, count, key: pcg(key) }.sobol_hashed(pcg(key ^ 7));
-                cells[(y * 4.0) as usize * 4 + (x * 4.0) as usize] += 1;
-            }
-            let (p, n) = (1.0 / 16.0, f64::from(n));
-            let se = (p * (1.0 - p) / n).sqrt();
-            for c in cells {
-                assert!((f64::from(c) / n - p).abs() < 5.0 * se, "index {index}: {cells:?}");
             }
         }
     }

@@ -215,6 +215,23 @@ fn small_inputs() {
     assert!(err.len() < 200 && err.contains("1e300"), "{err}");
 }
 
+#[test]
+fn unnormalised_input_hints_at_normalize_only_where_it_exists() {
+    // `joint` and `bottleneck` take no --normalize: the hint sent users to
+    // an option clap then refused ("unknown option --normalize").
+    let d = temp("defio", "hint");
+    let joint = d.join("joint.csv");
+    std::fs::write(&joint, "1,1\n1,1\n").unwrap();
+    for args in [&["measure", "joint", "--matrix", "1,1;1,1"][..], &["measure", "bottleneck", "--joint", s(&joint)]] {
+        fails_with(args, 2, "normalise them first");
+        let err = String::from_utf8_lossy(&itgfx(args).stderr).into_owned();
+        assert!(!err.contains("--normalize"), "{args:?}: {err}");
+    }
+    // Where it exists, the hint stays.
+    fails_with(&["measure", "entropy", "1", "1"], 2, "(--normalize does)");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
 /// NRRD `space directions` were ignored (only `spacings` read): a volume
 /// with directions (1,0,0) (0,1,0) (0,0,4) is the one with spacings 1 1 4;
 /// a rotated grid is refused.

@@ -190,6 +190,36 @@ fn a_volume_channel_over_the_memory_left_is_refused_at_once() {
     assert!(t.elapsed().as_secs() < 30, "refused before casting");
 }
 
+#[test]
+fn volumes_past_the_memory_left_are_refused_by_it_not_by_a_fixed_ceiling() {
+    // The channel's estimate is compared with what the process may use (no
+    // fixed 6 GiB any more): 162 views of hydrogen:3,2,0,128 (an 824 MiB
+    // estimate) are refused under a 512 MiB address space, naming the
+    // limit, before any ray is cast; so is a shard of half the views.
+    let t = std::time::Instant::now();
+    let d = temp("defmem", "volume-shard");
+    let saved = d.join("half.json");
+    for args in [
+        &["volume", "hydrogen:3,2,0,128", "--viewpoints", "162"][..],
+        &["volume", "hydrogen:3,2,0,128", "--viewpoints", "162", "--shard", "0/2", "--save-shard", s(&saved)],
+    ] {
+        let out = under_ulimit(512 << 10, args);
+        let (need, left) = refused_for_memory(&out, "volume");
+        assert!(need > left, "{args:?}: {need} MiB against {left} MiB");
+        assert!(String::from_utf8_lossy(&out.stderr).contains("ulimit -v"), "{args:?}: names the limit");
+    }
+    assert!(!saved.exists(), "nothing saved");
+    let _ = std::fs::remove_dir_all(&d);
+    // A series whose frames alone pass the memory left: refused by the
+    // budget, before a frame is made.
+    let out = under_ulimit(3 << 20, &["volume", "--time", "hydrogen-beat:512,64"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("frames alone need 32.0 GiB"), "{err}");
+    assert!(t.elapsed().as_secs() < 30, "refused before casting");
+}
+
 /// stderr of a successful run.
 fn warned(args: &[&str]) -> String {
     let out = itgfx(args);

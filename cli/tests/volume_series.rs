@@ -148,7 +148,6 @@ fn series_from_files_pictures_and_bad_input() {
         (t(&missing), "frame 1"),
         (t("hydrogen-beat:12,1"), "T = 1"),
         (t("hydrogen-beat:2"), "N = 2"),
-        (t("hydrogen-beat:512,64"), "frames alone need 32.0 GiB"),
         (t("sphere:8,"), "frame 1 is empty"),
         ([t("hydrogen-beat:8,2"), vec!["sphere:8"]].concat(), "--time takes no VOLUME"),
         ([t("hydrogen-beat:8,2"), vec!["--focus", "left"]].concat(), "--focus"),

@@ -16,7 +16,9 @@
 //!   measures from `itgfx-core` ([`Metric::Vmi`]: `|ΔI(V;O)|`,
 //!   [`Metric::Ve`]: the mean `|ΔH(O|v)|`, [`Metric::Vkl`]: the mean `|ΔKL_v|`);
 //! * [`metrics`]: what a user checks afterwards: image RMSE over views the
-//!   simplifier did not use, and the symmetric Hausdorff distance.
+//!   simplifier did not use, and the symmetric Hausdorff distance;
+//! * [`job`]: the whole run of `itgfx simplify` as one job (the memory
+//!   check, the collapses or the mesh to evaluate, each result measured).
 //!
 //! The channel is traced ([`ViewpointChannel::build_solid_angle`]) on the
 //! input and again each time the triangle count has fallen by
@@ -33,6 +35,7 @@
 
 pub mod collapse;
 pub mod cost;
+pub mod job;
 pub mod mesh;
 pub mod metrics;
 pub mod place;

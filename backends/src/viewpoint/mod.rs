@@ -35,6 +35,7 @@ mod contours;
 pub mod saliency;
 pub mod selection;
 pub mod shard_file;
+pub mod shard_job;
 pub mod solid_angle;
 pub mod study;
 

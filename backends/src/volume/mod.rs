@@ -27,7 +27,9 @@
 //!   channel of a labelled volume (crisp or fuzzy membership);
 //! * [`series`]: time-varying volumes; [`paths`]: the best static view of a
 //!   series, its dynamic view path, and the geodesic camera path between
-//!   two views.
+//!   two views;
+//! * [`shard_job`]: the memory a run needs, a shard's rows saved, shards
+//!   merged.
 
 pub mod builtin;
 pub mod cast;
@@ -40,6 +42,7 @@ pub mod paths;
 pub mod raw;
 pub mod raycast;
 pub mod series;
+pub mod shard_job;
 pub mod transfer;
 
 pub use channel::{VolumeChannelOptions, VolumeMeasures, volume_channel, volume_measures};

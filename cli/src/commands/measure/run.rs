@@ -163,10 +163,18 @@ fn tsallis(q: f64, values: &Values, r: &mut Report) -> Result<(), CliError> {
 }
 
 /// `measure joint`: the entropies and mutual information of a joint p(x,y).
+/// A core error of a measure that takes no `--normalize` (`joint`, `js`,
+/// `channel`, `markov`, `scene`, `bottleneck`): without [`core_err`]'s hint
+/// at an option that measure refuses (the core's line already says to
+/// normalise).
+fn no_option_err(what: &str, e: itgfx_core::Error) -> CliError {
+    CliError::usage(format!("{what}: {e}"))
+}
+
 fn joint(x: &OneMatrix, base: Base, r: &mut Report) -> Result<(), CliError> {
     let unit = Some(base.unit());
     let m = given(&x.matrix, "--matrix")?.0;
-    let e = core_::joint_entropies(&m.data, m.rows, m.cols, base).map_err(|e| core_err("matrix", e))?;
+    let e = core_::joint_entropies(&m.data, m.rows, m.cols, base).map_err(|e| no_option_err("matrix", e))?;
     r.count("rows", m.rows as u64).count("cols", m.cols as u64);
     r.real("h_x", e.h_x, unit).real("h_y", e.h_y, unit).real("h_xy", e.h_xy, unit);
     r.real("h_x_given_y", e.h_x_given_y, unit).real("h_y_given_x", e.h_y_given_x, unit);
@@ -215,7 +223,7 @@ fn js(weights: &Option<Vector>, dists: &Option<MatrixArg>, base: Base, r: &mut R
     let w = given(weights, "--weights")?.0;
     let d = given(dists, "--dists")?.0;
     rows_match(("--dists", d.rows), ("--weights", w.len()))?;
-    let js = core_::jensen_shannon(&w, &d.data, d.cols, base).map_err(|e| core_err("weights, dists", e))?;
+    let js = core_::jensen_shannon(&w, &d.data, d.cols, base).map_err(|e| no_option_err("weights, dists", e))?;
     r.count("distributions", d.rows as u64).count("outcomes", d.cols as u64);
     r.real("jensen_shannon", js, Some(base.unit()));
     Ok(())
@@ -227,7 +235,7 @@ fn channel(input: &Option<Vector>, matrix: &Option<MatrixArg>, base: Base, r: &m
     let p = given(input, "--input")?.0;
     let m = given(matrix, "--matrix")?.0;
     rows_match(("--matrix", m.rows), ("--input", p.len()))?;
-    let err = |e| core_err("channel", e);
+    let err = |e| no_option_err("channel", e);
     let ch = Channel::new(&p, &m.data, m.cols).map_err(err)?;
     let cm = ch.measures(base);
     let mut py = vec![0.0; m.cols];
@@ -261,9 +269,9 @@ fn markov(x: &OneMatrix, base: Base, r: &mut Report) -> Result<(), CliError> {
     if bytes > 8 << 30 {
         return Err(CliError::usage(format!("--matrix: {n} states need {bytes} bytes of scratch; the limit is 8 GiB")));
     }
-    let w = core_::stationary_distribution(&m.data, n).map_err(|e| core_err("matrix", e))?;
-    let h = core_::entropy_rate(&m.data, &w, base).map_err(|e| core_err("matrix", e))?;
-    let e = core_::markov_excess_entropy(&m.data, &w, base).map_err(|e| core_err("matrix", e))?;
+    let w = core_::stationary_distribution(&m.data, n).map_err(|e| no_option_err("matrix", e))?;
+    let h = core_::entropy_rate(&m.data, &w, base).map_err(|e| no_option_err("matrix", e))?;
+    let e = core_::markov_excess_entropy(&m.data, &w, base).map_err(|e| no_option_err("matrix", e))?;
     r.count("states", n as u64);
     r.reals("stationary_distribution", w).real("entropy_rate", h, unit).real("excess_entropy", e, unit);
     Ok(())
@@ -339,12 +347,13 @@ fn scene(areas: &Option<Vector>, matrix: &Option<MatrixArg>, base: Base, r: &mut
     if f.rows != a.len() || f.cols != a.len() {
         return Err(CliError::usage(format!("--matrix is {}x{} but there are {} areas", f.rows, f.cols, a.len())));
     }
-    let m = core_::scene_measures(&a, &f.data, base).map_err(|e| core_err("scene", e))?;
+    let m = core_::scene_measures(&a, &f.data, base).map_err(|e| no_option_err("scene", e))?;
     let n = a.len();
     reciprocity_warning(&a, &f.data);
     let mut mi = vec![0.0; n * n];
     let mut per = vec![0.0; n];
-    core_::mutual_information_matrix_into(&a, &f.data, base, &mut mi, &mut per).map_err(|e| core_err("scene", e))?;
+    core_::mutual_information_matrix_into(&a, &f.data, base, &mut mi, &mut per)
+        .map_err(|e| no_option_err("scene", e))?;
     r.count("patches", n as u64);
     r.real("H_P", m.positional_entropy, unit).real("H_S", m.scene_entropy, unit);
     r.real("H_J", m.joint_entropy, unit).real("I_S", m.mutual_information, unit);
@@ -373,7 +382,7 @@ fn bottleneck(joint: &Option<MatrixArg>, max_seconds: f64, base: Base, r: &mut R
     let b = core_::agglomerative_bottleneck_with_progress(&m.data, m.rows, m.cols, base, |d, t| {
         progress.update(d, t);
     })
-    .map_err(|e| core_err("joint", e))?;
+    .map_err(|e| no_option_err("joint", e))?;
     r.real("initial_information", b.initial_information, unit);
     let steps = b
         .merges

@@ -1,12 +1,13 @@
 //! The run of `itgfx simplify`: the simplification, the errors a user
 //! checks it by, the pictures.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use glam::DVec3;
-use itgfx_backends::simplify::metrics::{Render, evaluation_directions, image_error, render, surface_distance};
-use itgfx_backends::simplify::{IndexedMesh, Metric, Placement, Settings, check_memory, simplify};
+use itgfx_backends::simplify::job::{Evaluation, JobError, JobOutcome, Measured, SimplifyJob, Work};
+use itgfx_backends::simplify::metrics::{Render, evaluation_directions};
+use itgfx_backends::simplify::{IndexedMesh, Metric, Placement, Repairs, Settings};
 use itgfx_backends::tracer::Prepared;
 use itgfx_backends::viewpoint::icosphere;
 
@@ -139,29 +140,50 @@ impl Collapses {
     }
 }
 
-/// One mesh to measure: a stage of the simplification or `--evaluate`'s.
-struct Simplified {
-    label: String,
-    mesh: IndexedMesh,
-    seconds: f64,
-    cpu_seconds: Option<f64>,
-    mi: Option<f64>,
-    stalled: Option<String>,
-}
-
 /// How many of the evaluation views go into the pictures.
 const SHOWN: usize = 4;
 
-fn renders(mesh: &IndexedMesh, o: &SimplifyOptions, eyes: &[DVec3]) -> Result<Vec<Render>, CliError> {
-    render(mesh, o.run.tracing.backend, eyes, o.image_size).map_err(|e| CliError::usage(e.to_string()))
-}
-
-/// Runs `itgfx simplify`.
+/// Runs `itgfx simplify`: the options, the input welded, the job
+/// ([`SimplifyJob`]: memory check, collapses or the mesh to evaluate,
+/// measurements), the report, the outputs.
 ///
 /// # Errors
 /// Usage, mesh, backend and output errors, one line.
-#[allow(clippy::too_many_lines)]
 pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
+    let (spec, out) = required(o)?;
+    // Syntax first, before any file is read; the counts once the mesh is known.
+    targets(o, usize::MAX)?;
+    let scene = load_scene(&spec, 1)?;
+    let prepared = Prepared::new(&scene);
+    let frame = (prepared.centre, prepared.scale);
+    let (original, repairs) =
+        IndexedMesh::weld(&scene.triangles, frame.0, frame.1).map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
+    if repairs.any() {
+        eprintln!("itgfx: warning: {spec}: repaired: {repairs}");
+    }
+    let job = SimplifyJob { input: &original, work: work(o, original.triangles(), frame)?, evaluation: evaluation(o) };
+    job.plan().map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
+    crate::output::out_files(&out, &["original.png", "compare.png"])?;
+    let t0 = Instant::now();
+    let mut progress = Collapses::new();
+    let outcome = job.run(&mut |d, t| progress.update(d, t)).map_err(|e| match e {
+        JobError::Simplify(e) => CliError::usage(format!("{spec}: {e}")),
+        JobError::Render(e) => CliError::usage(e.to_string()),
+    })?;
+    for m in &outcome.results {
+        if let Some(why) = &m.made.stalled {
+            eprintln!("itgfx: warning: target {} not reached: {why}", m.made.label);
+        }
+    }
+    let mut r = report(o, &scene.name, (&original, repairs), &outcome);
+    let written = write_outputs(o, (&out, &spec, frame), &original, &outcome, &mut r)?;
+    r.texts("wrote", written);
+    r.real("seconds", t0.elapsed().as_secs_f64(), Some("s"));
+    Ok(r)
+}
+
+/// The mesh and `--out` (required), and something to do.
+fn required(o: &SimplifyOptions) -> Result<(String, PathBuf), CliError> {
     let spec = o.mesh.clone().ok_or_else(|| CliError::usage("give a mesh: an .obj file or a built-in scene name"))?;
     let out = o.out.clone().ok_or_else(|| CliError::usage("give --out DIR for the simplified meshes and pictures"))?;
     if o.target.is_none() && o.sweep.is_none() && o.evaluate.is_none() {
@@ -170,166 +192,170 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
     if std::fs::metadata(&out).is_ok_and(|m| !m.is_dir()) {
         return Err(CliError::usage(format!("--out {out:?}: not a directory")));
     }
+    Ok((spec, out))
+}
+
+/// The placement `--placement` and `--lambda` ask for.
+fn placement(o: &SimplifyOptions) -> Placement {
+    match o.placement.as_str() {
+        "endpoint" => Placement::Endpoint,
+        "best" => Placement::Best,
+        "quadric" => Placement::Quadric,
+        _ => Placement::Blend(o.lambda),
+    }
+}
+
+/// What the job does to a mesh of `n` triangles in the frame `(centre,
+/// scale)`: the targets asked for, or `--evaluate`'s mesh.
+fn work(o: &SimplifyOptions, n: usize, (centre, scale): (DVec3, f64)) -> Result<Work, CliError> {
+    let targets = targets(o, n)?;
+    if let Some(f) = &o.evaluate {
+        let mesh = load_evaluated(f, centre, scale)?;
+        let label = Path::new(f).file_stem().map_or_else(|| "evaluated".into(), |s| s.to_string_lossy().into_owned());
+        return Ok(Work::Evaluate { label, mesh });
+    }
     let metric = match o.metric.as_str() {
         "ve" => Metric::Ve,
         "ivo" => Metric::Ivo,
         "vkl" => Metric::Vkl,
         _ => Metric::Vmi,
     };
-    let placement = match o.placement.as_str() {
-        "endpoint" => Placement::Endpoint,
-        "best" => Placement::Best,
-        "quadric" => Placement::Quadric,
-        _ => Placement::Blend(o.lambda),
+    let settings = Settings {
+        metric,
+        placement: placement(o),
+        directions: icosphere(viewpoint_level(o.viewpoints)),
+        distance: o.distance,
+        backend: o.run.tracing.backend,
+        refresh: 0.5,
+        tolerance: o.tolerance,
+        max_subdivision: o.max_subdivision,
+        background: !o.no_background,
+        lazy: true,
     };
-    // Syntax first, before any file is read; the counts once the mesh is known.
-    targets(o, usize::MAX)?;
-    let scene = load_scene(&spec, 1)?;
-    let prepared = Prepared::new(&scene);
-    let (centre, scale) = (prepared.centre, prepared.scale);
-    let weld = |s: &itgfx_backends::scene::Scene, what: &str| {
-        IndexedMesh::weld(&s.triangles, centre, scale).map_err(|e| CliError::usage(format!("{what}: {e}")))
-    };
-    let (original, repairs) = weld(&scene, &spec)?;
-    if repairs.any() {
-        eprintln!("itgfx: warning: {spec}: repaired: {repairs}");
-    }
-    let n = original.triangles();
-    let wanted = targets(o, n)?;
-    let evaluated = match &o.evaluate {
-        Some(f) => Some(load_evaluated(f, centre, scale)?),
-        None => None,
-    };
-    if o.evaluate.is_none() {
-        check_memory(n, icosphere(viewpoint_level(o.viewpoints)).len())
-            .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
-    }
-    crate::output::out_files(&out, &["original.png", "compare.png"])?;
+    Ok(Work::Simplify { targets, settings })
+}
 
-    let t0 = Instant::now();
+/// The evaluation views, render size and samples asked for.
+fn evaluation(o: &SimplifyOptions) -> Evaluation {
+    Evaluation {
+        eyes: evaluation_directions(o.eval_views).into_iter().map(|d| d * o.distance).collect(),
+        image_size: o.image_size,
+        samples: o.samples,
+        kept: SHOWN,
+        backend: o.run.tracing.backend,
+    }
+}
+
+/// The report: the input, the mode and its settings, the collapses, one
+/// record per result (its file names are added by [`write_outputs`]).
+fn report(o: &SimplifyOptions, name: &str, (original, repairs): (&IndexedMesh, Repairs), job: &JobOutcome) -> Report {
     let unit = Some(o.run.common.base.unit());
     // The simplifier measures in bits; reports follow --base.
     let in_base = |bits: f64| bits * std::f64::consts::LN_2 * o.run.common.base.per_nat();
-    let eyes: Vec<DVec3> = evaluation_directions(o.eval_views).into_iter().map(|d| d * o.distance).collect();
-    let reference = renders(&original, o, &eyes)?;
     let mut r = Report::new();
-    r.text("mesh", scene.name.clone()).count("triangles", n as u64).count("vertices", original.positions.len() as u64);
-    r.count("evaluation_views", eyes.len() as u64).count("image_size", u64::from(o.image_size));
+    r.text("mesh", name).count("triangles", original.triangles() as u64);
+    r.count("vertices", original.positions.len() as u64);
+    r.count("evaluation_views", o.eval_views as u64).count("image_size", u64::from(o.image_size));
     r.count("hausdorff_samples", o.samples as u64);
     r.count("repaired_degenerate", repairs.degenerate as u64)
         .count("repaired_duplicates", repairs.duplicates as u64)
         .count("repaired_detached", repairs.detached as u64)
         .count("repaired_split_vertices", repairs.split_vertices as u64);
     r.text("distance_unit", "bounding-box half diagonal");
-
-    let mut results: Vec<Simplified> = Vec::new();
-    let mut results_written: Vec<String> = Vec::new();
-    if let Some(m) = evaluated {
-        r.text("mode", "evaluate");
-        let label = Path::new(o.evaluate.as_deref().unwrap_or("evaluated"))
-            .file_stem()
-            .map_or_else(|| "evaluated".into(), |s| s.to_string_lossy().into_owned());
-        results.push(Simplified { label, mesh: m, seconds: 0.0, cpu_seconds: None, mi: None, stalled: None });
-    } else {
-        let dirs = icosphere(viewpoint_level(o.viewpoints));
-        let settings = Settings {
-            metric,
-            placement,
-            directions: dirs,
-            distance: o.distance,
-            backend: o.run.tracing.backend,
-            refresh: 0.5,
-            tolerance: o.tolerance,
-            max_subdivision: o.max_subdivision,
-            background: !o.no_background,
-            lazy: true,
-        };
-        let mut progress = Collapses::new();
-        let outcome = simplify(&original, &wanted, &settings, &mut |d, t| progress.update(d, t))
-            .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
+    if let Some(c) = &job.collapsed {
         r.text("mode", "simplify")
             .text("metric", o.metric.clone())
             .text("placement", o.placement.clone())
-            .maybe_real("lambda", matches!(placement, Placement::Blend(_)).then_some(o.lambda), None)
+            .maybe_real("lambda", matches!(placement(o), Placement::Blend(_)).then_some(o.lambda), None)
             .flag("background", !o.no_background)
             .count("viewpoints", u64::from(o.viewpoints));
-        r.real("I_VO", in_base(outcome.initial_mutual_information), unit);
-        r.count("collapses", outcome.collapses).count("channel_traces", u64::from(outcome.traces));
-        r.real("channel_seconds", outcome.trace_seconds, Some("s"));
-        for s in outcome.stages {
-            if let Some(why) = &s.stalled {
-                eprintln!("itgfx: warning: target {} not reached: {why}", s.target);
-            }
-            results.push(Simplified {
-                label: s.target.to_string(),
-                mesh: s.mesh,
-                seconds: s.seconds,
-                cpu_seconds: s.cpu_seconds,
-                mi: Some(s.mutual_information),
-                stalled: s.stalled,
-            });
-        }
+        r.real("I_VO", in_base(c.initial_mutual_information), unit);
+        r.count("collapses", c.collapses).count("channel_traces", u64::from(c.traces));
+        r.real("channel_seconds", c.trace_seconds, Some("s"));
+    } else {
+        r.text("mode", "evaluate");
     }
+    let summary = job.results.iter().map(|m| {
+        format!(
+            "{} triangles: image RMSE {:.4}, silhouette RMSE {:.4}, Hausdorff {:.4}, {:.2} s",
+            m.made.mesh.triangles(),
+            m.error.shading,
+            m.error.silhouette,
+            m.distance.hausdorff,
+            m.made.seconds
+        )
+    });
+    r.texts("summary", summary.collect());
+    r
+}
 
-    if o.evaluate.is_none() {
+/// One result's record, without its files.
+fn result_record(o: &SimplifyOptions, m: &Measured) -> Report {
+    let unit = Some(o.run.common.base.unit());
+    let in_base = |bits: f64| bits * std::f64::consts::LN_2 * o.run.common.base.per_nat();
+    let mut x = Report::new();
+    x.text("name", m.made.label.clone()).count("triangles", m.made.mesh.triangles() as u64);
+    x.real("seconds", m.made.seconds, Some("s")).maybe_real("cpu_seconds", m.made.cpu_seconds, Some("s"));
+    x.real("image_rmse", m.error.shading, None).real("silhouette_rmse", m.error.silhouette, None);
+    x.real("hausdorff", m.distance.hausdorff, None).real("mean_distance", m.distance.mean, None);
+    x.maybe_real("I_VO", m.made.mutual_information.map(in_base), unit);
+    if let Some(why) = &m.made.stalled {
+        x.text("stalled", why.clone());
+    }
+    x
+}
+
+/// Writes `--out`'s files (the welded input and each simplified mesh when
+/// simplifying, the pictures, the error plot of a sweep), adds the results
+/// with their files to `r`, and returns the paths written.
+fn write_outputs(
+    o: &SimplifyOptions,
+    (out, spec, (centre, scale)): (&Path, &str, (DVec3, f64)),
+    original: &IndexedMesh,
+    job: &JobOutcome,
+    r: &mut Report,
+) -> Result<Vec<String>, CliError> {
+    let n = original.triangles();
+    let simplified = job.collapsed.is_some();
+    let mut written = Vec::new();
+    if simplified {
         // The welded, repaired mesh the collapses started from (the input of any peer to compare with).
         let input = out.join("input.obj");
         let comment = format!("itgfx simplify: {spec} welded and repaired, {n} triangles");
         crate::output::write(&input, original.to_obj(centre, scale, &comment).as_bytes())?;
-        results_written.push(input.display().to_string());
+        written.push(input.display().to_string());
     }
-    let mut rows = vec![reference.iter().take(SHOWN).map(picture).collect::<Vec<_>>()];
+    let mut rows = vec![job.reference.iter().map(picture).collect::<Vec<_>>()];
     write_png(&montage(&rows[0], SHOWN), &out.join("original.png"))?;
-    let mut written = results_written;
     written.push(out.join("original.png").display().to_string());
-    let mut stages = Vec::new();
-    let mut summary = Vec::new();
-    let mut plotted = Vec::new();
-    for Simplified { label, mesh, seconds, cpu_seconds, mi, stalled } in &results {
-        let imgs = renders(mesh, o, &eyes)?;
-        let err = image_error(&reference, &imgs);
-        let dist = surface_distance(&original, mesh, o.samples, 1);
-        let mut x = Report::new();
-        x.text("name", label.clone()).count("triangles", mesh.triangles() as u64);
-        x.real("seconds", *seconds, Some("s")).maybe_real("cpu_seconds", *cpu_seconds, Some("s"));
-        x.real("image_rmse", err.shading, None).real("silhouette_rmse", err.silhouette, None);
-        x.real("hausdorff", dist.hausdorff, None).real("mean_distance", dist.mean, None);
-        x.maybe_real("I_VO", mi.map(in_base), unit);
-        if let Some(why) = stalled {
-            x.text("stalled", why.clone());
-        }
-        plotted.push((mesh.triangles(), err.shading, err.silhouette));
-        summary.push(format!(
-            "{} triangles: image RMSE {:.4}, silhouette RMSE {:.4}, Hausdorff {:.4}, {:.2} s",
-            mesh.triangles(),
-            err.shading,
-            err.silhouette,
-            dist.hausdorff,
-            seconds
-        ));
-        let stem = if o.evaluate.is_some() { label.clone() } else { format!("simplified_{label}") };
-        if o.evaluate.is_none() {
+    let mut records = Vec::new();
+    for m in &job.results {
+        let mut x = result_record(o, m);
+        let label = &m.made.label;
+        let stem = if simplified { format!("simplified_{label}") } else { label.clone() };
+        if simplified {
             let obj = out.join(format!("{stem}.obj"));
             let comment = format!(
-                "itgfx simplify --metric {} --placement {} --viewpoints {}: {} of {} triangles",
+                "itgfx simplify --metric {} --placement {} --viewpoints {}: {} of {n} triangles",
                 o.metric,
                 o.placement,
                 o.viewpoints,
-                mesh.triangles(),
-                n
+                m.made.mesh.triangles(),
             );
-            crate::output::write(&obj, mesh.to_obj(centre, scale, &comment).as_bytes())?;
+            crate::output::write(&obj, m.made.mesh.to_obj(centre, scale, &comment).as_bytes())?;
             written.push(obj.display().to_string());
             x.text("obj", obj.display().to_string());
         }
-        let row: Vec<image::RgbImage> = imgs.iter().take(SHOWN).map(picture).collect();
+        let row: Vec<image::RgbImage> = m.renders.iter().map(picture).collect();
         let png = out.join(format!("{stem}.png"));
         write_png(&montage(&row, SHOWN), &png)?;
         written.push(png.display().to_string());
         rows.push(row);
-        stages.push(x);
+        records.push(x);
     }
-    if plotted.len() >= 2 {
+    if job.results.len() >= 2 {
+        let plotted: Vec<_> =
+            job.results.iter().map(|m| (m.made.mesh.triangles(), m.error.shading, m.error.silhouette)).collect();
         let plot = out.join("errors.png");
         write_png(&error_plot(&plotted, n), &plot)?;
         written.push(plot.display().to_string());
@@ -337,11 +363,8 @@ pub fn run(o: &SimplifyOptions) -> Result<Report, CliError> {
     let all: Vec<image::RgbImage> = rows.concat();
     write_png(&montage(&all, SHOWN), &out.join("compare.png"))?;
     written.push(out.join("compare.png").display().to_string());
-    r.texts("summary", summary);
-    r.records("results", stages);
-    r.texts("wrote", written);
-    r.real("seconds", t0.elapsed().as_secs_f64(), Some("s"));
-    Ok(r)
+    r.records("results", records);
+    Ok(written)
 }
 
 /// Error against triangles for a sweep: image RMSE (white) and silhouette

@@ -7,6 +7,7 @@ use itgfx_backends::open;
 use itgfx_backends::scene::Scene;
 use itgfx_backends::tracer::{Prepared, Tracer};
 use itgfx_backends::viewpoint::saliency::smooth;
+use itgfx_backends::viewpoint::shard_job::{Estimator, ViewpointShards, check_channel_memory};
 use itgfx_backends::viewpoint::solid_angle::{Convergence, Refinement};
 use itgfx_backends::viewpoint::study::{Study, StudySettings};
 use itgfx_backends::viewpoint::{ViewpointChannel, ViewpointWeights, icosphere};
@@ -72,10 +73,11 @@ pub fn run(o: &ViewpointsOptions) -> Result<Report, CliError> {
         weights: weights(o),
         background: o.background,
     };
+    let job = super::shard::job(o, &scene.name, &prepared, tracer.as_ref(), &dirs, &refine);
     if let Some(s) = o.shards.shard {
-        return super::shard::save(o, s, &scene.name, &prepared, tracer.as_ref(), &dirs, &refine);
+        return super::shard::save(o, s, &job);
     }
-    let (ch, convergence) = channel(o, &spec, &scene.name, &prepared, tracer.as_ref(), &dirs, &refine)?;
+    let (ch, convergence) = channel(o, &spec, &job)?;
     let t_channel = t0.elapsed().as_secs_f64();
     if ch.is_blind() {
         return Err(CliError::usage(format!("{spec}: no viewpoint sees any polygon (an empty mesh?)")));
@@ -122,25 +124,26 @@ fn checked_pictures(o: &ViewpointsOptions) -> Result<Vec<Picture>, CliError> {
 fn channel(
     o: &ViewpointsOptions,
     spec: &str,
-    name: &str,
-    prepared: &Prepared,
-    tracer: &dyn Tracer,
-    dirs: &[glam::DVec3],
-    refine: &Refinement,
+    job: &ViewpointShards,
 ) -> Result<(ViewpointChannel, Option<Convergence>), CliError> {
     if !o.shards.merge.is_empty() {
-        return super::shard::merged(o, name, prepared, tracer, dirs, refine);
+        return super::shard::merged(o, job);
     }
     let mut progress = Progress::new();
     let mut tick = |d, t| progress.update(d, t);
-    if o.estimator == "grid" {
-        let ch = ViewpointChannel::build(prepared, tracer, dirs, o.distance, o.resolution.unwrap_or(128), &mut tick)
-            .map_err(|e| CliError::usage(e.to_string()))?;
-        return Ok((ch, None));
+    let (prepared, tracer, dirs) = (job.prepared, job.tracer, job.directions);
+    match job.estimator {
+        Estimator::Grid { resolution } => {
+            let ch = ViewpointChannel::build(prepared, tracer, dirs, o.distance, resolution, &mut tick)
+                .map_err(|e| CliError::usage(e.to_string()))?;
+            Ok((ch, None))
+        }
+        Estimator::SolidAngle { refine, .. } => {
+            let (ch, c) = ViewpointChannel::build_solid_angle(prepared, tracer, dirs, refine, &mut tick)
+                .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
+            Ok((ch, Some(c)))
+        }
     }
-    let (ch, c) = ViewpointChannel::build_solid_angle(prepared, tracer, dirs, refine, &mut tick)
-        .map_err(|e| CliError::usage(format!("{spec}: {e}")))?;
-    Ok((ch, Some(c)))
 }
 
 /// The report: the channel, its estimator's convergence, the measures, the
@@ -297,23 +300,11 @@ fn grey_levels(info: &[f64]) -> Vec<[u8; 3]> {
     info.iter().map(|&i| [(255.0 * (1.0 - (i - lo) / (hi - lo))).round().clamp(0.0, 255.0) as u8; 3]).collect()
 }
 
-/// Bytes a channel entry (one viewpoint, one polygon seen) takes with the
-/// per-view data behind it, at most: 72 (measured 66 between 42 and 162
-/// viewpoints of `torus:512,256`, 6.4 M more entries for 399 MiB more
-/// maximum RSS).
-const BYTES_PER_ENTRY: u64 = 72;
-
-/// Refuses, before the tracer and its BVH are built, a run whose scene
-/// estimate ([`Limits::estimate_bytes`](itgfx_backends::scene::Limits::estimate_bytes))
-/// plus a channel entry for every viewpoint and polygon is over what the
-/// process may use (`viewpoints`, and `shapes` for each mesh). A bound: at 42
-/// viewpoints `torus:512,256` peaks at 320 MiB against 602 MiB estimated,
-/// `torus:1024,256` at 560 MiB against 1.11 GiB (`/usr/bin/time -v`).
+/// Refuses, before the tracer and its BVH are built, a run whose memory
+/// ([`check_channel_memory`]) is over what the process may use
+/// (`viewpoints`, and `shapes` for each mesh).
 pub fn memory_check(scene: &itgfx_backends::scene::Scene, views: usize) -> Result<(), CliError> {
-    use itgfx_backends::scene::Limits;
-    let (t, p) = (scene.triangles.len() as u64, scene.patches.len() as u64);
-    let need =
-        Limits::estimate_bytes(t, p).saturating_add((views as u64).saturating_mul(p).saturating_mul(BYTES_PER_ENTRY));
-    itgfx_backends::memory::check(|| format!("{} at {views} viewpoints", scene.name), need)
+    check_channel_memory(scene, views)
+        .map(|_| ())
         .map_err(|e| CliError::usage(format!("{e}: fewer --viewpoints or a smaller scene")))
 }

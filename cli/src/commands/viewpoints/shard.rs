@@ -9,10 +9,8 @@ use std::time::Instant;
 use glam::DVec3;
 use itgfx_backends::tracer::{Prepared, Tracer};
 use itgfx_backends::viewpoint::ViewpointChannel;
-use itgfx_backends::viewpoint::shard_file::{
-    MeshFingerprint, ShardSettings, ViewpointShard, grid_channel, order_shards, shard_range,
-};
-use itgfx_backends::viewpoint::solid_angle::{Convergence, Refinement, ladder_levels};
+use itgfx_backends::viewpoint::shard_job::{Estimator, ViewpointShardError, ViewpointShards};
+use itgfx_backends::viewpoint::solid_angle::{Convergence, Refinement};
 
 use super::ViewpointsOptions;
 use crate::CliError;
@@ -65,17 +63,29 @@ pub fn check(
     Ok(())
 }
 
-/// The settings the rows depend on.
-#[must_use]
-pub fn settings(o: &ViewpointsOptions, viewpoints: usize, refine: &Refinement, backend: &str) -> ShardSettings {
-    let grid = o.estimator == "grid";
-    ShardSettings {
-        viewpoints: viewpoints as u64,
-        estimator: o.estimator.clone(),
-        distance: o.distance,
-        levels: if grid { Vec::new() } else { ladder_levels(refine.first, refine.max) },
-        resolution: if grid { o.resolution.unwrap_or(128) } else { 0 },
-        backend: backend.to_string(),
+/// The job over the run's viewpoints `dirs`, estimated as the options say.
+pub fn job<'a>(
+    o: &ViewpointsOptions,
+    name: &'a str,
+    prepared: &'a Prepared,
+    tracer: &'a dyn Tracer,
+    dirs: &'a [DVec3],
+    refine: &'a Refinement,
+) -> ViewpointShards<'a> {
+    let estimator = if o.estimator == "grid" {
+        Estimator::Grid { resolution: o.resolution.unwrap_or(128) }
+    } else {
+        Estimator::SolidAngle { refine, keep: o.shard_levels.map_or(1, |k| k as usize) }
+    };
+    ViewpointShards { name, prepared, tracer, directions: dirs, distance: o.distance, estimator }
+}
+
+/// A job error in the CLI's words.
+fn job_error(e: ViewpointShardError) -> CliError {
+    match e {
+        ViewpointShardError::Shard(e) => CliError::usage(crate::shard::describe(&e)),
+        ViewpointShardError::Eye { .. } => CliError::usage(format!("--merge: {e}")),
+        e => CliError::usage(e.to_string()),
     }
 }
 
@@ -84,41 +94,19 @@ pub fn settings(o: &ViewpointsOptions, viewpoints: usize, refine: &Refinement, b
 ///
 /// # Errors
 /// Backend and output errors.
-pub fn save(
-    o: &ViewpointsOptions,
-    s: Shard,
-    name: &str,
-    prepared: &Prepared,
-    tracer: &dyn Tracer,
-    dirs: &[DVec3],
-    refine: &Refinement,
-) -> Result<Report, CliError> {
+pub fn save(o: &ViewpointsOptions, s: Shard, job: &ViewpointShards) -> Result<Report, CliError> {
     let t0 = Instant::now();
-    let st = settings(o, dirs.len(), refine, tracer.name());
-    let (first, end) = shard_range(s.index, s.count, dirs.len() as u64);
-    let mine = &dirs[first as usize..end as usize];
     let mut progress = Progress::new();
-    let mut tick = |d, t| progress.update(d, t);
-    let scene = MeshFingerprint::of(name, prepared);
-    let (shard, kept) = if o.estimator == "grid" {
-        let ch = ViewpointChannel::build(prepared, tracer, mine, o.distance, st.resolution, &mut tick)
-            .map_err(|e| CliError::usage(e.to_string()))?;
-        (ViewpointShard::grid(scene, st, (s.index, s.count), &ch), None)
-    } else {
-        let keep = o.shard_levels.map_or(1, |k| k as usize);
-        let ladders = ViewpointChannel::ladders(prepared, tracer, mine, refine, keep, &mut tick)
-            .map_err(|e| CliError::usage(format!("{name}: {e}")))?;
-        let kept = ladders.first().map_or(0, |l| l.fractions.len());
-        (ViewpointShard::solid_angle(scene, st, (s.index, s.count), ladders), Some(kept))
-    };
-    let text = shard.to_json().map_err(|e| CliError::runtime(format!("--save-shard: {e}")))?;
+    let saved = job.save(s, &mut |d, t| progress.update(d, t)).map_err(job_error)?;
+    let text = saved.shard.to_json().map_err(|e| CliError::runtime(format!("--save-shard: {e}")))?;
     let path = o.shards.save_shard.as_ref().ok_or_else(|| CliError::usage("--shard needs --save-shard F"))?;
     crate::output::write(path, text.as_bytes())?;
+    let (first, end, views) = (saved.shard.first, saved.shard.end, job.directions.len() as u64);
     let mut r = Report::new();
-    r.text("mesh", name).text("backend", tracer.name()).text("estimator", o.estimator.clone());
+    r.text("mesh", job.name).text("backend", job.tracer.name()).text("estimator", o.estimator.clone());
     r.text("shard", s.to_string()).count("first_viewpoint", first).count("end_viewpoint", end);
-    r.count("viewpoints", dirs.len() as u64).count("shard_viewpoints", end - first);
-    if let Some(k) = kept {
+    r.count("viewpoints", views).count("shard_viewpoints", end - first);
+    if let Some(k) = saved.levels_saved {
         r.count("levels_saved", k as u64);
     }
     r.text("saved", path.display().to_string()).count("bytes", text.len() as u64);
@@ -133,27 +121,7 @@ pub fn save(
 /// Unreadable, foreign, duplicate or missing shards: one line.
 pub fn merged(
     o: &ViewpointsOptions,
-    name: &str,
-    prepared: &Prepared,
-    tracer: &dyn Tracer,
-    dirs: &[DVec3],
-    refine: &Refinement,
+    job: &ViewpointShards,
 ) -> Result<(ViewpointChannel, Option<Convergence>), CliError> {
-    let st = settings(o, dirs.len(), refine, tracer.name());
-    let scene = MeshFingerprint::of(name, prepared);
-    let fail = |e| CliError::usage(crate::shard::describe(&e));
-    let named = itgfx_backends::shards::read_files(&o.shards.merge, MAX_SHARD_BYTES).map_err(fail)?;
-    let shards = order_shards(named, &scene, &st).map_err(fail)?;
-    if o.estimator == "grid" {
-        return Ok((grid_channel(prepared.patches, &shards, dirs, o.distance, st.resolution), None));
-    }
-    let ladders: Vec<_> = shards.iter().flat_map(ViewpointShard::ladders).collect();
-    for (v, (l, d)) in ladders.iter().zip(dirs).enumerate() {
-        if l.eye != d.normalize() * o.distance {
-            return Err(CliError::usage(format!("--merge: viewpoint {v}'s eye is not where this run puts it")));
-        }
-    }
-    let (ch, c) = ViewpointChannel::from_ladders(prepared, tracer, &ladders, refine)
-        .map_err(|e| CliError::usage(format!("{name}: {e}")))?;
-    Ok((ch, Some(c)))
+    job.merge(&o.shards.merge, MAX_SHARD_BYTES).map_err(job_error)
 }

@@ -21,9 +21,8 @@ use std::time::Instant;
 
 use clap::Args;
 use itgfx_backends::BackendChoice;
-use itgfx_backends::backend::{open_volume, volume_memory};
+use itgfx_backends::backend::open_volume;
 use itgfx_backends::viewpoint::{ViewpointWeights, icosphere};
-use itgfx_backends::volume::channel::{channel_memory, seeable_voxels};
 use itgfx_backends::volume::raycast::Caster;
 use itgfx_backends::volume::{TransferFunction, VolumeChannelOptions, volume_channel};
 
@@ -34,9 +33,6 @@ use crate::report::Report;
 use crate::values::{backend, distance, out_path, threads, viewpoint_count, viewpoint_level};
 use input::{dims, image_side, iso_value, size, spacing, step, transfer, volume_help};
 use study::{Inputs, Study};
-
-/// Most memory the channel may take (estimated before any ray is cast).
-pub const MEMORY_LIMIT: u64 = 6 << 30;
 
 /// `itgfx volume VOLUME`.
 #[derive(Debug, Args)]
@@ -200,10 +196,14 @@ fn run_in(o: &VolumeOptions, spec: &str, tf: &TransferFunction) -> Result<Report
     let dirs = icosphere(viewpoint_level(o.viewpoints));
     let largest = volume.dims.iter().copied().max().unwrap_or(1) as u32;
     let rays = o.size.unwrap_or((2 * largest).clamp(32, 512));
-    let need = memory_need(o, &volume.name, &caster, shard::range(o, dirs.len()), rays)?;
+    let label = shard::label(o, &caster);
+    let job = shard::job(o, &label, &caster, &dirs, rays);
+    let need = job
+        .check_memory(o.backend, job.range(o.shards.shard), o.shards.merge.is_empty())
+        .map_err(|e| CliError::usage(format!("{e}: fewer --viewpoints or a smaller volume")))?;
     let backend_err = |e: itgfx_backends::BackendError| CliError::usage(e.to_string());
     if let Some(s) = o.shards.shard {
-        return shard::save(o, s, &*open_volume(o.backend, &caster).map_err(backend_err)?, &dirs, rays, need);
+        return shard::save(o, s, &job, &*open_volume(o.backend, &caster).map_err(backend_err)?, need);
     }
     // Rays a device handed back to the host (reported for vulkan only).
     let mut host_rays = None;
@@ -215,7 +215,7 @@ fn run_in(o: &VolumeOptions, spec: &str, tf: &TransferFunction) -> Result<Report
         host_rays = (o.backend == BackendChoice::Vulkan).then(|| backend.rays_finished_on_host());
         ch
     } else {
-        shard::merged(o, &caster, &dirs, rays)?
+        shard::merged(o, &job)?
     };
     let t_channel = t0.elapsed().as_secs_f64();
     if ch.is_blind() {
@@ -239,29 +239,4 @@ fn run_in(o: &VolumeOptions, spec: &str, tf: &TransferFunction) -> Result<Report
 /// `p(V)`: uniform with `--uniform-input`, else by the visibility gathered.
 fn weights(o: &VolumeOptions) -> ViewpointWeights {
     if o.uniform_input { ViewpointWeights::Uniform } else { ViewpointWeights::ProjectedArea }
-}
-
-/// The bytes the channel of viewpoints `first..end` may need (the device's
-/// buffers too when it casts: on lavapipe they are host memory), refused
-/// above [`MEMORY_LIMIT`] or what the process may use.
-fn memory_need(
-    o: &VolumeOptions,
-    name: &str,
-    caster: &Caster,
-    (first, end): (usize, usize),
-    rays: u32,
-) -> Result<u64, CliError> {
-    let casting = if o.shards.merge.is_empty() { u64::from(rays) * u64::from(rays) } else { 0 };
-    let need = channel_memory(caster, seeable_voxels(caster), end - first)
-        + if casting > 0 { volume_memory(o.backend, caster, casting) } else { 0 };
-    if need > MEMORY_LIMIT {
-        return Err(CliError::usage(format!(
-            "{name}: the channel may need {:.1} GiB (limit {} GiB): fewer --viewpoints or a smaller volume",
-            need as f64 / f64::from(1u32 << 30),
-            MEMORY_LIMIT >> 30
-        )));
-    }
-    itgfx_backends::memory::check(|| format!("{name}: the channel"), need)
-        .map_err(|e| CliError::usage(format!("{e}: fewer --viewpoints or a smaller volume")))?;
-    Ok(need)
 }

@@ -14,25 +14,21 @@ use std::path::Path;
 use std::time::Instant;
 
 use glam::DVec3;
-use itgfx_backends::backend::{open_volume, volume_memory};
+use itgfx_backends::backend::open_volume;
 use itgfx_backends::viewpoint::{ViewpointWeights, icosphere};
-use itgfx_backends::volume::channel::{channel_memory, seeable_voxels};
 use itgfx_backends::volume::paths::{dynamic_path, static_view, turn};
 use itgfx_backends::volume::raycast::Caster;
 use itgfx_backends::volume::series::{check_frames, common_range, is_series_built_in, series_built_in};
+use itgfx_backends::volume::shard_job::{HELD_BYTES_PER_VOXEL, PROCESS_BYTES, cast_memory};
 use itgfx_backends::volume::{TransferFunction, Volume, VolumeChannelOptions, volume_channel, volume_measures};
 
+use super::VolumeOptions;
 use super::pictures::view;
-use super::{MEMORY_LIMIT, VolumeOptions};
 use crate::export::{montage, write_png};
 use crate::progress::Progress;
 use crate::report::Report;
 use crate::values::viewpoint_level;
 use crate::{CliError, core_err};
-
-/// Memory of the process before any volume: `itgfx volume sphere:4
-/// --viewpoints 12` peaks at 7,136 KiB (`/usr/bin/time -v`).
-const PROCESS: u64 = 16 << 20;
 
 /// The files under `--out` for a series, the report last.
 pub(super) const SERIES_FILES: [&str; 4] = ["path.png", "static.png", "frames-best.png", "series.json"];
@@ -45,7 +41,8 @@ fn frames(o: &VolumeOptions, spec: &str) -> Result<Vec<Volume>, CliError> {
         if o.dims.is_some() || o.value_type.is_some() || o.spacing.is_some() {
             return Err(CliError::usage("--dims, --type and --spacing are for raw files, not built-in volumes"));
         }
-        series_built_in(spec, MEMORY_LIMIT).map_err(usage)?
+        let budget = itgfx_backends::memory::budget().map_or(u64::MAX, |b| b.bytes);
+        series_built_in(spec, budget).map_err(usage)?
     } else {
         let items = if spec.contains(['*', '?']) { glob(spec)? } else { split(spec) };
         if items.len() > itgfx_backends::volume::series::MAX_FRAMES {
@@ -55,6 +52,7 @@ fn frames(o: &VolumeOptions, spec: &str) -> Result<Vec<Volume>, CliError> {
                 itgfx_backends::volume::series::MAX_FRAMES
             )));
         }
+        let budget = itgfx_backends::memory::budget();
         let mut frames: Vec<Volume> = Vec::with_capacity(items.len());
         for (k, s) in items.iter().enumerate() {
             if s.trim().is_empty() {
@@ -62,16 +60,10 @@ fn frames(o: &VolumeOptions, spec: &str) -> Result<Vec<Volume>, CliError> {
             }
             // Every frame has frame 0's grid (checked below): refuse before loading more than fits.
             if let Some(first) = frames.first() {
-                let bytes = items.len() as u64 * first.voxels() as u64 * 5;
-                if bytes > MEMORY_LIMIT {
-                    return Err(CliError::usage(format!(
-                        "--time: {} frames of {} voxels need {:.1} GiB (limit {} GiB)",
-                        items.len(),
-                        first.voxels(),
-                        bytes as f64 / f64::from(1u32 << 30),
-                        MEMORY_LIMIT >> 30
-                    )));
-                }
+                let bytes = items.len() as u64 * first.voxels() as u64 * HELD_BYTES_PER_VOXEL;
+                let what = || format!("--time: {} frames of {} voxels", items.len(), first.voxels());
+                itgfx_backends::memory::check_within(budget, what, bytes)
+                    .map_err(|e| CliError::usage(format!("{e}: fewer frames or voxels")))?;
             }
             frames
                 .push(super::input::load(o, s.trim()).map_err(|e| CliError::usage(format!("--time frame {k}: {e}")))?);
@@ -217,8 +209,7 @@ pub(super) fn run(
 }
 
 /// The memory the series needs (the process, every frame's values held,
-/// one frame's channel at a time), refused above [`MEMORY_LIMIT`] or what
-/// the process may use; with the largest content radius of the frames.
+/// one frame's channel at a time), refused above what the process may use; with the largest content radius of the frames.
 /// Refuses a frame the transfer function makes transparent.
 fn memory_need(
     o: &VolumeOptions,
@@ -227,7 +218,7 @@ fn memory_need(
     views: usize,
     rays: u32,
 ) -> Result<(u64, f64), CliError> {
-    let held: u64 = PROCESS + frames.iter().map(|f| f.voxels() as u64 * 5).sum::<u64>();
+    let held: u64 = PROCESS_BYTES + frames.iter().map(|f| f.voxels() as u64 * HELD_BYTES_PER_VOXEL).sum::<u64>();
     let mut need = held;
     let mut radius: f64 = 0.0;
     for (k, f) in frames.iter().enumerate() {
@@ -239,16 +230,8 @@ fn memory_need(
             )));
         }
         radius = radius.max(caster.content_radius());
-        let one = channel_memory(&caster, seeable_voxels(&caster), views)
-            + volume_memory(o.backend, &caster, u64::from(rays) * u64::from(rays));
+        let one = cast_memory(&caster, o.backend, views, u64::from(rays) * u64::from(rays));
         need = need.max(held + one);
-    }
-    if need > MEMORY_LIMIT {
-        return Err(CliError::usage(format!(
-            "--time: the series may need {:.1} GiB (limit {} GiB): fewer --viewpoints, frames or voxels",
-            need as f64 / f64::from(1u32 << 30),
-            MEMORY_LIMIT >> 30
-        )));
     }
     itgfx_backends::memory::check(|| "--time: the series".into(), need)
         .map_err(|e| CliError::usage(format!("{e}: fewer --viewpoints, frames or voxels")))?;

@@ -9,12 +9,9 @@ use std::time::Instant;
 
 use glam::DVec3;
 use itgfx_backends::viewpoint::ViewpointChannel;
-use itgfx_backends::viewpoint::shard_file::{
-    Fnv, MeshFingerprint, ShardSettings, VOLUME_ESTIMATOR, ViewpointShard, grid_channel, order_shards, shard_range,
-};
 use itgfx_backends::volume::cast::VolumeCaster;
 use itgfx_backends::volume::raycast::Caster;
-use itgfx_backends::volume::{VolumeChannelOptions, volume_channel};
+use itgfx_backends::volume::shard_job::VolumeShards;
 
 use super::VolumeOptions;
 use crate::CliError;
@@ -53,29 +50,21 @@ pub(super) fn check(o: &VolumeOptions) -> Result<(), CliError> {
     Ok(())
 }
 
-/// The viewpoint range of this run: shard `i/n`'s, or all of them.
-pub(super) fn range(o: &VolumeOptions, viewpoints: usize) -> (usize, usize) {
-    o.shards.shard.map_or((0, viewpoints), |s| {
-        let (a, b) = shard_range(s.index, s.count, viewpoints as u64);
-        (a as usize, b as usize)
-    })
+/// The job over the run's viewpoints `dirs`: the fingerprint's name is the
+/// volume, `--tf` and `--step` (as shard files have always had it).
+pub(super) fn job<'a>(
+    o: &VolumeOptions,
+    label: &'a str,
+    caster: &'a Caster<'a>,
+    dirs: &'a [DVec3],
+    rays: u32,
+) -> VolumeShards<'a> {
+    VolumeShards { label, caster, directions: dirs, distance: o.distance, rays }
 }
 
-/// What the rows depend on: the volume, transfer function and step (the
-/// fingerprint) and the viewpoints, distance and rays (the settings).
-fn identity(o: &VolumeOptions, caster: &Caster<'_>, viewpoints: usize, rays: u32) -> (MeshFingerprint, ShardSettings) {
-    let mut h = Fnv::default();
-    caster.fingerprint(&mut h);
-    let name = format!("{} --tf {} --step {}", caster.volume.name, o.tf, o.step);
-    let settings = ShardSettings {
-        viewpoints: viewpoints as u64,
-        estimator: VOLUME_ESTIMATOR.into(),
-        distance: o.distance,
-        levels: Vec::new(),
-        resolution: rays,
-        backend: "cpu".into(),
-    };
-    (MeshFingerprint::volume(&name, caster.volume.voxels(), h), settings)
+/// The fingerprint's name of `caster`'s volume under the options.
+pub(super) fn label(o: &VolumeOptions, caster: &Caster<'_>) -> String {
+    format!("{} --tf {} --step {}", caster.volume.name, o.tf, o.step)
 }
 
 /// Ray-casts shard `s`'s viewpoints, saves their rows to `--save-shard`,
@@ -86,28 +75,22 @@ fn identity(o: &VolumeOptions, caster: &Caster<'_>, viewpoints: usize, rays: u32
 pub(super) fn save(
     o: &VolumeOptions,
     s: Shard,
+    job: &VolumeShards,
     backend: &dyn VolumeCaster,
-    dirs: &[DVec3],
-    rays: u32,
     memory: u64,
 ) -> Result<Report, CliError> {
-    let caster = backend.caster();
     let t0 = Instant::now();
-    let (first, end) = range(o, dirs.len());
-    let (scene, settings) = identity(o, caster, dirs.len(), rays);
-    let copts = VolumeChannelOptions { directions: dirs[first..end].to_vec(), distance: o.distance, size: rays };
     let mut progress = Progress::new();
-    let ch = volume_channel(backend, &copts, &mut |d, t| progress.update(d, t))
-        .map_err(|e| CliError::usage(e.to_string()))?;
-    let shard = ViewpointShard::grid(scene, settings, (s.index, s.count), &ch);
-    let text = shard.to_json().map_err(|e| CliError::runtime(format!("--save-shard: {e}")))?;
+    let saved = job.save(backend, s, &mut |d, t| progress.update(d, t)).map_err(|e| CliError::usage(e.to_string()))?;
+    let text = saved.shard.to_json().map_err(|e| CliError::runtime(format!("--save-shard: {e}")))?;
     let path = o.shards.save_shard.as_ref().ok_or_else(|| CliError::usage("--shard needs --save-shard F"))?;
     crate::output::write(path, text.as_bytes())?;
+    let (first, end, views) = (saved.shard.first, saved.shard.end, job.directions.len() as u64);
     let mut r = Report::new();
-    r.text("volume", caster.volume.name.clone()).text("shard", s.to_string());
-    r.count("first_viewpoint", first as u64).count("end_viewpoint", end as u64);
-    r.count("viewpoints", dirs.len() as u64).count("shard_viewpoints", (end - first) as u64);
-    r.count("channel_entries", ch.patch.len() as u64);
+    r.text("volume", job.caster.volume.name.clone()).text("shard", s.to_string());
+    r.count("first_viewpoint", first).count("end_viewpoint", end);
+    r.count("viewpoints", views).count("shard_viewpoints", end - first);
+    r.count("channel_entries", saved.entries);
     r.text("saved", path.display().to_string()).count("bytes", text.len() as u64);
     r.real("memory_estimate_MiB", memory as f64 / f64::from(1u32 << 20), None);
     r.real("seconds", t0.elapsed().as_secs_f64(), Some("s"));
@@ -119,15 +102,6 @@ pub(super) fn save(
 ///
 /// # Errors
 /// Unreadable, foreign, duplicate or missing shards: one line.
-pub(super) fn merged(
-    o: &VolumeOptions,
-    caster: &Caster<'_>,
-    dirs: &[DVec3],
-    rays: u32,
-) -> Result<ViewpointChannel, CliError> {
-    let (scene, settings) = identity(o, caster, dirs.len(), rays);
-    let fail = |e| CliError::usage(crate::shard::describe(&e));
-    let named = itgfx_backends::shards::read_files(&o.shards.merge, MAX_SHARD_BYTES).map_err(fail)?;
-    let shards = order_shards(named, &scene, &settings).map_err(fail)?;
-    Ok(grid_channel(caster.volume.voxels(), &shards, dirs, o.distance, rays))
+pub(super) fn merged(o: &VolumeOptions, job: &VolumeShards) -> Result<ViewpointChannel, CliError> {
+    job.merge(&o.shards.merge, MAX_SHARD_BYTES).map_err(|e| CliError::usage(crate::shard::describe(&e)))
 }

@@ -106,6 +106,11 @@ const GIB: f64 = (1u64 << 30) as f64;
 /// vertices and patch id (76 B, up to twice that in a vector's spare
 /// capacity), the tracer's `f32` triangle and normal (64 B), the BVH build
 /// (nodes, indices, the builder's two node arrays: about 200 B): 512 B.
+/// The renderer's uncompressed 8-wide nodes (`tracer/wide8.rs`, 256 B a
+/// CWBVH node: 27 B a triangle on `mirror-room`, under 256 B on any tree,
+/// which has fewer nodes than triangles) are allocated, with a fallible
+/// reservation, at the first closest-hit or shadow query, after the
+/// build's temporaries are given back.
 /// Per patch: the [`super::Patch`] with its name and the visibility
 /// counters and per-patch results: 256 B (a sphere's cells measure 200 B).
 /// Plus [`Limits::BASE_BYTES`] for the program, its line buffers and

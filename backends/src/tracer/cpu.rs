@@ -14,6 +14,7 @@ use super::watertight::{
     BLOCK, Block, Shear, TriangleLanes, barycentric, before, finish, push_crossing, sphere_crossings, sphere_hit,
     triangle_hit, walk_direction,
 };
+use super::wide8::{self, Wide8};
 use super::{BackendError, CrossingBuffer, Hit, Prepared, Tracer};
 use crate::lines::Line;
 
@@ -74,6 +75,7 @@ pub(crate) fn build_bvh(scene: &Prepared, params: obvhs::BvhBuildParams) -> CwBv
 }
 
 /// The CPU backend.
+#[derive(Clone)]
 pub struct CpuTracer {
     scene: Prepared,
     bvh: Option<CwBvh>,
@@ -83,6 +85,11 @@ pub struct CpuTracer {
     ordered: Vec<[Vec3A; 3]>,
     /// `ordered` as a structure of arrays for the 8-wide triangle test.
     lanes: TriangleLanes,
+    /// `bvh` uncompressed (`wide8.rs`): the tree `closest_hit` and
+    /// `occluded` walk one ray at a time, built at their first call (a
+    /// tracer used only for `trace_all` never allocates it); `None` inside
+    /// where [`Wide8::new`] declines, and the CWBVH walk serves.
+    wide: std::sync::OnceLock<Option<Wide8>>,
     /// Whether the 8-lane AVX2 node test is used (`node8`).
     avx2: bool,
     /// Whether `trace_all` interleaves walks (`interleave.rs`): AVX2 and
@@ -138,7 +145,14 @@ impl CpuTracer {
         let avx2 = node8::has_avx2();
         let interleave = avx2 && scene.sphere.is_none();
         let lanes = TriangleLanes::new(&ordered);
-        Self { scene: scene.clone(), bvh, ordered, lanes, avx2, interleave, bounds }
+        let wide = std::sync::OnceLock::new();
+        Self { scene: scene.clone(), bvh, ordered, lanes, wide, avx2, interleave, bounds }
+    }
+
+    /// The uncompressed tree, built at the first call.
+    #[inline]
+    fn wide(&self) -> Option<&Wide8> {
+        self.wide.get_or_init(|| self.bvh.as_ref().and_then(Wide8::new)).as_ref()
     }
 
     /// The first crossing of one line: the walk shrinks the interval as hits
@@ -154,7 +168,10 @@ impl CpuTracer {
             // SAFETY: `self.avx2` came from `has_avx2()`.
             return unsafe { self.closest_avx2(l) };
         }
-        self.closest_with::<false>(l, &())
+        match self.wide() {
+            Some(w) => self.closest_with::<false, true>(l, Some(w), &()),
+            None => self.closest_with::<false, false>(l, None, &()),
+        }
     }
 
     /// [`CpuTracer::closest`] compiled for AVX2, the walk, the triangle
@@ -165,11 +182,22 @@ impl CpuTracer {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     unsafe fn closest_avx2(&self, l: &Line) -> Option<Hit> {
-        self.closest_with::<true>(l, &())
+        match self.wide() {
+            Some(w) => self.closest_with::<true, true>(l, Some(w), &()),
+            None => self.closest_with::<true, false>(l, None, &()),
+        }
     }
 
+    /// The closest hit with the AVX2 tests or not, walking `wide` (where
+    /// `WIDE`; it must then be `Some`) or the CWBVH: one walk per
+    /// instance, so that the leaf closure is inlined into the AVX2 caller.
     #[inline(always)]
-    fn closest_with<const AVX2: bool>(&self, l: &Line, tally: &impl Tally) -> Option<Hit> {
+    fn closest_with<const AVX2: bool, const WIDE: bool>(
+        &self,
+        l: &Line,
+        wide: Option<&Wide8>,
+        tally: &impl Tally,
+    ) -> Option<Hit> {
         if let Some(s) = &self.scene.sphere {
             return sphere_hit(s, l);
         }
@@ -198,7 +226,13 @@ impl CpuTracer {
             })
         };
         // SAFETY: `AVX2` is true only in `closest_avx2`, entered after `has_avx2()`.
-        unsafe { node8::walk_groups::<AVX2, _>(bvh, &ray, tally, group) };
+        unsafe {
+            if WIDE {
+                wide8::walk::<AVX2, _>(wide?, &ray, tally, group);
+            } else {
+                node8::walk_groups::<AVX2, _>(bvh, &ray, tally, group);
+            }
+        }
         best.map(|(t, tri)| {
             let n = self.scene.normals[tri as usize];
             Hit {
@@ -220,7 +254,10 @@ impl CpuTracer {
             // SAFETY: `self.avx2` came from `has_avx2()`.
             return unsafe { self.any_avx2(l) };
         }
-        self.any_with::<false>(l, &())
+        match self.wide() {
+            Some(w) => self.any_with::<false, true>(l, Some(w), &()),
+            None => self.any_with::<false, false>(l, None, &()),
+        }
     }
 
     /// [`CpuTracer::any`] compiled for AVX2.
@@ -230,11 +267,15 @@ impl CpuTracer {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     unsafe fn any_avx2(&self, l: &Line) -> bool {
-        self.any_with::<true>(l, &())
+        match self.wide() {
+            Some(w) => self.any_with::<true, true>(l, Some(w), &()),
+            None => self.any_with::<true, false>(l, None, &()),
+        }
     }
 
+    /// Occlusion, as [`CpuTracer::closest_with`].
     #[inline(always)]
-    fn any_with<const AVX2: bool>(&self, l: &Line, tally: &impl Tally) -> bool {
+    fn any_with<const AVX2: bool, const WIDE: bool>(&self, l: &Line, wide: Option<&Wide8>, tally: &impl Tally) -> bool {
         if let Some(s) = &self.scene.sphere {
             return sphere_hit(s, l).is_some();
         }
@@ -247,7 +288,14 @@ impl CpuTracer {
             hit
         };
         // SAFETY: `AVX2` is true only in `any_avx2`, entered after `has_avx2()`.
-        unsafe { node8::walk_groups::<AVX2, _>(bvh, &ray, tally, group) };
+        unsafe {
+            if WIDE {
+                let Some(w) = wide else { return false };
+                wide8::walk::<AVX2, _>(w, &ray, tally, group);
+            } else {
+                node8::walk_groups::<AVX2, _>(bvh, &ray, tally, group);
+            }
+        }
         hit
     }
 
@@ -628,8 +676,9 @@ mod tests {
                 let t = CpuTracer::with_params(&p, *params);
                 let build = clock.elapsed().as_secs_f64();
                 let (c, s) = (Counts::default(), Counts::default());
-                let mut hits: Vec<Option<Hit>> = closest.iter().map(|l| t.closest_with::<false>(l, &c)).collect();
-                let blocked: Vec<bool> = shadow.iter().map(|l| t.any_with::<false>(l, &s)).collect();
+                let mut hits: Vec<Option<Hit>> =
+                    closest.iter().map(|l| t.closest_with::<false, true>(l, t.wide(), &c)).collect();
+                let blocked: Vec<bool> = shadow.iter().map(|l| t.any_with::<false, true>(l, t.wide(), &s)).collect();
                 // The batch calls, as the renderer makes them (packets included): best of 5.
                 let (mut tc, mut ts) = (f64::MAX, f64::MAX);
                 for _ in 0..5 {
@@ -644,6 +693,29 @@ mod tests {
                     }
                     ts = ts.min(clock.elapsed().as_secs_f64());
                 }
+                // The same rays one at a time, no packets, the wide walk
+                // and the CWBVH walk (`wide: None`) alternating: best of 5.
+                let cwbvh = CpuTracer { wide: None.into(), ..t.clone() };
+                let mut best = [f64::MAX; 4];
+                for _ in 0..5 {
+                    for (k, tracer) in [&t, &cwbvh].into_iter().enumerate() {
+                        let clock = std::time::Instant::now();
+                        let n = closest.iter().filter(|l| tracer.closest(l).is_some()).count();
+                        best[2 * k] = best[2 * k].min(clock.elapsed().as_secs_f64());
+                        let clock = std::time::Instant::now();
+                        let m = shadow.iter().filter(|l| tracer.any(l)).count();
+                        best[2 * k + 1] = best[2 * k + 1].min(clock.elapsed().as_secs_f64());
+                        assert!(n + m > 0);
+                    }
+                }
+                let ns = |s: f64, n: usize| s / n as f64 * 1e9;
+                eprintln!(
+                    "{spec} | {name} | single walks, no packets: wide closest {:.1} ns, shadow {:.1} ns | CWBVH closest {:.1} ns, shadow {:.1} ns",
+                    ns(best[0], closest.len()),
+                    ns(best[1], shadow.len()),
+                    ns(best[2], closest.len()),
+                    ns(best[3], shadow.len()),
+                );
                 let mut batch = Vec::new();
                 for chunk in closest.chunks(1024) {
                     let mut out = Vec::new();
@@ -653,6 +725,21 @@ mod tests {
                 assert_eq!(batch, hits, "{spec} {name}: batch and single walks differ");
                 let bvh = t.bvh.as_ref().unwrap();
                 let per = |x: &std::cell::Cell<u64>, n: usize| x.get() as f64 / n as f64;
+                // The CWBVH walk's counts on the same tree (the walk before `wide8`).
+                let cw = CpuTracer { wide: None.into(), ..t.clone() };
+                let (cc, cs) = (Counts::default(), Counts::default());
+                closest.iter().for_each(|l| assert_eq!(cw.closest_with::<false, false>(l, None, &cc), t.closest(l)));
+                shadow.iter().for_each(|l| assert_eq!(cw.any_with::<false, false>(l, None, &cs), t.any(l)));
+                eprintln!(
+                    "{spec} | {name} | wide nodes {} ({} bytes, {} CWBVH bytes) | CWBVH walk: closest {:.2} nodes {:.2} tris | shadow {:.2} nodes {:.2} tris",
+                    t.wide().map_or(0, Wide8::len),
+                    t.wide().map_or(0, Wide8::bytes),
+                    bvh.nodes.len() * size_of::<obvhs::cwbvh::node::CwBvhNode>(),
+                    per(&cc.nodes, closest.len()),
+                    per(&cc.triangles, closest.len()),
+                    per(&cs.nodes, shadow.len()),
+                    per(&cs.triangles, shadow.len()),
+                );
                 eprintln!(
                     "{spec} | {name} | build {:.1} ms, {} nodes, {} prims | closest {:.2} nodes {:.2} tris {:.1} ns | shadow {:.2} nodes {:.2} tris {:.1} ns",
                     build * 1e3,

@@ -38,6 +38,7 @@ mod node8;
 mod packet;
 mod reference;
 pub(crate) mod watertight;
+mod wide8;
 
 use glam::{DVec3, Vec3A};
 

@@ -73,6 +73,13 @@ impl LineRng {
         Self { w1, w2 }
     }
 
+    /// The generator's two words (`w1`, `w2`), for the 8-lane draws.
+    #[inline]
+    #[must_use]
+    pub(crate) fn words(&self) -> [u32; 2] {
+        [self.w1, self.w2]
+    }
+
     /// 32 random bits for draw `k`.
     #[inline]
     #[must_use]
@@ -201,7 +208,7 @@ pub fn global_lines_of(seed: SeedHash, first: u64, stride: u64, count: u64, radi
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-fn pcg8(v: std::arch::x86_64::__m256i) -> std::arch::x86_64::__m256i {
+pub(crate) fn pcg8(v: std::arch::x86_64::__m256i) -> std::arch::x86_64::__m256i {
     use std::arch::x86_64::{
         _mm256_add_epi32, _mm256_mullo_epi32, _mm256_set1_epi32, _mm256_srli_epi32, _mm256_srlv_epi32, _mm256_xor_si256,
     };
@@ -211,6 +218,63 @@ fn pcg8(v: std::arch::x86_64::__m256i) -> std::arch::x86_64::__m256i {
     let word =
         _mm256_mullo_epi32(_mm256_xor_si256(_mm256_srlv_epi32(state, shift), state), _mm256_set1_epi32(277_803_737));
     _mm256_xor_si256(_mm256_srli_epi32::<22>(word), word)
+}
+
+/// [`LineRng::uniform32`] of draw `k` for 8 generators, lane `l` of
+/// `w1`/`w2` holding generator `l`'s words ([`LineRng::words`]): the same
+/// integer operations, and the same f32 conversion (exact: the word's top
+/// 23 bits, plus one half, times a power of two).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(crate) fn uniform32x8(
+    w1: std::arch::x86_64::__m256i,
+    w2: std::arch::x86_64::__m256i,
+    k: u32,
+) -> std::arch::x86_64::__m256 {
+    use std::arch::x86_64::{
+        _mm256_add_epi32, _mm256_add_ps, _mm256_cvtepi32_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_srli_epi32,
+        _mm256_xor_si256,
+    };
+    let word = pcg8(_mm256_xor_si256(w1, pcg8(_mm256_add_epi32(w2, splat8(k.wrapping_mul(0x9E37_79B9))))));
+    let top = _mm256_cvtepi32_ps(_mm256_srli_epi32::<9>(word));
+    _mm256_mul_ps(_mm256_add_ps(top, _mm256_set1_ps(0.5)), _mm256_set1_ps(1.0 / 8_388_608.0))
+}
+
+/// [`permute`] of 8 lanes when each lane's `len` is a power of two (`w` =
+/// `len − 1`): the cycle walk then ends after one round, so this is that
+/// round's operations and the final masked sum, lane by lane.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(crate) fn permute8_pow2(
+    i: std::arch::x86_64::__m256i,
+    w: std::arch::x86_64::__m256i,
+    p: std::arch::x86_64::__m256i,
+) -> std::arch::x86_64::__m256i {
+    use std::arch::x86_64::{
+        _mm256_add_epi32, _mm256_and_si256, _mm256_mullo_epi32, _mm256_or_si256, _mm256_srli_epi32, _mm256_xor_si256,
+    };
+    let mul = |a, c: u32| _mm256_mullo_epi32(a, splat8(c));
+    let mut i = _mm256_xor_si256(i, p);
+    i = mul(i, 0xe170_893d);
+    i = _mm256_xor_si256(i, _mm256_srli_epi32::<16>(p));
+    i = _mm256_xor_si256(i, _mm256_srli_epi32::<4>(_mm256_and_si256(i, w)));
+    i = _mm256_xor_si256(i, _mm256_srli_epi32::<8>(p));
+    i = mul(i, 0x0929_eb3f);
+    i = _mm256_xor_si256(i, _mm256_srli_epi32::<23>(p));
+    i = _mm256_xor_si256(i, _mm256_srli_epi32::<1>(_mm256_and_si256(i, w)));
+    i = _mm256_mullo_epi32(i, _mm256_or_si256(splat8(1), _mm256_srli_epi32::<27>(p)));
+    i = mul(i, 0x6935_fa69);
+    i = _mm256_xor_si256(i, _mm256_srli_epi32::<11>(_mm256_and_si256(i, w)));
+    i = mul(i, 0x74dc_b303);
+    i = _mm256_xor_si256(i, _mm256_srli_epi32::<2>(_mm256_and_si256(i, w)));
+    i = mul(i, 0x9e50_1cc3);
+    i = _mm256_xor_si256(i, _mm256_srli_epi32::<2>(_mm256_and_si256(i, w)));
+    i = mul(i, 0xc860_a3df);
+    i = _mm256_and_si256(i, w);
+    i = _mm256_xor_si256(i, _mm256_srli_epi32::<5>(i));
+    _mm256_and_si256(_mm256_add_epi32(i, p), w)
 }
 
 /// [`LineRng::of`] for 8 line indices, and draws 0, 1, 64 and 65 of each:
@@ -241,14 +305,14 @@ unsafe fn hash8(seed: SeedHash, index: &[u64; 8]) -> ([u32; 8], [u32; 8], [[u32;
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-fn splat8(x: u32) -> std::arch::x86_64::__m256i {
+pub(crate) fn splat8(x: u32) -> std::arch::x86_64::__m256i {
     std::arch::x86_64::_mm256_set1_epi32(x as i32)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-fn load8(a: &[u32; 8]) -> std::arch::x86_64::__m256i {
+pub(crate) fn load8(a: &[u32; 8]) -> std::arch::x86_64::__m256i {
     // SAFETY: `a` is 32 readable bytes; the load is unaligned.
     unsafe { std::arch::x86_64::_mm256_loadu_si256(a.as_ptr().cast()) }
 }
@@ -256,7 +320,7 @@ fn load8(a: &[u32; 8]) -> std::arch::x86_64::__m256i {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-fn store8(v: std::arch::x86_64::__m256i) -> [u32; 8] {
+pub(crate) fn store8(v: std::arch::x86_64::__m256i) -> [u32; 8] {
     let mut a = [0u32; 8];
     // SAFETY: `a` is 32 writable bytes; the store is unaligned.
     unsafe { std::arch::x86_64::_mm256_storeu_si256(a.as_mut_ptr().cast(), v) };

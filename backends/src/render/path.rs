@@ -143,16 +143,54 @@ fn which(depth: u32) -> [u32; 2] {
     [v ^ 0x4c49_4748, v ^ 0x4449_5245]
 }
 
+/// What became of a live path at its vertex this bounce.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Fate {
+    /// Ended: escaped, absorbed, at the depth cap, or a direction of zero density.
+    Ended,
+    /// Goes on (a mirror, or a diffuse vertex whose direction is drawn).
+    Continues,
+}
+
 /// The wavefront's buffers, kept per thread between calls so that a batch
 /// neither allocates nor touches fresh pages (a chunk's paths are ~0.6 MB,
 /// above the allocator's threshold for returning memory to the system).
+///
+/// Per-path state is a structure of arrays indexed by the path's slot (its
+/// start's index): nothing of a path is copied between bounces; the live
+/// paths are a list of slots, compacted as paths end. All live paths are at
+/// the same depth (one bounce per wavefront step), so the depth is one
+/// number per step, not an array.
 #[derive(Default)]
 struct Scratch {
-    paths: Vec<Path>,
-    next: Vec<Path>,
+    /// Ray origin of each path's current segment (after its vertex: the
+    /// offset vertex the next segment leaves from).
+    origin: Vec<Vec3A>,
+    /// Unit direction of each path's current segment.
+    direction: Vec<Vec3A>,
+    /// Throughput of each path.
+    beta: Vec<Vec3A>,
+    /// Solid-angle density of the BSDF sample that made each path's
+    /// current segment; 0 after the camera or a mirror (emission then
+    /// counts in full).
+    pdf: Vec<f32>,
+    /// Each path's random draws.
+    rng: Vec<LineRng>,
+    /// Slots of the live paths, in the order of `lines`.
+    live: Vec<u32>,
+    next_live: Vec<u32>,
     lines: Vec<Line>,
     next_lines: Vec<Line>,
     hits: Vec<Option<crate::tracer::Hit>>,
+    /// Per live path this step (index as `live`): its fate and reflectance.
+    fate: Vec<Fate>,
+    rho: Vec<Vec3A>,
+    /// The diffuse vertices of this step: index into `live`, the shading
+    /// normal facing the arriving ray, and the vertex's five draws (light
+    /// choice, light point, direction).
+    diffuse: Vec<u32>,
+    normal: Vec<Vec3A>,
+    draws: Vec<[f32; 5]>,
     shadow: Vec<Line>,
     shadow_add: Vec<(u32, Vec3A)>,
     blocked: Vec<bool>,
@@ -164,19 +202,6 @@ thread_local! {
     /// nested through the tracer's own parallelism finds none and makes
     /// its own), put back after.
     static SCRATCH: std::cell::Cell<Option<Box<Scratch>>> = const { std::cell::Cell::new(None) };
-}
-
-#[derive(Clone, Copy)]
-struct Path {
-    origin: Vec3A,
-    direction: Vec3A,
-    beta: Vec3A,
-    /// Solid-angle density of the BSDF sample that made this segment; 0
-    /// after the camera or a mirror (emission then counts in full).
-    pdf: f32,
-    rng: LineRng,
-    slot: u32,
-    depth: u32,
 }
 
 /// Power-heuristic weight of a strategy with density `a` against one with
@@ -249,6 +274,14 @@ impl PathTracer<'_> {
     }
 
     /// The wavefront of [`Self::radiance_strata`] in `scratch`'s buffers.
+    ///
+    /// Each step runs in passes over the live paths' arrays: the hit
+    /// vertices (emission, mirrors, which paths go on), the diffuse
+    /// vertices' draws (integer hashing only, [`vertex_draws`]), their
+    /// next-event estimation and BSDF directions (f32 only), then the
+    /// roulette and the next segments in the live order. Per path, the
+    /// arithmetic and its order are the single loop's before this split,
+    /// so the images are the same bit for bit.
     fn wavefront(
         &self,
         starts: &[Start],
@@ -256,109 +289,157 @@ impl PathTracer<'_> {
         mut geometry: Option<&mut Vec<f64>>,
         scratch: &mut Scratch,
     ) -> Result<Vec<[f64; 3]>, BackendError> {
-        let Scratch { paths, next, lines, next_lines, hits, shadow, shadow_add, blocked, out } = scratch;
+        let Scratch {
+            origin,
+            direction,
+            beta,
+            pdf,
+            rng,
+            live,
+            next_live,
+            lines,
+            next_lines,
+            hits,
+            fate,
+            rho,
+            diffuse,
+            normal,
+            draws,
+            shadow,
+            shadow_add,
+            blocked,
+            out,
+        } = scratch;
+        let n = starts.len();
         out.clear();
-        out.resize(starts.len(), Vec3A::ZERO);
-        paths.clear();
+        out.resize(n, Vec3A::ZERO);
+        origin.clear();
+        direction.clear();
+        beta.clear();
+        beta.resize(n, Vec3A::ONE);
+        pdf.clear();
+        pdf.resize(n, 0.0);
+        rng.clear();
+        live.clear();
         lines.clear();
         for (slot, s) in starts.iter().enumerate() {
-            let (origin, direction) = (s.origin.as_vec3a(), s.direction.as_vec3a());
-            paths.push(Path { origin, direction, beta: Vec3A::ONE, pdf: 0.0, rng: s.rng, slot: slot as u32, depth: 0 });
-            lines.push(Line::ray32(origin, direction, 0.0, FAR));
+            let (o, d) = (s.origin.as_vec3a(), s.direction.as_vec3a());
+            origin.push(o);
+            direction.push(d);
+            rng.push(s.rng);
+            live.push(slot as u32);
+            lines.push(Line::ray32(o, d, 0.0, FAR));
         }
-        while !paths.is_empty() {
+        let mut depth = 0u32;
+        while !live.is_empty() {
             self.tracer.closest_hit(lines, hits)?;
-            shadow.clear();
-            shadow_add.clear();
-            next.clear();
-            next_lines.clear();
-            for (p, hit) in paths.iter().zip(hits.iter()) {
+            fate.clear();
+            rho.clear();
+            diffuse.clear();
+            normal.clear();
+            // Pass 1: the vertices. Emission, the depth cap, absorption,
+            // mirrors; diffuse vertices listed for the passes below.
+            for (j, (&p, hit)) in live.iter().zip(hits.iter()).enumerate() {
+                let p = p as usize;
+                fate.push(Fate::Ended);
+                rho.push(Vec3A::ZERO);
                 let Some(h) = hit else { continue };
-                let mut p = *p;
                 let t = h.primitive as usize;
                 let [v0, v1, v2] = self.prepared.triangles[t];
                 let [b1, b2] = h.barycentric;
                 let x = v0 * (1.0 - b1 - b2) + v1 * b1 + v2 * b2;
-                let n = Vec3A::from(h.normal);
-                let cos_in = n.dot(p.direction);
-                if p.depth == 0
+                let nrm = Vec3A::from(h.normal);
+                let cos_in = nrm.dot(direction[p]);
+                if depth == 0
                     && let Some(g) = geometry.as_deref_mut()
                 {
-                    let r = (x - p.origin).length();
-                    g[p.slot as usize] = itgfx_core::pixel::geometry_factor(f64::from(cos_in), f64::from(r));
+                    let r = (x - origin[p]).length();
+                    g[p] = itgfx_core::pixel::geometry_factor(f64::from(cos_in), f64::from(r));
                 }
                 let m = self.surfaces.fast_of(h.primitive);
                 let light = self.lights.of_triangle[t];
                 if cos_in < 0.0 && light != u32::MAX {
-                    let w = if p.pdf == 0.0 {
+                    let w = if pdf[p] == 0.0 {
                         1.0
                     } else {
-                        let d = (x - p.origin).length();
-                        power(p.pdf, self.lights.pdf32(light as usize, d, -cos_in))
+                        let d = (x - origin[p]).length();
+                        power(pdf[p], self.lights.pdf32(light as usize, d, -cos_in))
                     };
-                    out[p.slot as usize] += p.beta * m.emittance * w;
+                    out[p] += beta[p] * m.emittance * w;
                 }
-                if p.depth + 1 >= self.max_depth {
+                if depth + 1 >= self.max_depth {
                     continue;
                 }
-                let nf = if cos_in < 0.0 { n } else { -n };
-                let rho = m.reflectance;
-                if rho.max_element() <= 0.0 {
+                let nf = if cos_in < 0.0 { nrm } else { -nrm };
+                if m.reflectance.max_element() <= 0.0 {
                     continue;
                 }
-                let k = CAMERA_DRAWS + DRAWS_PER_BOUNCE * p.depth;
-                let o = x + nf * EPSILON;
+                rho[j] = m.reflectance;
+                origin[p] = x + nf * EPSILON;
+                fate[j] = Fate::Continues;
                 if m.mirror {
-                    p.direction = (p.direction - nf * (2.0 * p.direction.dot(nf))).normalize();
-                    p.pdf = 0.0;
+                    let d = direction[p];
+                    direction[p] = (d - nf * (2.0 * d.dot(nf))).normalize();
+                    pdf[p] = 0.0;
                 } else {
-                    let u = |i: u32| p.rng.uniform32(k + i);
-                    let (mut l1, mut l2, mut d1, mut d2) = (u(1), u(2), u(3), u(4));
-                    if let Some(s) = strata {
-                        let s = &s[p.slot as usize];
-                        let grid = self::strata(s.count);
-                        let [wl, wd] = which(p.depth);
-                        (l1, l2) = s.place_hashed(grid, pcg(s.key ^ wl), l1, l2);
-                        (d1, d2) = s.place_hashed(grid, pcg(s.key ^ wd), d1, d2);
-                    }
-                    // Next-event estimation.
-                    let (li, y) = self.lights.sample32(u(0), l1, l2);
-                    let to = y - o;
-                    let dist = to.length();
-                    let w = to / dist;
-                    let cos_x = nf.dot(w);
-                    let fl = &self.lights.fast[li];
-                    let cos_l = -fl.normal.dot(w);
-                    if cos_x > 0.0 && cos_l > 0.0 && dist > 0.0 {
-                        let pdf_l = self.lights.pdf32(li, dist, cos_l);
-                        let weight = power(pdf_l, cos_x * FRAC_1_PI);
-                        let c = p.beta * rho * fl.radiance * (FRAC_1_PI * cos_x / pdf_l * weight);
-                        if c.max_element() > 0.0 {
-                            shadow.push(Line::ray32(o, w, 0.0, dist * (1.0 - 1e-4)));
-                            shadow_add.push((p.slot, c));
-                        }
-                    }
-                    let d = cosine_direction32(nf, d1, d2);
-                    p.pdf = (nf.dot(d) * FRAC_1_PI).max(0.0);
-                    p.direction = d;
-                    if !(p.pdf > 0.0) {
-                        continue;
+                    diffuse.push(j as u32);
+                    normal.push(nf);
+                }
+            }
+            // Pass 2: the diffuse vertices' draws.
+            let k = CAMERA_DRAWS + DRAWS_PER_BOUNCE * depth;
+            vertex_draws(live, diffuse, rng, strata, k, depth, draws);
+            // Pass 3: next-event estimation and the BSDF direction.
+            shadow.clear();
+            shadow_add.clear();
+            for ((&j, &nf), &[u0, l1, l2, d1, d2]) in diffuse.iter().zip(normal.iter()).zip(draws.iter()) {
+                let p = live[j as usize] as usize;
+                let o = origin[p];
+                let (li, y) = self.lights.sample32(u0, l1, l2);
+                let to = y - o;
+                let dist = to.length();
+                let w = to / dist;
+                let cos_x = nf.dot(w);
+                let fl = &self.lights.fast[li];
+                let cos_l = -fl.normal.dot(w);
+                if cos_x > 0.0 && cos_l > 0.0 && dist > 0.0 {
+                    let pdf_l = self.lights.pdf32(li, dist, cos_l);
+                    let weight = power(pdf_l, cos_x * FRAC_1_PI);
+                    let c = beta[p] * rho[j as usize] * fl.radiance * (FRAC_1_PI * cos_x / pdf_l * weight);
+                    if c.max_element() > 0.0 {
+                        shadow.push(Line::ray32(o, w, 0.0, dist * (1.0 - 1e-4)));
+                        shadow_add.push((p as u32, c));
                     }
                 }
-                p.beta *= rho;
-                p.depth += 1;
-                if p.depth >= ROULETTE_FROM {
+                let d = cosine_direction32(nf, d1, d2);
+                pdf[p] = (nf.dot(d) * FRAC_1_PI).max(0.0);
+                direction[p] = d;
+                if !(pdf[p] > 0.0) {
+                    fate[j as usize] = Fate::Ended;
+                }
+            }
+            // Pass 4: throughput, the roulette, and the next segments, in
+            // the live order.
+            next_live.clear();
+            next_lines.clear();
+            for ((&p, &f), &r) in live.iter().zip(fate.iter()).zip(rho.iter()) {
+                if f == Fate::Ended {
+                    continue;
+                }
+                let s = p as usize;
+                let mut b = beta[s] * r;
+                if depth + 1 >= ROULETTE_FROM {
                     // The roulette's draw (the bounce's sixth), drawn only
                     // where the path needs it.
-                    let q = p.beta.max_element().min(0.95);
-                    if p.rng.uniform32(k + 5) >= q {
+                    let q = b.max_element().min(0.95);
+                    if rng[s].uniform32(k + 5) >= q {
                         continue;
                     }
-                    p.beta /= q;
+                    b /= q;
                 }
-                p.origin = o;
-                next.push(p);
-                next_lines.push(Line::ray32(o, p.direction, 0.0, FAR));
+                beta[s] = b;
+                next_live.push(p);
+                next_lines.push(Line::ray32(origin[s], direction[s], 0.0, FAR));
             }
             if !shadow.is_empty() {
                 self.tracer.occluded(shadow, blocked)?;
@@ -368,11 +449,132 @@ impl PathTracer<'_> {
                     }
                 }
             }
-            std::mem::swap(paths, next);
+            std::mem::swap(live, next_live);
             std::mem::swap(lines, next_lines);
+            depth += 1;
         }
         Ok(out.iter().map(|c| c.as_dvec3().to_array()).collect())
     }
+}
+
+/// The five draws of each diffuse vertex of a step at `depth` (its draws
+/// from `k` on): light choice, light point, BSDF direction, the two pairs
+/// placed in their stratum's cell where the path has a [`Stratum`].
+/// `diffuse` indexes `live`, which holds slots (of `rng` and `strata`).
+/// Eight vertices at a time where AVX2 runs ([`vertex_draws_avx2`]: the
+/// same integer operations lane by lane, so the same draws).
+fn vertex_draws(
+    live: &[u32],
+    diffuse: &[u32],
+    rng: &[LineRng],
+    strata: Option<&[Stratum]>,
+    k: u32,
+    depth: u32,
+    draws: &mut Vec<[f32; 5]>,
+) {
+    draws.clear();
+    #[allow(unused_mut)]
+    let mut done = 0;
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: AVX2 was detected just above.
+        done = unsafe { vertex_draws_avx2(live, diffuse, rng, strata, k, depth, draws) };
+    }
+    for &j in &diffuse[done..] {
+        draws.push(vertex_draw(live[j as usize] as usize, rng, strata, k, which(depth)));
+    }
+}
+
+/// The five draws of path `p`'s vertex (see [`vertex_draws`]), `words` =
+/// [`which`] of its depth.
+#[inline(always)]
+fn vertex_draw(p: usize, rng: &[LineRng], strata: Option<&[Stratum]>, k: u32, [wl, wd]: [u32; 2]) -> [f32; 5] {
+    let r = &rng[p];
+    let u = |i: u32| r.uniform32(k + i);
+    let (mut l1, mut l2, mut d1, mut d2) = (u(1), u(2), u(3), u(4));
+    if let Some(s) = strata {
+        let s = &s[p];
+        let grid = self::strata(s.count);
+        (l1, l2) = s.place_hashed(grid, pcg(s.key ^ wl), l1, l2);
+        (d1, d2) = s.place_hashed(grid, pcg(s.key ^ wd), d1, d2);
+    }
+    [u(0), l1, l2, d1, d2]
+}
+
+/// [`vertex_draws`] for whole groups of eight vertices, 8 lanes at once:
+/// the draws ([`crate::lines::uniform32x8`]), the permutation keys, and,
+/// where every lane's batch is a power of two (a one-round permutation,
+/// [`crate::lines::permute8_pow2`]), the placement in the cell; a group
+/// with another batch size takes [`vertex_draw`] lane by lane. Returns how
+/// many vertices it drew (a multiple of 8).
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn vertex_draws_avx2(
+    live: &[u32],
+    diffuse: &[u32],
+    rng: &[LineRng],
+    strata: Option<&[Stratum]>,
+    k: u32,
+    depth: u32,
+    draws: &mut Vec<[f32; 5]>,
+) -> usize {
+    use std::arch::x86_64::{
+        __m256, _mm256_add_ps, _mm256_and_si256, _mm256_castsi256_ps, _mm256_cvtepi32_ps, _mm256_min_ps, _mm256_mul_ps,
+        _mm256_set1_ps, _mm256_srlv_epi32, _mm256_storeu_ps, _mm256_xor_si256,
+    };
+
+    use crate::lines::{load8, pcg8, permute8_pow2, splat8, uniform32x8};
+
+    let words = which(depth);
+    let below_one = _mm256_set1_ps(1.0 - f32::EPSILON / 2.0);
+    // `Stratum::place_hashed`'s power-of-two branch, 8 lanes: `cell`'s
+    // column and row, each plus its jitter, times `1/a` and `1/b`.
+    let place = |cell, amask, ka, inva, invb, u, v| {
+        let x = _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(_mm256_and_si256(cell, amask)), u), inva);
+        let y = _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(_mm256_srlv_epi32(cell, ka)), v), invb);
+        (_mm256_min_ps(x, below_one), _mm256_min_ps(y, below_one))
+    };
+    let store = |v: __m256| {
+        let mut a = [0f32; 8];
+        // SAFETY: `a` is 32 writable bytes; the store is unaligned.
+        unsafe { _mm256_storeu_ps(a.as_mut_ptr(), v) };
+        a
+    };
+    let groups = diffuse.len() / 8;
+    for group in diffuse.chunks_exact(8) {
+        let slot: [usize; 8] = std::array::from_fn(|l| live[group[l] as usize] as usize);
+        let [w1, w2] = [0, 1].map(|w| load8(&slot.map(|p| rng[p].words()[w])));
+        let u: [__m256; 5] = std::array::from_fn(|i| uniform32x8(w1, w2, k + i as u32));
+        let [mut l1, mut l2, mut d1, mut d2] = [u[1], u[2], u[3], u[4]];
+        if let Some(s) = strata {
+            let s = slot.map(|p| s[p]);
+            if !s.iter().all(|s| s.count.is_power_of_two()) {
+                for &p in &slot {
+                    draws.push(vertex_draw(p, rng, strata, k, words));
+                }
+                continue;
+            }
+            let ka = s.map(|s| s.count.trailing_zeros() / 2);
+            let kb = s.map(|s| s.count.trailing_zeros() - s.count.trailing_zeros() / 2);
+            let inv = |k: [u32; 8]| _mm256_castsi256_ps(load8(&k.map(|k| (127 - k) << 23)));
+            let (inva, invb) = (inv(ka), inv(kb));
+            let amask = load8(&ka.map(|k| (1 << k) - 1));
+            let ka = load8(&ka);
+            let (key, index, w) =
+                (load8(&s.map(|s| s.key)), load8(&s.map(|s| s.index)), load8(&s.map(|s| s.count - 1)));
+            let cell = |which: u32| permute8_pow2(index, w, pcg8(_mm256_xor_si256(key, splat8(which))));
+            (l1, l2) = place(cell(words[0]), amask, ka, inva, invb, l1, l2);
+            (d1, d2) = place(cell(words[1]), amask, ka, inva, invb, d1, d2);
+        }
+        let [u0, l1, l2, d1, d2] = [u[0], l1, l2, d1, d2].map(store);
+        for l in 0..8 {
+            draws.push([u0[l], l1[l], l2[l], d1[l], d2[l]]);
+        }
+    }
+    groups * 8
 }
 
 #[cfg(test)]
@@ -408,5 +610,37 @@ mod tests {
         let order =
             |key| (0..64).map(|index| Stratum { index, count: 64, key }.place((8, 8), 1, 0.5, 0.5)).collect::<Vec<_>>();
         assert_ne!(order(1), order(2));
+    }
+
+    /// The 8-lane draws are the scalar draws bit for bit: batches of a
+    /// power of two (one permutation round) and of other sizes (the scalar
+    /// fallback) mixed within groups, a tail that is not a whole group,
+    /// and paths with no stratum.
+    #[test]
+    fn vertex_draws_match_the_scalar_draws() {
+        let n = 203u32;
+        let rng: Vec<LineRng> = (0..n).map(|i| LineRng::new(5, u64::from(i) * 7 + 1)).collect();
+        let live: Vec<u32> = (0..n).rev().collect();
+        let diffuse: Vec<u32> = (0..n).filter(|j| j % 3 != 1).collect();
+        for sizes in [&[64u32, 16, 1, 256, 2][..], &[64, 60, 64, 64], &[8, 32, 128]] {
+            let strata: Vec<Stratum> = (0..n)
+                .map(|p| {
+                    let count = sizes[(p as usize / 8) % sizes.len()];
+                    Stratum { index: (p * 13) % count, count, key: pcg(p / 8) }
+                })
+                .collect();
+            for s in [Some(&strata[..]), None] {
+                for depth in [0u32, 3] {
+                    let k = CAMERA_DRAWS + DRAWS_PER_BOUNCE * depth;
+                    let mut draws = Vec::new();
+                    vertex_draws(&live, &diffuse, &rng, s, k, depth, &mut draws);
+                    assert_eq!(draws.len(), diffuse.len());
+                    for (&j, d) in diffuse.iter().zip(&draws) {
+                        let want = vertex_draw(live[j as usize] as usize, &rng, s, k, which(depth));
+                        assert_eq!(d.map(f32::to_bits), want.map(f32::to_bits), "vertex {j}, sizes {sizes:?}");
+                    }
+                }
+            }
+        }
     }
 }

@@ -320,7 +320,7 @@ pub fn jensen_shannon_sparse<T: Real>(
 /// [`sparse_logs`]'s output), so that rows compared with many others take
 /// their logarithms once. Bit for bit the same value as
 /// [`jensen_shannon_sparse`] for such logs: the same merge in batches
-/// ([`js_merge_batched`], tested against [`js_merge`] bit for bit), each
+/// (`js_merge_batched`, tested against `js_merge` bit for bit), each
 /// batch's mixture logarithms taken in one vectorised pass.
 ///
 /// # Errors

@@ -165,5 +165,9 @@ fn node_samples_change_the_tree_and_bad_values_are_refused() {
     }
     fails(&["render", "cornell-box", "--out", o, "--sampler", "es", "--node-samples", "4"], "refinement trees");
     fails(&["render", "cornell-box", "--out", o, "--node-samples", "4"], "refinement trees");
+    // A misspelt sampler names the nearest one; a far-off name lists them only.
+    fails(&["render", "cornell-box", "--out", o, "--sampler", "adaptiv"], "did you mean adaptive?");
+    fails(&["render", "cornell-box", "--out", o, "--sampler", "hl-sqr"], "did you mean hl-sqrt?");
+    fails(&["render", "cornell-box", "--out", o, "--sampler", "zzzzzzzz"], "uniform, adaptive, es");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -155,12 +155,36 @@ fn sampler_name(s: &str) -> Result<String, String> {
     {
         Ok(s.to_string())
     } else {
-        Err(format!(
-            "unknown sampler {s:?}: uniform, adaptive, es, {}, {}",
-            tree::NAMES.join(", "),
-            criteria::NAMES.join(", ")
-        ))
+        let names: Vec<&str> = ["uniform", "adaptive", "es"]
+            .into_iter()
+            .chain(tree::NAMES.iter().copied())
+            .chain(criteria::NAMES.iter().copied())
+            .collect();
+        let hint = names
+            .iter()
+            .map(|n| (edit_distance(s, n), *n))
+            .filter(|&(d, _)| d <= 2)
+            .min()
+            .map_or(String::new(), |(_, n)| format!(" (did you mean {n}?)"));
+        Err(format!("unknown sampler {s:?}{hint}: {}", names.join(", ")))
     }
+}
+
+/// Levenshtein distance between two names (insertions, deletions and
+/// substitutions of characters), for the "did you mean" hint.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diag = row[0];
+        row[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let next = (diag + usize::from(ca != cb)).min(row[j] + 1).min(row[j + 1] + 1);
+            diag = row[j + 1];
+            row[j + 1] = next;
+        }
+    }
+    row[b.len()]
 }
 
 /// Longest time budget: a week.

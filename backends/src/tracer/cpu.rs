@@ -151,7 +151,7 @@ impl CpuTracer {
 
     /// The uncompressed tree, built at the first call.
     #[inline]
-    fn wide(&self) -> Option<&Wide8> {
+    pub(super) fn wide(&self) -> Option<&Wide8> {
         self.wide.get_or_init(|| self.bvh.as_ref().and_then(Wide8::new)).as_ref()
     }
 

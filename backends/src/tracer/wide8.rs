@@ -38,11 +38,11 @@ use super::node8::{NODE_EPSILON, Tally};
 
 /// A leaf child's entry in [`Node::child`]: this bit, and the child's
 /// primitives as a mask over the node's primitive group (bits 0..24).
-const LEAF: u32 = 1 << 31;
+pub(super) const LEAF: u32 = 1 << 31;
 
 /// Depth of the traversal stack. [`Wide8::new`] computes the most entries
 /// any walk of its tree can hold and declines a tree that needs more.
-const STACK: usize = 128;
+pub(super) const STACK: usize = 128;
 
 /// One 8-wide node: 256 bytes, four cache lines (checked below).
 #[derive(Clone, Copy, Debug)]
@@ -50,14 +50,14 @@ const STACK: usize = 128;
 pub(crate) struct Node {
     /// `bounds[2·axis + side][slot]`: side 0 the lower plane, 1 the upper;
     /// an empty slot has lower `+∞` and upper `−∞` (no ray enters it).
-    bounds: [[f32; 8]; 6],
+    pub(super) bounds: [[f32; 8]; 6],
     /// Per slot: an internal child's node index, [`LEAF`] with its
     /// primitive mask for a leaf child, 0 for an empty slot.
-    child: [u32; 8],
+    pub(super) child: [u32; 8],
     /// First primitive (BVH order) of the node's primitive group.
-    prim_base: u32,
+    pub(super) prim_base: u32,
     /// Bit `i`: slot `i` is an internal child.
-    imask: u32,
+    pub(super) imask: u32,
 }
 
 const _: () = assert!(size_of::<Node>() == 256);
@@ -65,7 +65,7 @@ const _: () = assert!(size_of::<Node>() == 256);
 /// The CPU backend's BVH as uncompressed 8-wide nodes.
 #[derive(Clone, Debug)]
 pub(crate) struct Wide8 {
-    nodes: Vec<Node>,
+    pub(super) nodes: Vec<Node>,
 }
 
 impl Wide8 {

@@ -63,11 +63,6 @@ pub(crate) struct Node {
     /// The node's primitive group in [`Wide8::leaves`]: primitive
     /// `prim_base + j` is lane `j % 8` of block `leaf_base + j / 8`.
     pub(super) leaf_base: u32,
-    /// Where the leaf blocks of the internal children are, for prefetching:
-    /// slot `i`'s are [`Node::kid_leaves`]`[i] >> 2` blocks after this one,
-    /// `kid_leaves[i] & 3` of them (0: none, or too far to say).
-    pub(super) kids_leaf: u32,
-    pub(super) kid_leaves: [u8; 8],
 }
 
 const _: () = assert!(size_of::<Node>() == 256);
@@ -113,21 +108,6 @@ impl Wide8 {
                 }
                 leaves.push(leaf);
             }
-        }
-        for i in 0..nodes.len() {
-            let n = &nodes[i];
-            let kids = (0..8).filter(|&s| n.imask >> s & 1 == 1);
-            let first = kids.clone().map(|s| nodes[n.child[s] as usize].leaf_base).min().unwrap_or(0);
-            let mut info = [0u8; 8];
-            for s in kids {
-                let c = &nodes[n.child[s] as usize];
-                let (off, count) = (c.leaf_base - first, group_len(c).div_ceil(BLOCK));
-                if off < 64 && count < 4 {
-                    info[s] = (off << 2) as u8 | count as u8;
-                }
-            }
-            nodes[i].kids_leaf = first;
-            nodes[i].kid_leaves = info;
         }
         let tree = Self { nodes, leaves };
         (tree.nodes.is_empty() || tree.stack_need(0) < STACK).then_some(tree)
@@ -215,8 +195,6 @@ fn decode(n: &obvhs::cwbvh::node::CwBvhNode) -> Node {
         prim_base: n.primitive_base_idx,
         imask: u32::from(n.imask),
         leaf_base: 0,
-        kids_leaf: 0,
-        kid_leaves: [0; 8],
     };
     for slot in 0..8 {
         if n.is_child_empty(slot) {
@@ -277,7 +255,7 @@ fn test_scalar(n: &Node, c: &Consts, tmax: f32) -> (u32, [f32; 8]) {
 /// The CPU must support AVX2.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-unsafe fn test_avx2(n: &Node, c: &Consts, tmax: f32) -> (u32, __m256, __m256) {
+unsafe fn test_avx2(n: &Node, c: &Consts, tmax: f32) -> (u32, __m256) {
     // SAFETY: AVX2 (this function's contract); every load reads one
     // 32-byte row of `n.bounds`, 32-byte aligned (`Node` is 64-aligned,
     // rows are 32 bytes).
@@ -300,7 +278,7 @@ unsafe fn test_avx2(n: &Node, c: &Consts, tmax: f32) -> (u32, __m256, __m256) {
         let lo = _mm256_max_ps(_mm256_max_ps(nx, ny), _mm256_max_ps(nz, _mm256_set1_ps(NODE_EPSILON)));
         let hi = _mm256_min_ps(_mm256_min_ps(fx, fy), _mm256_min_ps(fz, _mm256_set1_ps(tmax)));
         let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(lo, hi);
-        (_mm256_movemask_ps(hit) as u32, lo, hit)
+        (_mm256_movemask_ps(hit) as u32, lo)
     }
 }
 
@@ -319,54 +297,25 @@ fn leaf_prims_scalar(n: &Node, hit: u32) -> u32 {
 }
 
 /// [`leaf_prims_scalar`] without a loop: the slots' entries masked by
-/// their own [`LEAF`] bit and by the node test's lane mask `hit` (all
-/// ones in a hit slot's lane: [`test_avx2`]'s third value, not its bits
-/// re-expanded, so the chain from the node test is five operations
-/// shorter), OR-reduced.
+/// their own [`LEAF`] bit and by `hit`, OR-reduced.
 ///
 /// # Safety
 /// The CPU must support AVX2.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-unsafe fn leaf_prims_avx2(n: &Node, hit: __m256) -> u32 {
-    use std::arch::x86_64::{__m256i, _mm256_castps_si256};
+unsafe fn leaf_prims_avx2(n: &Node, hit: u32) -> u32 {
+    use std::arch::x86_64::{__m256i, _mm256_cmpeq_epi32, _mm256_set1_epi32, _mm256_setr_epi32};
     // SAFETY: AVX2 (this function's contract); `child` is 32 bytes at
     // offset 192 of a 64-aligned `Node`, so 32-byte aligned.
     unsafe {
         let c = _mm256_load_si256(n.child.as_ptr().cast::<__m256i>());
-        let lanes = _mm256_and_si256(_mm256_and_si256(c, _mm256_srai_epi32::<31>(c)), _mm256_castps_si256(hit));
+        let bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+        let hitv = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(hit as i32), bit), bit);
+        let lanes = _mm256_and_si256(_mm256_and_si256(c, _mm256_srai_epi32::<31>(c)), hitv);
         let x = _mm_or_si128(_mm256_castsi256_si128(lanes), _mm256_extracti128_si256::<1>(lanes));
         let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b0100_1110>(x));
         let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b1011_0001>(x));
         _mm_cvtsi128_si32(x) as u32 & !LEAF
-    }
-}
-
-/// Asks for the cache lines of the children of `n` in `kids` (bit `i`:
-/// slot `i`, internal) and of their leaf blocks: the walk goes to one of
-/// them next (after testing `n`'s own leaves, which hides the loads'
-/// wait) and pushes the others.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn prefetch_kids(tree: &Wide8, n: &Node, kids: u32) {
-    use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-    let mut k = kids;
-    while k != 0 {
-        let i = k.trailing_zeros() as usize;
-        k &= k - 1;
-        let node = tree.nodes.as_ptr().wrapping_add(n.child[i] as usize).cast::<i8>();
-        let info = n.kid_leaves[i] as usize;
-        let leaves = tree.leaves.as_ptr().wrapping_add(n.kids_leaf as usize + (info >> 2)).cast::<i8>();
-        // SAFETY: a prefetch is only a hint and never faults, whatever the
-        // address; the pointers are formed with `wrapping_add`, never read.
-        unsafe {
-            for line in 0..4 {
-                _mm_prefetch::<_MM_HINT_T0>(node.wrapping_add(64 * line));
-            }
-            for line in 0..(info & 3) * 5 {
-                _mm_prefetch::<_MM_HINT_T0>(leaves.wrapping_add(64 * line));
-            }
-        }
     }
 }
 
@@ -380,6 +329,7 @@ fn prefetch_kids(tree: &Wide8, n: &Node, kids: u32) {
 /// # Safety
 /// `AVX2` only where the CPU has AVX2 (`node8::has_avx2`).
 #[inline(always)]
+#[allow(dead_code, reason = "the BVH-order entry kept for `trace_all`'s walks (interleave.rs), which are to call it")]
 pub(super) unsafe fn walk<const AVX2: bool, F: FnMut(u32, u32, &mut f32) -> bool>(
     tree: &Wide8,
     ray: &Ray,
@@ -431,11 +381,11 @@ pub(super) unsafe fn walk_nodes<const AVX2: bool, const ORDERED: bool, F: FnMut(
         let (hit, prims) = if AVX2 {
             // SAFETY: `AVX2` only where the CPU has AVX2 (this function's contract).
             unsafe {
-                let (hit, lo, hitv) = test_avx2(n, &c, tmax);
+                let (hit, lo) = test_avx2(n, &c, tmax);
                 if ORDERED {
                     _mm256_storeu_ps(near.as_mut_ptr(), lo);
                 }
-                (hit, leaf_prims_avx2(n, hitv))
+                (hit, leaf_prims_avx2(n, hit))
             }
         } else {
             let (hit, lo) = test_scalar(n, &c, tmax);
@@ -449,10 +399,6 @@ pub(super) unsafe fn walk_nodes<const AVX2: bool, const ORDERED: bool, F: FnMut(
             (hit, leaf_prims_scalar(n, hit))
         };
         let mut m = hit & n.imask;
-        #[cfg(target_arch = "x86_64")]
-        if AVX2 {
-            prefetch_kids(tree, n, m);
-        }
         if prims != 0 {
             if leaves(n, prims, &mut tmax) {
                 return;
@@ -617,10 +563,10 @@ mod tests {
                         if has_avx2() {
                             // SAFETY: AVX2 checked.
                             let (h, lo, prims) = unsafe {
-                                let (h, lo, hitv) = test_avx2(n, &c, tmax);
+                                let (h, lo) = test_avx2(n, &c, tmax);
                                 let mut out = [0.0f32; 8];
                                 _mm256_storeu_ps(out.as_mut_ptr(), lo);
-                                (h, out, leaf_prims_avx2(n, hitv))
+                                (h, out, leaf_prims_avx2(n, hit))
                             };
                             assert_eq!(h, hit, "{spec}");
                             assert_eq!(lo.map(f32::to_bits), near.map(f32::to_bits), "{spec}");

@@ -459,10 +459,9 @@ unsafe fn lanes_avx2<const ALIGNED: bool>(
     vertices: impl Fn(usize) -> [Vec3A; 3],
 ) -> Block {
     use std::arch::x86_64::{
-        __m256, _CMP_EQ_OQ, _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_NEQ_UQ, _mm256_add_ps,
-        _mm256_and_ps, _mm256_andnot_ps, _mm256_cmp_ps, _mm256_div_ps, _mm256_load_ps, _mm256_loadu_ps,
-        _mm256_movemask_ps, _mm256_mul_ps, _mm256_or_ps, _mm256_set1_ps, _mm256_setzero_ps, _mm256_storeu_ps,
-        _mm256_sub_ps,
+        __m256, _CMP_EQ_OQ, _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_NEQ_UQ, _mm256_add_ps, _mm256_and_ps,
+        _mm256_andnot_ps, _mm256_cmp_ps, _mm256_div_ps, _mm256_load_ps, _mm256_loadu_ps, _mm256_movemask_ps,
+        _mm256_mul_ps, _mm256_or_ps, _mm256_set1_ps, _mm256_setzero_ps, _mm256_storeu_ps, _mm256_sub_ps,
     };
     // SAFETY: the CPU has AVX2 (this function's contract); the loads read
     // eight floats behind each row pointer (aligned where `ALIGNED`), the
@@ -575,11 +574,11 @@ mod tests {
                 for first in (0..tris.len()).step_by(BLOCK) {
                     let n = (tris.len() - first).min(BLOCK);
                     let all = (1u32 << n) - 1;
-                    // SAFETY: `true` only where the CPU has AVX2.
                     let mut leaf = Leaf8::EMPTY;
                     for k in 0..n {
                         leaf.set(k, (first + k) as u32, &tris[first + k]);
                     }
+                    // SAFETY: `true` only where the CPU has AVX2.
                     let blocks = unsafe {
                         [
                             Some(lanes.block::<false>(tris, &shear, first, all, l.tmin, l.tmax)),

@@ -21,7 +21,13 @@
 //! walk does, `node8::walk_groups`), then the internal children hit are
 //! visited nearest first (one: go; two: one compare; more: a small sort by
 //! entry distance), the others pushed with their entry distance, and a
-//! popped node whose entry is beyond the best hit so far is skipped.
+//! popped node whose entry is beyond the best hit so far is skipped. The
+//! any-hit walk keeps no order (any crossing ends it).
+//!
+//! Each node's primitive group is also copied into aligned blocks of eight
+//! triangles ([`Leaf8`], [`Wide8::leaves`]), so the leaf test reads one
+//! aligned row per axis and vertex and finds each lane's triangle index
+//! beside its coordinates.
 
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::{

@@ -340,7 +340,7 @@ impl CpuTracer {
         #[cfg(target_arch = "x86_64")]
         if let Some((bvh, p)) = self.packet(lines) {
             // SAFETY: `packet` checked `self.avx2`, which came from `has_avx2()`.
-            let done = unsafe { packet::occluded(bvh, &self.ordered, &p, stack) };
+            let done = unsafe { packet::occluded(bvh, self.wide(), &self.ordered, &p, stack) };
             out.extend((0..p.len()).map(|i| done >> i & 1 == 1));
             return true;
         }

@@ -423,44 +423,39 @@ impl CpuTracer {
         }
     }
 
-    /// [`Tracer::trace_all`] by interleaved walks (`interleave.rs`): the
-    /// crossings found, grouped by line (a counting sort), then each line's
-    /// sorted and merged as the single walk's are.
+    /// [`Tracer::trace_all`] by interleaved walks over the wide nodes
+    /// (`interleave.rs`): each line's crossings are sorted and merged as
+    /// the single walk's are when its walk ends, into a buffer of lines in
+    /// that order, then copied in line order. Without AVX2 and FMA, or
+    /// where [`Wide8::new`] declines the tree, the single walk finds the
+    /// same crossings.
     #[cfg(target_arch = "x86_64")]
     fn trace_interleaved(&self, bvh: &CwBvh, lines: &[Line], out: &mut CrossingBuffer) {
-        if !self.avx2 {
-            // The interleaved walk needs AVX2; the single walk finds the same crossings.
-            self.trace_single(lines, out);
-            return;
-        }
-        let mut raw = Vec::with_capacity(lines.len() * 2);
+        let tree = match self.wide() {
+            Some(tree) if self.avx2 && std::is_x86_feature_detected!("fma") => tree,
+            _ => return self.trace_single(lines, out),
+        };
         let take = |l: &Line| !line_misses_box(Vec3A::from(l.origin), Vec3A::from(l.direction), self.bounds);
-        // SAFETY: checked just above: `self.avx2` is true, and it came from `has_avx2()`.
-        unsafe { interleave::trace(bvh, &self.ordered, lines, take, &mut raw) };
-        let mut start = vec![0u32; lines.len() + 1];
-        for &(li, _, _) in &raw {
-            start[li as usize + 1] += 1;
-        }
-        for i in 0..lines.len() {
-            start[i + 1] += start[i];
-        }
-        let mut grouped = vec![(0u32, 0f32); raw.len()];
-        let mut next = start.clone();
-        for &(li, k, t) in &raw {
-            let at = &mut next[li as usize];
-            grouped[*at as usize] = (k, t);
-            *at += 1;
-        }
+        // `ended.line(at[i])`: line `i`'s crossings, where its walk found any.
+        let mut at = vec![u32::MAX; lines.len()];
+        let mut ended = CrossingBuffer::default();
+        ended.clear();
         let mut hits = Vec::with_capacity(16);
-        for (li, l) in lines.iter().enumerate() {
-            let found = &grouped[start[li] as usize..start[li + 1] as usize];
-            if !found.is_empty() {
-                let dir = walk_direction(l);
-                for &(k, t) in found {
-                    push_crossing(&self.scene, dir, t, bvh.primitive_indices[k as usize] as usize, &mut hits);
-                }
+        let done = |li: u32, found: &[(u32, f32)]| {
+            let dir = walk_direction(&lines[li as usize]);
+            for &(k, t) in found {
+                push_crossing(&self.scene, dir, t, bvh.primitive_indices[k as usize] as usize, &mut hits);
             }
-            finish(&mut hits, out);
+            at[li as usize] = (ended.offsets.len() - 1) as u32;
+            finish(&mut hits, &mut ended);
+        };
+        // SAFETY: `self.avx2` came from `has_avx2()`, FMA was detected just above.
+        unsafe { interleave::trace(tree, &self.ordered, lines, take, done) };
+        for &e in &at {
+            if e != u32::MAX {
+                out.crossings.extend_from_slice(ended.line(e as usize));
+            }
+            out.offsets.push(out.crossings.len() as u32);
         }
     }
 }

@@ -1,137 +1,41 @@
 //! Every crossing of many lines, several BVH walks interleaved step by step
-//! (latency hiding for [`super::Tracer::trace_all`] on the CPU).
+//! (latency hiding for [`super::Tracer::trace_all`] on the CPU), over the
+//! uncompressed 8-wide nodes of [`Wide8`].
 //!
 //! One walk is a chain of dependent loads: a node's children are known only
 //! once the node is loaded and tested, a leaf's triangles only once its
 //! parent is. On global lines the chain stalls on those loads (the hottest
 //! instructions of a profile are the first loads of a node and of a
 //! triangle: `docs/TRACING.md`). Here [`LANES`] lines walk at once, one step
-//! each in turn. A step visits the node chosen at the lane's previous step
-//! and chooses the next one, or tests the triangles of the last leaves
-//! found; what it will load next is only prefetched, and loaded a round of
-//! the other lanes later, by when it has arrived.
+//! each in turn. A step tests the triangles of the leaves found at the
+//! lane's previous step, then visits the node chosen there and chooses the
+//! next one; what it will load next is only prefetched, and loaded a round
+//! of the other lanes later, by when it has arrived.
 //!
-//! Each lane keeps obvhs's `traverse!` bookkeeping (groups of children
-//! still to visit on a stack, the child order of the octant) and
-//! [`super::node8::intersect8`] as its node test. `trace_all` keeps each
-//! line's full interval, so the nodes and triangles a line visits do not
-//! depend on the order of the visits: exactly those of its single walk.
-//! [`super::watertight::finish`] then sorts each line's crossings by
-//! `(t, triangle)`, a strict order, so the order in which they were found
-//! cannot show: the crossings are bit for bit the single walk's (unit test
-//! in `cpu.rs`).
+//! The nodes are the CPU tracer's CWBVH decoded (`wide8.rs`: each child's
+//! box as `f32` planes, widened by one ulp, so it contains the compressed
+//! box): a node test is six aligned loads and six fused multiply-subtracts,
+//! with nothing to decode. `trace_all` wants every crossing within each
+//! line's full interval, so no child order is kept and no child is culled
+//! by a hit: a walk visits every node whose box the line enters, and tests
+//! every triangle of those leaves; the order of the visits cannot show.
+//! The crossings are then a property of the triangle test alone (every
+//! crossed triangle lies in boxes padded by 1e-5, far beyond the slab
+//! test's rounding), bit for bit those of the CWBVH walk, and
+//! [`super::watertight::finish`] sorts each line's by `(t, triangle)`, a
+//! strict order (unit test in `cpu.rs`; `bench/complexity_identity.sh`).
 #![cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
 
-use glam::{UVec2, Vec3A};
-use obvhs::cwbvh::CwBvh;
+use glam::Vec3A;
 use obvhs::ray::Ray;
 
+use super::node8::NODE_EPSILON;
 use super::watertight::Shear;
+use super::wide8::{self, Node as WideNode, Wide8};
 use crate::lines::Line;
 
 /// Walks in flight at once.
 pub(super) const LANES: usize = 8;
-
-/// obvhs's traversal stack depth (`TRAVERSAL_STACK_SIZE`, private there):
-/// a push onto a full stack overwrites its top entry, as obvhs's does.
-const STACK: usize = 32;
-
-/// One walk's state: obvhs's `Traversal` plus the line it belongs to.
-struct Lane {
-    ray: Ray,
-    shear: Shear,
-    /// Index of the line in the batch.
-    line: u32,
-    oct_inv4: u32,
-    current: UVec2,
-    primitives: UVec2,
-    stack: [UVec2; STACK],
-    depth: usize,
-    /// The node to visit at the next step (prefetched), or [`NONE`].
-    pending: u32,
-}
-
-impl Lane {
-    /// A lane with no line.
-    fn idle() -> Self {
-        let (shear, _) = Shear::of(&Line::default());
-        Self {
-            ray: Ray::new(Vec3A::ZERO, Vec3A::Z, 0.0, 0.0),
-            shear,
-            line: NONE,
-            oct_inv4: 0,
-            current: UVec2::ZERO,
-            primitives: UVec2::ZERO,
-            stack: [UVec2::ZERO; STACK],
-            depth: 0,
-            pending: NONE,
-        }
-    }
-
-    /// Starts the walk of `l` (line `line` of the batch) at the root.
-    fn start(&mut self, l: &Line, line: u32) {
-        let (shear, dir) = Shear::of(l);
-        self.ray = Ray::new(Vec3A::from(l.origin), dir, l.tmin, l.tmax);
-        self.shear = shear;
-        self.line = line;
-        // obvhs's `ray_get_octant_inv4`.
-        self.oct_inv4 = (if dir.x < 0.0 { 0 } else { 0x0404_0404 })
-            | (if dir.y < 0.0 { 0 } else { 0x0202_0202 })
-            | (if dir.z < 0.0 { 0 } else { 0x0101_0101 });
-        self.pending = 0;
-    }
-}
-
-/// A crossing found by a walk: the line (in the batch), the triangle (BVH
-/// order) and `t`.
-pub(super) type RawHit = (u32, u32, f32);
-
-/// Every crossing within `[tmin, tmax]` of each line of `lines` for which
-/// `take(line)` holds, appended to `hits` in no particular order.
-///
-/// # Safety
-/// The CPU must support AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-pub(super) unsafe fn trace(
-    bvh: &CwBvh,
-    ordered: &[[Vec3A; 3]],
-    lines: &[Line],
-    take: impl Fn(&Line) -> bool,
-    hits: &mut Vec<RawHit>,
-) {
-    if bvh.nodes.is_empty() {
-        return;
-    }
-    let mut next = 0usize;
-    let mut lanes: [Lane; LANES] = std::array::from_fn(|_| Lane::idle());
-    let mut active = 0;
-    loop {
-        for lane in &mut lanes {
-            if lane.pending == NONE && lane.primitives.y == 0 && lane.current.y & 0xff00_0000 == 0 && lane.depth == 0 {
-                // Idle or done: the next line that enters the scene's box.
-                active -= usize::from(lane.line != NONE);
-                lane.line = NONE;
-                while next < lines.len() {
-                    next += 1;
-                    if take(&lines[next - 1]) {
-                        lane.start(&lines[next - 1], (next - 1) as u32);
-                        active += 1;
-                        break;
-                    }
-                }
-                if lane.line == NONE {
-                    continue;
-                }
-            }
-            // SAFETY: AVX2 is enabled here, as `step` requires.
-            unsafe { step(bvh, ordered, lines, lane, hits) };
-        }
-        if active == 0 && next >= lines.len() {
-            break;
-        }
-    }
-}
 
 /// Brings the cache lines of `len` bytes at `p` towards the core (a hint:
 /// never faults, whatever the address).
@@ -150,77 +54,268 @@ fn prefetch<T>(p: *const T, len: usize) {
     unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(len.saturating_sub(1))) };
 }
 
-/// One step of `lane`'s walk (a leaf group's triangles tested, or one node
-/// visited and the next one chosen). The node chosen is only prefetched
-/// here and visited at the lane's next step, and a node's triangles are
-/// prefetched when it is visited and tested at the next step: what a step
-/// loads was asked for a round of the other lanes earlier.
-///
-/// The bookkeeping is obvhs's `traverse!` loop (groups of children still
-/// to visit on a stack, the child order of the octant), only the order of
-/// visits differs (a node's triangles wait while its first child is
-/// chosen): `trace_all` keeps the full interval, so the set of nodes and
-/// triangles visited does not depend on the order.
+/// No node chosen.
+const NONE: u32 = u32::MAX;
+
+/// One walk over the uncompressed tree ([`Wide8`]): the ray's slab
+/// constants, the line's shear, a stack of nodes still to visit, and the
+/// crossings found so far.
+struct Lane {
+    shear: Shear,
+    /// Index of the line in the batch, or [`NONE`].
+    line: u32,
+    /// The node to visit at the next step (prefetched), or [`NONE`].
+    pending: u32,
+    /// The leaf primitives found at the last node visited and not yet
+    /// tested (a mask over the group at `prim_base`; prefetched).
+    prims: u32,
+    prim_base: u32,
+    /// `origin · inverse` and the inverse direction per axis: a plane's
+    /// distance is `plane · inverse − origin · inverse` (one fused
+    /// multiply-subtract, Embree's form of the slab test).
+    org_inv: [f32; 3],
+    inv: [f32; 3],
+    /// Byte offset in a node of each axis's near-plane row.
+    near: [usize; 3],
+    tmax: f32,
+    depth: usize,
+    /// [`wide8::STACK`] entries and eight spare: the pushes store a whole
+    /// node's children at once.
+    stack: [u32; wide8::STACK + 8],
+    /// `(k, t)` of each crossing found (triangle in BVH order).
+    found: Vec<(u32, f32)>,
+}
+
+impl Lane {
+    fn idle() -> Self {
+        let (shear, _) = Shear::of(&Line::default());
+        Self {
+            shear,
+            line: NONE,
+            pending: NONE,
+            prims: 0,
+            prim_base: 0,
+            org_inv: [0.0; 3],
+            inv: [0.0; 3],
+            near: [0; 3],
+            tmax: 0.0,
+            depth: 0,
+            stack: [0; wide8::STACK + 8],
+            found: Vec::with_capacity(32),
+        }
+    }
+
+    /// Starts the walk of `l` (line `line` of the batch) at the root, with
+    /// obvhs's ray constants (its finite inverse of each component, on the
+    /// direction without negative zeros, as the CWBVH walk takes them).
+    fn start(&mut self, l: &Line, line: u32) {
+        let (shear, dir) = Shear::of(l);
+        let ray = Ray::new(Vec3A::from(l.origin), dir, l.tmin, l.tmax);
+        let inv = ray.inv_direction.to_array();
+        let org = ray.origin.to_array();
+        self.shear = shear;
+        self.line = line;
+        self.pending = 0;
+        self.prims = 0;
+        self.inv = inv;
+        self.org_inv = [0, 1, 2].map(|a| org[a] * inv[a]);
+        // Row `2·axis` holds the lower planes, `2·axis + 1` the upper; 32 bytes a row.
+        self.near = [0, 1, 2].map(|a| (2 * a + usize::from(inv[a] < 0.0)) * 32);
+        self.tmax = l.tmax;
+        self.depth = 0;
+        self.found.clear();
+    }
+}
+
+/// Every crossing within `[tmin, tmax]` of each line of `lines` for which
+/// `take(line)` holds, [`LANES`] walks of `tree` interleaved:
+/// `done(line, found)` is called once per line taken whose walk found
+/// crossings, with their `(k, t)` in no particular order (`k` the triangle
+/// in BVH order, `ordered`'s index, which `tree`'s leaves hold), lines in
+/// the order their walks end.
 ///
 /// # Safety
-/// The CPU must support AVX2.
+/// The CPU must support AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
+#[target_feature(enable = "avx2,fma")]
+pub(super) unsafe fn trace(
+    tree: &Wide8,
+    ordered: &[[Vec3A; 3]],
+    lines: &[Line],
+    take: impl Fn(&Line) -> bool,
+    mut done: impl FnMut(u32, &[(u32, f32)]),
+) {
+    if tree.nodes.is_empty() {
+        return;
+    }
+    let mut next = 0usize;
+    let mut lanes: [Lane; LANES] = std::array::from_fn(|_| Lane::idle());
+    let mut active = 0;
+    loop {
+        for lane in &mut lanes {
+            if lane.pending == NONE && lane.prims == 0 {
+                // Idle or done: hand over its crossings, then take the next
+                // line that enters the scene's box.
+                if lane.line != NONE {
+                    active -= 1;
+                    if !lane.found.is_empty() {
+                        done(lane.line, &lane.found);
+                    }
+                    lane.line = NONE;
+                }
+                while next < lines.len() {
+                    next += 1;
+                    if take(&lines[next - 1]) {
+                        lane.start(&lines[next - 1], (next - 1) as u32);
+                        active += 1;
+                        break;
+                    }
+                }
+                if lane.line == NONE {
+                    continue;
+                }
+            }
+            // SAFETY: AVX2 and FMA are enabled here, as `step` requires.
+            unsafe { step(tree, ordered, lines, lane) };
+        }
+        if active == 0 && next >= lines.len() {
+            break;
+        }
+    }
+}
+
+/// For each 8-bit mask, the indices of its set bits in increasing order,
+/// one per byte (the rest zero): the permutation that packs a node's hit
+/// children to the front of a vector.
+static PACK: [u64; 256] = {
+    let mut table = [0u64; 256];
+    let mut mask = 0;
+    while mask < 256 {
+        let (mut slot, mut packed) = (0, 0);
+        while slot < 8 {
+            if mask >> slot & 1 == 1 {
+                table[mask] |= (slot as u64) << (8 * packed);
+                packed += 1;
+            }
+            slot += 1;
+        }
+        mask += 1;
+    }
+    table
+};
+
+/// Visits node `n` on `lane`'s walk: the children the ray enters within
+/// `[NODE_EPSILON, tmax]` (a slot's entry and exit are its largest
+/// near-plane and smallest far-plane distances; empty slots, `+∞`/`−∞`
+/// planes, are never entered). The internal ones are pushed onto the
+/// stack all at once (packed by [`PACK`], stored as one vector, the depth
+/// raised by their count: no branch per child); the leaf ones'
+/// primitives are returned, their [`wide8::LEAF`] entries OR-ed under the
+/// compare's lanes.
+///
+/// # Safety
+/// The CPU must support AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
 #[inline]
-unsafe fn step(bvh: &CwBvh, ordered: &[[Vec3A; 3]], lines: &[Line], lane: &mut Lane, hits: &mut Vec<RawHit>) {
-    if lane.primitives.y != 0 {
+unsafe fn visit(n: &WideNode, lane: &mut Lane) -> u32 {
+    use std::arch::x86_64::{
+        __m128i, __m256i, _CMP_LE_OQ, _mm_cvtsi128_si32, _mm_loadl_epi64, _mm_or_si128, _mm_shuffle_epi32,
+        _mm256_and_si256, _mm256_castps_si256, _mm256_castsi256_si128, _mm256_cmp_ps, _mm256_cvtepu8_epi32,
+        _mm256_extracti128_si256, _mm256_fmsub_ps, _mm256_load_ps, _mm256_load_si256, _mm256_max_ps, _mm256_min_ps,
+        _mm256_movemask_ps, _mm256_permutevar8x32_epi32, _mm256_set1_ps, _mm256_srai_epi32, _mm256_storeu_si256,
+    };
+    let base = (n as *const WideNode).cast::<u8>();
+    // SAFETY: AVX2 and FMA (this function's contract). Each row load reads
+    // one 32-byte row of `n.bounds` (`near[a]` and `near[a] ^ 32` are rows
+    // `2a` and `2a + 1`, at most row 5 of 6), 32-byte aligned as `Node` is
+    // 64-aligned; `child` is the 32 bytes at offset 192. The stack store
+    // writes entries `d .. d + 8` with `d <= STACK` of `STACK + 8`.
+    unsafe {
+        macro_rules! t {
+            ($off:expr, $a:expr) => {
+                _mm256_fmsub_ps(
+                    _mm256_load_ps(base.add($off).cast::<f32>()),
+                    _mm256_set1_ps(lane.inv[$a]),
+                    _mm256_set1_ps(lane.org_inv[$a]),
+                )
+            };
+        }
+        let (nx, ny, nz) = (t!(lane.near[0], 0), t!(lane.near[1], 1), t!(lane.near[2], 2));
+        let (fx, fy, fz) = (t!(lane.near[0] ^ 32, 0), t!(lane.near[1] ^ 32, 1), t!(lane.near[2] ^ 32, 2));
+        let lo = _mm256_max_ps(_mm256_max_ps(nx, ny), _mm256_max_ps(nz, _mm256_set1_ps(NODE_EPSILON)));
+        let hi = _mm256_min_ps(_mm256_min_ps(fx, fy), _mm256_min_ps(fz, _mm256_set1_ps(lane.tmax)));
+        let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(lo, hi);
+        let inner = _mm256_movemask_ps(hit) as u32 & n.imask;
+        let c = _mm256_load_si256(n.child.as_ptr().cast::<__m256i>());
+        // `Wide8::new` declines a tree whose walks could hold `STACK`
+        // entries after taking one child: `depth + inner.count_ones()`
+        // stays within `STACK`. The clamp keeps the store in bounds
+        // whatever the tree.
+        let d = lane.depth.min(wide8::STACK);
+        let order = _mm256_cvtepu8_epi32(_mm_loadl_epi64((&raw const PACK[inner as usize & 0xff]).cast::<__m128i>()));
+        _mm256_storeu_si256(lane.stack.as_mut_ptr().add(d).cast::<__m256i>(), _mm256_permutevar8x32_epi32(c, order));
+        debug_assert!(d + inner.count_ones() as usize <= wide8::STACK);
+        lane.depth = (d + inner.count_ones() as usize).min(wide8::STACK);
+        let leaves = _mm256_and_si256(_mm256_and_si256(c, _mm256_srai_epi32::<31>(c)), _mm256_castps_si256(hit));
+        let x = _mm_or_si128(_mm256_castsi256_si128(leaves), _mm256_extracti128_si256::<1>(leaves));
+        let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b0100_1110>(x));
+        let x = _mm_or_si128(x, _mm_shuffle_epi32::<0b1011_0001>(x));
+        _mm_cvtsi128_si32(x) as u32 & !wide8::LEAF
+    }
+}
+
+/// One step of `lane`'s walk over the wide nodes: the leaf primitives
+/// found at its previous step tested, then the pending node visited (its
+/// internal children hit pushed, its leaf primitives kept for the next
+/// step and prefetched) and the next node taken off the stack and
+/// prefetched: what a step loads was asked for a round of the other
+/// lanes earlier.
+///
+/// # Safety
+/// The CPU must support AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+#[inline]
+unsafe fn step(tree: &Wide8, ordered: &[[Vec3A; 3]], lines: &[Line], lane: &mut Lane) {
+    if lane.prims != 0 {
         let l = &lines[lane.line as usize];
         // A group holds at most 24 triangles; each is written to the spare
         // capacity and kept by advancing the length, not by a branch.
-        hits.reserve(24);
-        let spare = hits.spare_capacity_mut();
+        lane.found.reserve(24);
+        let spare = lane.found.spare_capacity_mut();
         let mut found = 0;
-        while lane.primitives.y != 0 {
-            let local = 31 - lane.primitives.y.leading_zeros();
-            lane.primitives.y &= !(1u32 << local);
-            let k = lane.primitives.x + local;
+        let mut m = lane.prims;
+        while m != 0 {
+            let k = lane.prim_base + m.trailing_zeros();
+            m &= m - 1;
             let (t, crossed) = lane.shear.hit_within(&ordered[k as usize], l.tmin, l.tmax);
-            spare[found].write((lane.line, k, t));
+            spare[found].write((k, t));
             found += usize::from(crossed);
         }
         // SAFETY: the first `found` spare entries were written above, and
         // `found` is at most the 24 reserved.
-        unsafe { hits.set_len(hits.len() + found) };
+        unsafe { lane.found.set_len(lane.found.len() + found) };
+        lane.prims = 0;
+    }
+    if lane.pending == NONE {
         return;
     }
-    if lane.pending != NONE {
-        let node = &bvh.nodes[lane.pending as usize];
-        lane.pending = NONE;
-        // SAFETY: AVX2 is enabled here.
-        let hitmask = unsafe { super::node8::intersect8(node, &lane.ray, lane.oct_inv4) };
-        if lane.current.y & 0xff00_0000 != 0 {
-            lane.stack[lane.depth] = lane.current;
-            lane.depth = (lane.depth + 1).min(STACK - 1);
-        }
-        lane.current = UVec2::new(node.child_base_idx, (hitmask & 0xff00_0000) | u32::from(node.imask));
-        let prims = hitmask & 0x00ff_ffff;
-        lane.primitives = UVec2::new(node.primitive_base_idx, prims);
-        if prims != 0 {
-            let first = (node.primitive_base_idx + prims.trailing_zeros()) as usize;
-            let last = (node.primitive_base_idx + 31 - prims.leading_zeros()) as usize;
-            prefetch(ordered.as_ptr().wrapping_add(first), (last + 1 - first) * size_of::<[Vec3A; 3]>());
-        }
+    let n = &tree.nodes[lane.pending as usize];
+    // SAFETY: AVX2 and FMA are enabled here.
+    let prims = unsafe { visit(n, lane) };
+    if prims != 0 {
+        lane.prims = prims;
+        lane.prim_base = n.prim_base;
+        let first = (n.prim_base + prims.trailing_zeros()) as usize;
+        let last = (n.prim_base + 31 - prims.leading_zeros()) as usize;
+        prefetch(ordered.as_ptr().wrapping_add(first), (last + 1 - first) * size_of::<[Vec3A; 3]>());
     }
-    if lane.current.y & 0xff00_0000 == 0 {
-        if lane.depth == 0 {
-            return; // done once its last triangles are tested
-        }
-        lane.depth -= 1;
-        lane.current = lane.stack[lane.depth];
+    if lane.depth == 0 {
+        lane.pending = NONE; // done once its last triangles are tested
+        return;
     }
-    let hits_imask = lane.current.y;
-    let child_index_offset = 31 - hits_imask.leading_zeros();
-    lane.current.y &= !(1u32 << child_index_offset);
-    let slot_index = (child_index_offset - 24) ^ (lane.oct_inv4 & 0xff);
-    let relative_index = (hits_imask & !(0xffff_ffffu32 << slot_index)).count_ones();
-    lane.pending = lane.current.x + relative_index;
-    prefetch(bvh.nodes.as_ptr().wrapping_add(lane.pending as usize), size_of::<obvhs::cwbvh::node::CwBvhNode>());
+    lane.depth -= 1;
+    lane.pending = lane.stack[lane.depth];
+    prefetch(tree.nodes.as_ptr().wrapping_add(lane.pending as usize), size_of::<WideNode>());
 }
-
-/// No node chosen.
-const NONE: u32 = u32::MAX;

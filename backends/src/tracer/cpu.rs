@@ -85,10 +85,10 @@ pub struct CpuTracer {
     ordered: Vec<[Vec3A; 3]>,
     /// `ordered` as a structure of arrays for the 8-wide triangle test.
     lanes: TriangleLanes,
-    /// `bvh` uncompressed (`wide8.rs`): the tree `closest_hit` and
-    /// `occluded` walk one ray at a time, built at their first call (a
-    /// tracer used only for `trace_all` never allocates it); `None` inside
-    /// where [`Wide8::new`] declines, and the CWBVH walk serves.
+    /// `bvh` uncompressed (`wide8.rs`): the tree every CPU walk reads
+    /// (`closest_hit`, `occluded`, the occlusion packets and `trace_all`'s
+    /// interleaved walk), built at the first call that needs it; `None`
+    /// inside where [`Wide8::new`] declines, and the CWBVH walks serve.
     wide: std::sync::OnceLock<Option<Wide8>>,
     /// Whether the 8-lane AVX2 node test is used (`node8`).
     avx2: bool,

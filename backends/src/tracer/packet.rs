@@ -562,8 +562,8 @@ mod tests {
         for spec in ["cube-enclosure:6", "cubes-room:16", "geosphere", "table-chairs:2", "mirror-room"] {
             let p = Prepared::new(&built_in(spec).unwrap());
             let bvh = crate::tracer::cpu::build_bvh(&p, bvh_input(&p).1);
-            let wide = Wide8::new(&bvh).unwrap();
             let ordered: Vec<[Vec3A; 3]> = bvh.primitive_indices.iter().map(|&i| p.triangles[i as usize]).collect();
+            let wide = Wide8::new(&bvh, &ordered).unwrap();
             let mut stack = Vec::new();
             let (mut packets, mut blocked, mut open) = (0, 0, 0);
             for g in 0..400u64 {

@@ -325,27 +325,6 @@ unsafe fn leaf_prims_avx2(n: &Node, hit: u32) -> u32 {
     }
 }
 
-/// Walks `tree` along `ray`, calling `group(first, mask, &mut tmax)` with
-/// each visited node's hit leaf children (primitive `first + i` for each
-/// bit `i` of `mask`, below 24, in BVH order) as the CWBVH walk
-/// (`node8::walk_groups`) does; `group` may shrink `tmax` (closest hit)
-/// and returns `true` to end the walk (any hit). `tally` counts the nodes
-/// tested. [`walk_nodes`] with the internal children nearest first.
-///
-/// # Safety
-/// `AVX2` only where the CPU has AVX2 (`node8::has_avx2`).
-#[inline(always)]
-#[allow(dead_code, reason = "the BVH-order entry kept for `trace_all`'s walks (interleave.rs), which are to call it")]
-pub(super) unsafe fn walk<const AVX2: bool, F: FnMut(u32, u32, &mut f32) -> bool>(
-    tree: &Wide8,
-    ray: &Ray,
-    tally: &impl Tally,
-    mut group: F,
-) {
-    // SAFETY: this function's contract.
-    unsafe { walk_nodes::<AVX2, true, _>(tree, ray, tally, |n, mask, tmax| group(n.prim_base, mask, tmax)) }
-}
-
 /// Walks `tree` along `ray`, calling `leaves(node, mask, &mut tmax)` with
 /// each visited node and the primitives of its hit leaf children (bit `j`
 /// of `mask`, below 24: primitive `node.prim_base + j` in BVH order, lane

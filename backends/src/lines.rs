@@ -338,6 +338,16 @@ pub fn cosine_direction(n: DVec3, u: f64, v: f64) -> DVec3 {
     (t * x + b * y + n * z).normalize()
 }
 
+/// `⌊f⌋` as an integer without libm's `floorf` (a call where SSE2, which
+/// has no rounding instruction, is the target): truncation, one less where
+/// it rounded up. Exact for `|f| < 2³¹`; NaN gives 0, as
+/// `f.floor() as i32` does.
+#[inline]
+fn floor_i32(f: f32) -> i32 {
+    let t = f as i32;
+    t - i32::from(t as f32 > f)
+}
+
 /// `(cos 2πv, sin 2πv)` for `v` in `[0, 1)` in f32 without a library
 /// call: the quarter turn `⌊4v⌋` is applied exactly, and the angle left,
 /// in `[0, π/2)`, goes through Taylor polynomials to `x¹¹`/`x¹²` (error
@@ -346,8 +356,8 @@ pub fn cosine_direction(n: DVec3, u: f64, v: f64) -> DVec3 {
 #[must_use]
 pub fn cos_sin_turn(v: f32) -> (f32, f32) {
     let f = v * 4.0;
-    let q = f.floor();
-    let x = (f - q) * std::f32::consts::FRAC_PI_2;
+    let q = floor_i32(f);
+    let x = (f - q as f32) * std::f32::consts::FRAC_PI_2;
     let x2 = x * x;
     let s = x
         * (1.0
@@ -357,7 +367,7 @@ pub fn cos_sin_turn(v: f32) -> (f32, f32) {
         + x2 * (-0.5
             + x2 * (1.0 / 24.0
                 + x2 * (-1.0 / 720.0 + x2 * (1.0 / 40_320.0 + x2 * (-1.0 / 3_628_800.0 + x2 / 479_001_600.0)))));
-    match (q as i32) & 3 {
+    match q & 3 {
         0 => (c, s),
         1 => (-s, c),
         2 => (-c, -s),
@@ -462,6 +472,20 @@ mod tests {
             assert!(x > 0.0 && x < 1.0, "{m}: {x}");
         }
         assert!((0..10_000).map(|k| r.uniform32(k)).all(|x| x > 0.0 && x < 1.0));
+    }
+
+    #[test]
+    fn floor_i32_is_floor() {
+        let r = LineRng::new(9, 1);
+        for k in 0..100_000 {
+            for f in [(r.uniform32(k) - 0.5) * 2e6, r.uniform32(k) * 4.0] {
+                assert_eq!(floor_i32(f), f.floor() as i32, "{f}");
+            }
+        }
+        for f in [0.0f32, -0.0, 1.0, -1.0, 3.999_999_8, 4.0, -2.5, 0.5, f32::MIN_POSITIVE, -f32::MIN_POSITIVE, f32::NAN]
+        {
+            assert_eq!(floor_i32(f), f.floor() as i32, "{f}");
+        }
     }
 
     #[test]

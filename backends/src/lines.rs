@@ -402,15 +402,22 @@ pub(crate) struct Vec3x8 {
 
 #[cfg(target_arch = "x86_64")]
 impl Vec3x8 {
-    /// Lanes `at..at + 8` of three columns.
-    ///
-    /// # Panics
-    /// If a column is shorter than `at + 8`.
+    /// The eight vectors `rows` as columns (a 4 × 4 transpose in each
+    /// 128-bit half; exact: moves only).
     #[target_feature(enable = "avx2")]
     #[inline]
-    pub(crate) fn load(columns: &[Vec<f32>; 3], at: usize) -> Self {
-        let [x, y, z] = columns.each_ref().map(|c| load8f(c[at..at + 8].try_into().expect("eight lanes")));
-        Self { x, y, z }
+    pub(crate) fn from_rows(rows: [Vec3A; 8]) -> Self {
+        use std::arch::x86_64::{__m128, _mm256_set_m128, _mm256_shuffle_ps, _mm256_unpackhi_ps, _mm256_unpacklo_ps};
+        let r = rows.map(__m128::from);
+        // Rows `l` and `l + 4` side by side, then the in-lane transpose.
+        let [a0, a1, a2, a3] = [0, 1, 2, 3].map(|l| _mm256_set_m128(r[l + 4], r[l]));
+        let (xy01, xy23) = (_mm256_unpacklo_ps(a0, a1), _mm256_unpacklo_ps(a2, a3));
+        let (zw01, zw23) = (_mm256_unpackhi_ps(a0, a1), _mm256_unpackhi_ps(a2, a3));
+        Self {
+            x: _mm256_shuffle_ps::<0b01_00_01_00>(xy01, xy23),
+            y: _mm256_shuffle_ps::<0b11_10_11_10>(xy01, xy23),
+            z: _mm256_shuffle_ps::<0b01_00_01_00>(zw01, zw23),
+        }
     }
 
     /// Lane `l` of each column, as one array per column.
@@ -733,8 +740,10 @@ mod tests {
             let col = |f: &dyn Fn(&(Vec3A, f32, f32)) -> f32| -> [f32; 8] { std::array::from_fn(|l| f(&group[l])) };
             // SAFETY: AVX2 was detected above.
             let [x, y, z] = unsafe {
-                let n =
+                let n = Vec3x8::from_rows(std::array::from_fn(|l| group[l].0));
+                let columns =
                     Vec3x8 { x: load8f(&col(&|c| c.0.x)), y: load8f(&col(&|c| c.0.y)), z: load8f(&col(&|c| c.0.z)) };
+                assert_eq!(n.lanes().map(|c| c.map(f32::to_bits)), columns.lanes().map(|c| c.map(f32::to_bits)));
                 cosine_direction32x8(n, load8f(&col(&|c| c.1)), load8f(&col(&|c| c.2))).lanes()
             };
             for (l, &(n, u, v)) in group.iter().enumerate() {

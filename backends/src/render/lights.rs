@@ -101,17 +101,7 @@ impl Lights {
         }
         let total: f64 = weights.iter().sum();
         let probability: Vec<f64> = weights.iter().map(|w| w / total).collect();
-        let mut acc = 0.0;
-        let mut cdf: Vec<f64> = probability
-            .iter()
-            .map(|p| {
-                acc += p;
-                acc
-            })
-            .collect();
-        if let Some(last) = cdf.last_mut() {
-            *last = 1.0;
-        }
+        let cdf = cumulative(&probability);
         let fast: Vec<FastLight> = triangles
             .iter()
             .zip(&probability)
@@ -227,6 +217,22 @@ impl Lights {
     }
 }
 
+/// The cumulative sums of `probability`, the last set to exactly 1.
+fn cumulative(probability: &[f64]) -> Vec<f64> {
+    let mut acc = 0.0;
+    let mut cdf: Vec<f64> = probability
+        .iter()
+        .map(|p| {
+            acc += p;
+            acc
+        })
+        .collect();
+    if let Some(last) = cdf.last_mut() {
+        *last = 1.0;
+    }
+    cdf
+}
+
 /// The columns of [`Lights::columns`].
 fn light_columns(fast: &[FastLight]) -> [Vec<f32>; 16] {
     let rows = fast.len().max(8);
@@ -313,17 +319,7 @@ impl Lights {
                 density: r.uniform32(20 * i + 15) * 5.0,
             })
             .collect();
-        let mut acc = 0.0;
-        let mut cdf: Vec<f64> = probability
-            .iter()
-            .map(|p| {
-                acc += p;
-                acc
-            })
-            .collect();
-        if let Some(last) = cdf.last_mut() {
-            *last = 1.0;
-        }
+        let cdf = cumulative(probability);
         Self {
             triangles: Vec::new(),
             cdf32: cdf.iter().map(|&c| c as f32).collect(),

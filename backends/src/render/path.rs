@@ -185,15 +185,14 @@ struct Scratch {
     /// Per live path this step (index as `live`): its fate and reflectance.
     fate: Vec<Fate>,
     rho: Vec<Vec3A>,
-    /// The diffuse vertices of this step: index into `live`, then columns
-    /// (x, y, z; one row a vertex, for 8-lane loads): the offset vertex the
-    /// next segment and the shadow ray leave from, the shading normal
-    /// facing the arriving ray, the throughput times the reflectance, and
-    /// the vertex's five draws (light choice, light point, direction).
+    /// The diffuse vertices of this step: index into `live`; the offset
+    /// vertex the next segment and the shadow ray leave from, the shading
+    /// normal facing the arriving ray and the throughput times the
+    /// reflectance (one push a vertex, transposed for 8 lanes where they
+    /// are read); the vertex's five draws (light choice, light point,
+    /// direction) as columns, one row a vertex.
     diffuse: Vec<u32>,
-    at: [Vec<f32>; 3],
-    normal: [Vec<f32>; 3],
-    weight: [Vec<f32>; 3],
+    vertex: Vec<[Vec3A; 3]>,
     draws: [Vec<f32>; 5],
     shadow: Vec<Line>,
     shadow_add: Vec<(u32, Vec3A)>,
@@ -247,20 +246,6 @@ fn power8(a: std::arch::x86_64::__m256, b: std::arch::x86_64::__m256) -> std::ar
     _mm256_andnot_ps(zero, w)
 }
 
-/// Appends `v` as one row of three columns.
-#[inline]
-fn push3(columns: &mut [Vec<f32>; 3], v: Vec3A) {
-    for (c, x) in columns.iter_mut().zip(v.to_array()) {
-        c.push(x);
-    }
-}
-
-/// Row `i` of three columns.
-#[inline]
-fn get3(columns: &[Vec<f32>; 3], i: usize) -> Vec3A {
-    Vec3A::new(columns[0][i], columns[1][i], columns[2][i])
-}
-
 /// A shadow ray ends this fraction of the way to the light point.
 const SHADOW_SHORT: f32 = 1.0 - 1e-4;
 
@@ -305,7 +290,7 @@ fn shade(lights: &Lights, o: Vec3A, nf: Vec3A, weight: Vec3A, [u0, l1, l2, d1, d
 }
 
 /// [`shade`] for whole groups of eight diffuse vertices, 8 lanes at once
-/// (rows of `[at, normal, weight]` and `draws`): the same f32 operations
+/// (`vertex`: `[at, normal, weight]` each; `draws`): the same f32 operations
 /// lane by lane, so the same bits; each vertex's result goes to `apply`
 /// in order. Returns how many vertices it shaded (a multiple of 8).
 ///
@@ -315,7 +300,7 @@ fn shade(lights: &Lights, o: Vec3A, nf: Vec3A, weight: Vec3A, [u0, l1, l2, d1, d
 #[target_feature(enable = "avx2")]
 unsafe fn shade_avx2(
     lights: &Lights,
-    [at, normal, weight]: [&[Vec<f32>; 3]; 3],
+    vertex: &[[Vec3A; 3]],
     draws: &[Vec<f32>; 5],
     apply: &mut impl FnMut(usize, Shaded),
 ) -> usize {
@@ -330,7 +315,8 @@ unsafe fn shade_avx2(
     let zero = _mm256_setzero_ps();
     let inv_pi = _mm256_set1_ps(FRAC_1_PI);
     for base in (0..n).step_by(8) {
-        let (o, nf, wt) = (Vec3x8::load(at, base), Vec3x8::load(normal, base), Vec3x8::load(weight, base));
+        let rows = |k: usize| Vec3x8::from_rows(std::array::from_fn(|l| vertex[base + l][k]));
+        let (o, nf, wt) = (rows(0), rows(1), rows(2));
         let [u0, l1, l2, d1, d2] = draws.each_ref().map(|c| load8f(c[base..base + 8].try_into().expect("eight rows")));
         let l = lights.sample32x8(u0, l1, l2);
         let to = l.point.sub(o);
@@ -446,9 +432,7 @@ impl PathTracer<'_> {
             fate,
             rho,
             diffuse,
-            at,
-            normal,
-            weight,
+            vertex,
             draws,
             shadow,
             shadow_add,
@@ -481,9 +465,7 @@ impl PathTracer<'_> {
             fate.clear();
             rho.clear();
             diffuse.clear();
-            for c in [&mut *at, &mut *normal, &mut *weight].into_iter().flatten() {
-                c.clear();
-            }
+            vertex.clear();
             // Pass 1: the vertices. Emission, the depth cap, absorption,
             // mirrors; diffuse vertices listed for the passes below.
             for (j, (&p, hit)) in live.iter().zip(hits.iter()).enumerate() {
@@ -530,9 +512,7 @@ impl PathTracer<'_> {
                     pdf[p] = 0.0;
                 } else {
                     diffuse.push(j as u32);
-                    push3(at, origin[p]);
-                    push3(normal, nf);
-                    push3(weight, beta[p] * m.reflectance);
+                    vertex.push([origin[p], nf, beta[p] * m.reflectance]);
                 }
             }
             // Pass 2: the diffuse vertices' draws.
@@ -559,11 +539,12 @@ impl PathTracer<'_> {
             #[cfg(target_arch = "x86_64")]
             if std::arch::is_x86_feature_detected!("avx2") {
                 // SAFETY: AVX2 was detected just above.
-                done = unsafe { shade_avx2(self.lights, [at, normal, weight], draws, &mut apply) };
+                done = unsafe { shade_avx2(self.lights, vertex, draws, &mut apply) };
             }
             for i in done..diffuse.len() {
                 let d = draws.each_ref().map(|c| c[i]);
-                apply(i, shade(self.lights, get3(at, i), get3(normal, i), get3(weight, i), d));
+                let [o, nf, w] = vertex[i];
+                apply(i, shade(self.lights, o, nf, w, d));
             }
             // Pass 4: throughput, the roulette, and the next segments, in
             // the live order.
@@ -801,27 +782,27 @@ mod tests {
         {
             let lights = Lights::random(probability);
             let n = 1003;
-            let (mut at, mut normal, mut weight): ([Vec<f32>; 3], [Vec<f32>; 3], [Vec<f32>; 3]) = Default::default();
+            let mut vertex = Vec::new();
             let mut draws: [Vec<f32>; 5] = Default::default();
             for i in 0..n {
                 let r = LineRng::new(6, i);
                 let v = |k: u32| Vec3A::new(r.uniform32(k), r.uniform32(k + 1), r.uniform32(k + 2));
-                push3(&mut at, v(0) * 2.0 - 1.0);
-                push3(&mut normal, r.sphere_point(3).as_vec3a());
-                push3(&mut weight, if i % 7 == 0 { Vec3A::ZERO } else { v(10) });
+                let weight = if i % 7 == 0 { Vec3A::ZERO } else { v(10) };
+                vertex.push([v(0) * 2.0 - 1.0, r.sphere_point(3).as_vec3a(), weight]);
                 for (k, c) in draws.iter_mut().enumerate() {
                     c.push(r.uniform32(20 + k as u32));
                 }
             }
             let mut got = Vec::new();
             // SAFETY: AVX2 was detected above.
-            let done = unsafe { shade_avx2(&lights, [&at, &normal, &weight], &draws, &mut |i, v| got.push((i, v))) };
+            let done = unsafe { shade_avx2(&lights, &vertex, &draws, &mut |i, v| got.push((i, v))) };
             assert_eq!(done, 1000);
             let bits = |v: Vec3A| v.to_array().map(f32::to_bits);
             let mut lit = 0;
             for (i, v) in got {
                 let d = draws.each_ref().map(|c| c[i]);
-                let want = shade(&lights, get3(&at, i), get3(&normal, i), get3(&weight, i), d);
+                let [o, nf, w] = vertex[i];
+                let want = shade(&lights, o, nf, w, d);
                 assert_eq!(
                     (bits(v.direction), v.pdf.to_bits()),
                     (bits(want.direction), want.pdf.to_bits()),

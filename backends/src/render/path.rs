@@ -407,7 +407,8 @@ impl PathTracer<'_> {
     /// Each step runs in passes over the live paths' arrays: the hit
     /// vertices (emission, mirrors, which paths go on), the diffuse
     /// vertices' draws (integer hashing only, [`vertex_draws`]), their
-    /// next-event estimation and BSDF directions (f32 only), then the
+    /// next-event estimation and BSDF directions ([`shade`], 8 vertices at
+    /// a time where AVX2 runs: [`shade_avx2`]), then the
     /// roulette and the next segments in the live order. Per path, the
     /// arithmetic and its order are the single loop's before this split,
     /// so the images are the same bit for bit.

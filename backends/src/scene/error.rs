@@ -108,9 +108,11 @@ const GIB: f64 = (1u64 << 30) as f64;
 /// (nodes, indices, the builder's two node arrays: about 200 B): 512 B.
 /// The renderer's uncompressed 8-wide nodes (`tracer/wide8.rs`, 256 B a
 /// CWBVH node: 27 B a triangle on `mirror-room`, under 256 B on any tree,
-/// which has fewer nodes than triangles) are allocated, with a fallible
-/// reservation, at the first closest-hit or shadow query, after the
-/// build's temporaries are given back.
+/// which has fewer nodes than triangles) and their leaf blocks (320 B per
+/// eight lanes of a node's leaf triangles: 51 B a triangle on
+/// `mirror-room`, 40 B plus 320 B a node at most) are allocated, with a
+/// fallible reservation, at the first closest-hit or shadow query, after
+/// the build's temporaries (about 200 B a triangle) are given back.
 /// Per patch: the [`super::Patch`] with its name and the visibility
 /// counters and per-patch results: 256 B (a sphere's cells measure 200 B).
 /// Plus [`Limits::BASE_BYTES`] for the program, its line buffers and

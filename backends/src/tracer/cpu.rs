@@ -152,13 +152,14 @@ impl CpuTracer {
     /// The uncompressed tree, built at the first call.
     #[inline]
     pub(super) fn wide(&self) -> Option<&Wide8> {
-        self.wide.get_or_init(|| self.bvh.as_ref().and_then(Wide8::new)).as_ref()
+        self.wide.get_or_init(|| self.bvh.as_ref().and_then(|b| Wide8::new(b, &self.ordered))).as_ref()
     }
 
     /// The first crossing of one line: the walk shrinks the interval as hits
     /// are found, and ties in `t` go to the smaller triangle. Each node's
-    /// leaf triangles are tested eight at a time ([`TriangleLanes::block`],
-    /// [`Shear::hit`]'s arithmetic per lane), and the best one's
+    /// leaf triangles are tested eight at a time ([`Wide8::leaf_blocks`],
+    /// or [`TriangleLanes::block`] on the CWBVH walk; [`Shear::hit`]'s
+    /// arithmetic per lane), and the best one's
     /// barycentric numerators are kept from its block, not recomputed, and
     /// divided once the walk ends (the same [`Hit`] as [`triangle_hit`]'s,
     /// to the bit).
@@ -206,31 +207,23 @@ impl CpuTracer {
         let mut best: Option<(f32, u32)> = None;
         let mut numerators = [0.0f32; 3];
         let ray = Ray::new(Vec3A::from(l.origin), dir, l.tmin, l.tmax);
-        let group = |first, mask, tmax: &mut f32| {
-            self.blocks::<AVX2>(&shear, l, first, mask, tally, |block, base| {
-                let mut h = block.hit;
-                while h != 0 {
-                    let i = h.trailing_zeros() as usize;
-                    h &= h - 1;
-                    let t = block.t[i];
-                    let tri = bvh.primitive_indices[base + i];
-                    if before(t, tri, best) {
-                        best = Some((t, tri));
-                        numerators = block.numerators(i);
-                    }
-                    if t < *tmax {
-                        *tmax = t;
-                    }
-                }
-                false
-            })
-        };
         // SAFETY: `AVX2` is true only in `closest_avx2`, entered after `has_avx2()`.
         unsafe {
             if WIDE {
-                wide8::walk::<AVX2, _>(wide?, &ray, tally, group);
+                let w = wide?;
+                wide8::walk_nodes::<AVX2, true, _>(w, &ray, tally, |n, mask, tmax| {
+                    w.leaf_blocks::<AVX2>(n, mask, &shear, l.tmin, l.tmax, tally, |block, leaf| {
+                        keep_best(block, |i| leaf.tri[i], &mut best, &mut numerators, tmax);
+                        false
+                    })
+                });
             } else {
-                node8::walk_groups::<AVX2, _>(bvh, &ray, tally, group);
+                node8::walk_groups::<AVX2, _>(bvh, &ray, tally, |first, mask, tmax| {
+                    self.blocks::<AVX2>(&shear, l, first, mask, tally, |block, base| {
+                        keep_best(block, |i| bvh.primitive_indices[base + i], &mut best, &mut numerators, tmax);
+                        false
+                    })
+                });
             }
         }
         best.map(|(t, tri)| {
@@ -283,17 +276,20 @@ impl CpuTracer {
         let (shear, dir) = Shear::of(l);
         let mut hit = false;
         let ray = Ray::new(Vec3A::from(l.origin), dir, l.tmin, l.tmax);
-        let group = |first, mask, _: &mut f32| {
-            hit = self.blocks::<AVX2>(&shear, l, first, mask, tally, |block, _| block.hit != 0);
-            hit
-        };
         // SAFETY: `AVX2` is true only in `any_avx2`, entered after `has_avx2()`.
         unsafe {
             if WIDE {
                 let Some(w) = wide else { return false };
-                wide8::walk::<AVX2, _>(w, &ray, tally, group);
+                // Any crossing ends the walk: the nodes in no order.
+                wide8::walk_nodes::<AVX2, false, _>(w, &ray, tally, |n, mask, _| {
+                    hit = w.leaf_blocks::<AVX2>(n, mask, &shear, l.tmin, l.tmax, tally, |block, _| block.hit != 0);
+                    hit
+                });
             } else {
-                node8::walk_groups::<AVX2, _>(bvh, &ray, tally, group);
+                node8::walk_groups::<AVX2, _>(bvh, &ray, tally, |first, mask, _| {
+                    hit = self.blocks::<AVX2>(&shear, l, first, mask, tally, |block, _| block.hit != 0);
+                    hit
+                });
             }
         }
         hit
@@ -330,6 +326,33 @@ impl CpuTracer {
     }
 }
 
+/// Keeps the closest crossing of `block` in `best` (smallest `t`, ties to
+/// the smaller triangle: [`before`]), lane `i` being triangle `tri(i)`,
+/// with its barycentric numerators, and shrinks `tmax` to it.
+#[inline(always)]
+fn keep_best(
+    block: &Block,
+    tri: impl Fn(usize) -> u32,
+    best: &mut Option<(f32, u32)>,
+    numerators: &mut [f32; 3],
+    tmax: &mut f32,
+) {
+    let mut h = block.hit;
+    while h != 0 {
+        let i = h.trailing_zeros() as usize;
+        h &= h - 1;
+        let t = block.t[i];
+        let tri = tri(i);
+        if before(t, tri, *best) {
+            *best = Some((t, tri));
+            *numerators = block.numerators(i);
+        }
+        if t < *tmax {
+            *tmax = t;
+        }
+    }
+}
+
 impl CpuTracer {
     /// Occlusion of up to [`packet::LANES`] coherent lines walked as one
     /// packet (`packet.rs`), appended to `out`; `false` (nothing appended)
@@ -340,7 +363,7 @@ impl CpuTracer {
         #[cfg(target_arch = "x86_64")]
         if let Some((bvh, p)) = self.packet(lines) {
             // SAFETY: `packet` checked `self.avx2`, which came from `has_avx2()`.
-            let done = unsafe { packet::occluded(bvh, &self.ordered, &p, stack) };
+            let done = unsafe { packet::occluded(bvh, self.wide(), &self.ordered, &p, stack) };
             out.extend((0..p.len()).map(|i| done >> i & 1 == 1));
             return true;
         }
@@ -731,9 +754,9 @@ mod tests {
                 closest.iter().for_each(|l| assert_eq!(cw.closest_with::<false, false>(l, None, &cc), t.closest(l)));
                 shadow.iter().for_each(|l| assert_eq!(cw.any_with::<false, false>(l, None, &cs), t.any(l)));
                 eprintln!(
-                    "{spec} | {name} | wide nodes {} ({} bytes, {} CWBVH bytes) | CWBVH walk: closest {:.2} nodes {:.2} tris | shadow {:.2} nodes {:.2} tris",
+                    "{spec} | {name} | wide nodes {} ({:?} bytes of nodes and leaf blocks, {} CWBVH bytes) | CWBVH walk: closest {:.2} nodes {:.2} tris | shadow {:.2} nodes {:.2} tris",
                     t.wide().map_or(0, Wide8::len),
-                    t.wide().map_or(0, Wide8::bytes),
+                    t.wide().map_or((0, 0), Wide8::bytes),
                     bvh.nodes.len() * size_of::<obvhs::cwbvh::node::CwBvhNode>(),
                     per(&cc.nodes, closest.len()),
                     per(&cc.triangles, closest.len()),

@@ -45,6 +45,7 @@ use obvhs::ray::safe_inverse;
 
 use super::node8::NODE_EPSILON;
 use super::watertight::{Shear, before};
+use super::wide8::{LEAF, Node as WideNode, Wide8};
 use crate::lines::Line;
 
 /// Lanes of a packet.
@@ -270,9 +271,109 @@ fn leaf(node: &CwBvhNode, c: usize) -> std::ops::Range<usize> {
     first..first + (meta >> 5).count_ones() as usize
 }
 
+/// The wide tree's node test for every lane of `lanes` against each
+/// occupied slot of `n`: per slot, the lanes whose ray enters the child's
+/// box within `[NODE_EPSILON, tmax[lane]]`, with the single-ray wide test's
+/// arithmetic lane by lane (`wide8::test_scalar`: `(plane − origin) ·
+/// inverse`, the same max/min order). The boxes are the CWBVH's, widened
+/// (`wide8.rs`), so a crossing the CWBVH walk reaches is reached here too.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn wide_node(p: &Packet, n: &WideNode, occupied: u32, tmax: __m256, lanes: u8) -> [u8; 8] {
+    // SAFETY: each load reads one [f32; 8] (unaligned loads are allowed).
+    let load = |x: &Lanes| unsafe { _mm256_loadu_ps(x.as_ptr()) };
+    let (ox, oy, oz) = (load(&p.origin[0]), load(&p.origin[1]), load(&p.origin[2]));
+    let (ix, iy, iz) = (load(&p.inv[0]), load(&p.inv[1]), load(&p.inv[2]));
+    // Row of `bounds` holding each axis's near plane (the far one is `^ 1`).
+    let near = [0, 1, 2].map(|a| 2 * a + usize::from(p.neg[a]));
+    let eps = _mm256_set1_ps(NODE_EPSILON);
+    let mut out = [0u8; 8];
+    let mut m = occupied;
+    while m != 0 {
+        let c = m.trailing_zeros() as usize;
+        m &= m - 1;
+        let t = |row: usize, o: __m256, i: __m256| _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(n.bounds[row][c]), o), i);
+        let (nx, ny, nz) = (t(near[0], ox, ix), t(near[1], oy, iy), t(near[2], oz, iz));
+        let (fx, fy, fz) = (t(near[0] ^ 1, ox, ix), t(near[1] ^ 1, oy, iy), t(near[2] ^ 1, oz, iz));
+        let lo = _mm256_max_ps(_mm256_max_ps(nx, ny), _mm256_max_ps(nz, eps));
+        let hi = _mm256_min_ps(_mm256_min_ps(fx, fy), _mm256_min_ps(fz, tmax));
+        out[c] = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(lo, hi)) as u8 & lanes;
+    }
+    out
+}
+
+/// [`occluded`] over the wide tree (`wide8.rs`, node `i` there is node `i`
+/// of the CWBVH, with the same slots and primitive groups): the same walk,
+/// children in the same order, without decoding quantised planes. Each
+/// lane's answer is the single-ray wide walk's ([`super::cpu`]'s `any`):
+/// whether one of the triangles it reaches is crossed.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn occluded_wide(tree: &Wide8, triangles: &[[Vec3A; 3]], packet: &Packet, stack: &mut Vec<(u32, u8)>) -> u8 {
+    let all = ((1u16 << packet.len()) - 1) as u8;
+    let mut done = 0u8;
+    stack.clear();
+    if tree.nodes.is_empty() {
+        return 0;
+    }
+    // SAFETY: reads one [f32; 8].
+    let tmax = unsafe { _mm256_loadu_ps(packet.tmax.as_ptr()) };
+    let oct = (packet.oct_inv4 & 7) as usize;
+    stack.push((0, all));
+    let mut ts = [0.0; LANES];
+    while let Some((index, lanes)) = stack.pop() {
+        let lanes = lanes & !done;
+        if lanes == 0 {
+            continue;
+        }
+        let n = &tree.nodes[index as usize];
+        let occupied = n.child.iter().enumerate().fold(0u32, |m, (c, &x)| m | u32::from(x != 0) << c);
+        // SAFETY: AVX2 (the caller's promise).
+        let hit = unsafe { wide_node(packet, n, occupied, tmax, lanes) };
+        let mut leaves = occupied & !n.imask;
+        while leaves != 0 {
+            let c = leaves.trailing_zeros() as usize;
+            leaves &= leaves - 1;
+            if hit[c] == 0 {
+                continue;
+            }
+            let mut prims = n.child[c] & !LEAF;
+            while prims != 0 {
+                let k = (n.prim_base + prims.trailing_zeros()) as usize;
+                prims &= prims - 1;
+                let l = hit[c] & !done;
+                if l != 0 {
+                    // SAFETY: AVX2 as above.
+                    done |= unsafe { packet.crossing(&triangles[k], l, &mut ts) };
+                }
+            }
+            if done == all {
+                return done;
+            }
+        }
+        // Internal children, lowest traversal priority first (slot
+        // `p ^ octant`, as [`push_children`]), so the nearest is walked next.
+        for q in 0..8 {
+            let c = q ^ oct;
+            if hit[c] != 0 && n.imask & (1 << c) != 0 {
+                stack.push((n.child[c], hit[c]));
+            }
+        }
+    }
+    done
+}
+
 /// Which lanes of `packet` are occluded by `triangles` (in BVH order):
 /// bit `i` is set when ray `i` crosses one of the triangles its own
-/// single-ray walk would test. `stack` is scratch space.
+/// single-ray walk would test. The walk is over `wide` where there is one
+/// (as the single-ray walks), else over `bvh`. `stack` is scratch space.
 ///
 /// # Safety
 /// The CPU must support AVX2.
@@ -280,10 +381,27 @@ fn leaf(node: &CwBvhNode, c: usize) -> std::ops::Range<usize> {
 #[target_feature(enable = "avx2")]
 pub(crate) unsafe fn occluded(
     bvh: &CwBvh,
+    wide: Option<&Wide8>,
     triangles: &[[Vec3A; 3]],
     packet: &Packet,
     stack: &mut Vec<(u32, u8)>,
 ) -> u8 {
+    // SAFETY: AVX2 (the caller's promise).
+    unsafe {
+        match wide {
+            Some(w) => occluded_wide(w, triangles, packet, stack),
+            None => occluded_cwbvh(bvh, triangles, packet, stack),
+        }
+    }
+}
+
+/// [`occluded`] over the compressed nodes.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn occluded_cwbvh(bvh: &CwBvh, triangles: &[[Vec3A; 3]], packet: &Packet, stack: &mut Vec<(u32, u8)>) -> u8 {
     let all = ((1u16 << packet.len()) - 1) as u8;
     let mut done = 0u8;
     stack.clear();
@@ -428,6 +546,63 @@ mod tests {
                 }
             }
             assert!(packets > 100 && entered > 1000, "{spec}: {packets} packets, {entered} children entered");
+        }
+    }
+
+    /// Occlusion walked over the wide tree and over the CWBVH gives every
+    /// lane the answer of testing every triangle (crossed within its
+    /// `[tmin, tmax]`), for packets of shadow rays from one eye to nearby
+    /// points (as the viewpoint channel casts them) and of parallel lines,
+    /// cut short and not.
+    #[test]
+    fn wide_and_compressed_packet_occlusion_agree_with_every_triangle() {
+        if !has_avx2() {
+            return;
+        }
+        for spec in ["cube-enclosure:6", "cubes-room:16", "geosphere", "table-chairs:2", "mirror-room"] {
+            let p = Prepared::new(&built_in(spec).unwrap());
+            let bvh = crate::tracer::cpu::build_bvh(&p, bvh_input(&p).1);
+            let wide = Wide8::new(&bvh).unwrap();
+            let ordered: Vec<[Vec3A; 3]> = bvh.primitive_indices.iter().map(|&i| p.triangles[i as usize]).collect();
+            let mut stack = Vec::new();
+            let (mut packets, mut blocked, mut open) = (0, 0, 0);
+            for g in 0..400u64 {
+                let r = crate::lines::LineRng::new(9, g);
+                let eye = glam::DVec3::new(r.uniform(0), r.uniform(1), r.uniform(2)) * 1.6 - 0.8;
+                let target = glam::DVec3::new(r.uniform(3), r.uniform(4), r.uniform(5)) * 1.6 - 0.8;
+                let lines: Vec<Line> = (0..8)
+                    .map(|i| {
+                        if g % 2 == 0 {
+                            let q = target + glam::DVec3::new(0.01 * f64::from(i), 0.003 * f64::from(i % 3), 0.0);
+                            let d = q - eye;
+                            Line::ray(eye, d.normalize(), 0.0, d.length() * (1.0 - 1e-5))
+                        } else {
+                            let mut l = global_line(3, g, 1.1);
+                            l.origin[i as usize % 3] += 1e-3 * i as f32;
+                            l.tmax *= [1.0, 0.5, 0.1][i as usize % 3];
+                            l
+                        }
+                    })
+                    .collect();
+                let Some(pk) = Packet::new(&lines) else { continue };
+                packets += 1;
+                // SAFETY: AVX2 checked above.
+                let (w, c) = unsafe {
+                    (occluded_wide(&wide, &ordered, &pk, &mut stack), occluded_cwbvh(&bvh, &ordered, &pk, &mut stack))
+                };
+                for (i, l) in lines.iter().enumerate() {
+                    let (shear, _) = Shear::of(l);
+                    let every = p.triangles.iter().any(|t| shear.hit(t).is_some_and(|t| t >= l.tmin && t <= l.tmax));
+                    assert_eq!(w >> i & 1 == 1, every, "{spec}: packet {g} lane {i}, wide tree");
+                    assert_eq!(c >> i & 1 == 1, every, "{spec}: packet {g} lane {i}, CWBVH");
+                    if every {
+                        blocked += 1;
+                    } else {
+                        open += 1;
+                    }
+                }
+            }
+            assert!(packets > 200 && blocked > 100 && open > 100, "{spec}: {packets} packets, {blocked}/{open}");
         }
     }
 }

@@ -350,13 +350,8 @@ impl TriangleLanes {
         b
     }
 
-    /// [`TriangleLanes::block`] with AVX2: [`Shear::raw_always`]'s
-    /// operations lane by lane in the same order (no fused multiply-add).
-    ///
-    /// Always inlined, so that in the AVX2-compiled walks (`closest_avx2`,
-    /// `any_avx2`) its intrinsics become single instructions with no call
-    /// and no `Block` through memory (as a `target_feature` function it
-    /// stayed out of line at some call sites: 7% of a render).
+    /// [`TriangleLanes::block`] with AVX2: [`lanes_avx2`] on the nine
+    /// coordinate arrays at `first` (unaligned loads).
     ///
     /// # Safety
     /// The CPU must support AVX2; `first < len`.
@@ -371,84 +366,175 @@ impl TriangleLanes {
         tmin: f32,
         tmax: f32,
     ) -> Block {
-        use std::arch::x86_64::{
-            __m256, _CMP_EQ_OQ, _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_NEQ_UQ, _mm256_add_ps,
-            _mm256_and_ps, _mm256_andnot_ps, _mm256_cmp_ps, _mm256_div_ps, _mm256_loadu_ps, _mm256_movemask_ps,
-            _mm256_mul_ps, _mm256_or_ps, _mm256_set1_ps, _mm256_setzero_ps, _mm256_storeu_ps, _mm256_sub_ps,
-        };
-        // SAFETY: the CPU has AVX2 (this function's contract); the loads
-        // and stores stay in bounds (see each).
-        unsafe {
-            let [kx, ky, kz] = shear.k;
-            let [ox, oy, oz] = shear.org_k.map(|o| _mm256_set1_ps(o));
-            let [sx, sy, sz] = shear.s.map(|s| _mm256_set1_ps(s));
-            assert!(first + BLOCK <= self.coord[0][0].len(), "a block past the padding");
-            let (px, py, pz) = (&self.coord[kx], &self.coord[ky], &self.coord[kz]);
-            // `rel` then the shear, as `Shear::raw_always`.
-            let (mut x, mut y, mut z) = ([_mm256_setzero_ps(); 3], [_mm256_setzero_ps(); 3], [_mm256_setzero_ps(); 3]);
-            for j in 0..3 {
-                // `first + 8 <= len` (asserted above; every array has the same
-                // padded length); unaligned loads are allowed.
-                let (rx, ry, rz) = (
-                    _mm256_sub_ps(_mm256_loadu_ps(px[j].as_ptr().add(first)), ox),
-                    _mm256_sub_ps(_mm256_loadu_ps(py[j].as_ptr().add(first)), oy),
-                    _mm256_sub_ps(_mm256_loadu_ps(pz[j].as_ptr().add(first)), oz),
-                );
-                x[j] = _mm256_sub_ps(rx, _mm256_mul_ps(sx, rz));
-                y[j] = _mm256_sub_ps(ry, _mm256_mul_ps(sy, rz));
-                z[j] = rz;
+        assert!(first + BLOCK <= self.coord[0][0].len(), "a block past the padding");
+        // `first + 8 <= len` (asserted above; every array has the same
+        // padded length), so each row pointer has eight readable floats.
+        let rows = shear.k.map(|axis| [0, 1, 2].map(|v| self.coord[axis][v][first..].as_ptr()));
+        // SAFETY: AVX2 (this function's contract); eight floats behind each row.
+        unsafe { lanes_avx2::<false>(rows, shear, lanes, tmin, tmax, |i| ordered[first + i]) }
+    }
+}
+
+/// Eight triangles' vertex coordinates for the watertight test, one
+/// aligned row of eight lanes per axis and vertex (`v[axis][vertex]`),
+/// and each lane's triangle (scene order; padding lanes `u32::MAX`, never
+/// tested): the leaf blocks of the wide tree (`wide8.rs`), 320 bytes, five
+/// cache lines.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub(crate) struct Leaf8 {
+    pub(crate) v: [[[f32; BLOCK]; 3]; 3],
+    pub(crate) tri: [u32; BLOCK],
+}
+
+const _: () = assert!(size_of::<Leaf8>() == 320);
+
+impl Leaf8 {
+    /// A block with no triangle.
+    pub(crate) const EMPTY: Self = Self { v: [[[0.0; BLOCK]; 3]; 3], tri: [u32::MAX; BLOCK] };
+
+    /// Puts triangle `tri` (vertices `v`) in lane `i`.
+    pub(crate) fn set(&mut self, i: usize, tri: u32, v: &[Vec3A; 3]) {
+        for (axis, rows) in self.v.iter_mut().enumerate() {
+            for (vertex, row) in rows.iter_mut().enumerate() {
+                row[i] = v[vertex][axis];
             }
-            let ([ax, bx, cx], [ay, by, cy], [az, bz, cz]) = (x, y, z);
-            let u = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
-            let w = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
-            let vv = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
-            let zero = _mm256_setzero_ps();
-            let or3 = |a: __m256, b: __m256, c: __m256| _mm256_or_ps(_mm256_or_ps(a, b), c);
-            let exact = or3(
-                _mm256_cmp_ps::<_CMP_EQ_OQ>(u, zero),
-                _mm256_cmp_ps::<_CMP_EQ_OQ>(vv, zero),
-                _mm256_cmp_ps::<_CMP_EQ_OQ>(w, zero),
-            );
-            let exact = _mm256_movemask_ps(exact) as u32 & lanes;
-            let neg = or3(
-                _mm256_cmp_ps::<_CMP_LT_OQ>(u, zero),
-                _mm256_cmp_ps::<_CMP_LT_OQ>(vv, zero),
-                _mm256_cmp_ps::<_CMP_LT_OQ>(w, zero),
-            );
-            let pos = or3(
-                _mm256_cmp_ps::<_CMP_GT_OQ>(u, zero),
-                _mm256_cmp_ps::<_CMP_GT_OQ>(vv, zero),
-                _mm256_cmp_ps::<_CMP_GT_OQ>(w, zero),
-            );
-            let det = _mm256_add_ps(_mm256_add_ps(u, vv), w);
-            let num = _mm256_add_ps(
-                _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(u, sz), az), _mm256_mul_ps(_mm256_mul_ps(vv, sz), bz)),
-                _mm256_mul_ps(_mm256_mul_ps(w, sz), cz),
-            );
-            let t = _mm256_div_ps(num, det);
-            // Rust's `det != 0.0` is true for NaN: the unordered comparison.
-            let crossed = _mm256_andnot_ps(_mm256_and_ps(neg, pos), _mm256_cmp_ps::<_CMP_NEQ_UQ>(det, zero));
-            let within = _mm256_and_ps(
-                _mm256_cmp_ps::<_CMP_GE_OQ>(t, _mm256_set1_ps(tmin)),
-                _mm256_cmp_ps::<_CMP_LE_OQ>(t, _mm256_set1_ps(tmax)),
-            );
-            let mut b = Block {
-                hit: _mm256_movemask_ps(_mm256_and_ps(crossed, within)) as u32 & lanes & !exact,
-                ..Block::default()
-            };
-            // Each store writes one [f32; 8] (unaligned stores are allowed).
-            _mm256_storeu_ps(b.t.as_mut_ptr(), t);
-            _mm256_storeu_ps(b.w1.as_mut_ptr(), vv);
-            _mm256_storeu_ps(b.w2.as_mut_ptr(), w);
-            _mm256_storeu_ps(b.det.as_mut_ptr(), det);
-            let mut l = exact;
-            while l != 0 {
-                let i = l.trailing_zeros() as usize;
-                l &= l - 1;
-                b.set_scalar(i, shear, &ordered[first + i], tmin, tmax);
-            }
-            b
         }
+        self.tri[i] = tri;
+    }
+
+    /// Lane `i`'s vertices.
+    #[inline]
+    pub(crate) fn vertices(&self, i: usize) -> [Vec3A; 3] {
+        [0, 1, 2].map(|vertex| Vec3A::new(self.v[0][vertex][i], self.v[1][vertex][i], self.v[2][vertex][i]))
+    }
+
+    /// [`Shear::hit_within`] for the lanes of `lanes`, as
+    /// [`TriangleLanes::block`]: the same `t` to the bit.
+    ///
+    /// # Safety
+    /// `AVX2` only where the CPU has AVX2 (`node8::has_avx2`).
+    #[inline(always)]
+    pub(crate) unsafe fn test<const AVX2: bool>(&self, shear: &Shear, lanes: u32, tmin: f32, tmax: f32) -> Block {
+        #[cfg(target_arch = "x86_64")]
+        if AVX2 {
+            let rows = shear.k.map(|axis| [0, 1, 2].map(|v| self.v[axis][v].as_ptr()));
+            // SAFETY: AVX2 (this function's contract); each row is eight
+            // floats, 32-byte aligned (`Leaf8` is 64-aligned, rows 32 bytes).
+            return unsafe { lanes_avx2::<true>(rows, shear, lanes, tmin, tmax, |i| self.vertices(i)) };
+        }
+        let mut b = Block::default();
+        let mut l = lanes;
+        while l != 0 {
+            let i = l.trailing_zeros() as usize;
+            l &= l - 1;
+            b.set_scalar(i, shear, &self.vertices(i), tmin, tmax);
+        }
+        b
+    }
+}
+
+/// [`Shear::raw_always`]'s operations on eight triangles with AVX2, lane
+/// by lane in the same order (no fused multiply-add): `rows[j][v]` points
+/// at eight floats, coordinate `shear.k[j]` of vertex `v` of each lane
+/// (32-byte aligned where `ALIGNED`); lanes whose edge functions are
+/// exactly zero are finished by the scalar test on `vertices(i)`.
+///
+/// Always inlined, so that in the AVX2-compiled walks (`closest_avx2`,
+/// `any_avx2`) its intrinsics become single instructions with no call
+/// and no `Block` through memory (as a `target_feature` function it
+/// stayed out of line at some call sites: 7% of a render).
+///
+/// # Safety
+/// The CPU must support AVX2; every row pointer has eight readable floats,
+/// 32-byte aligned where `ALIGNED`.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn lanes_avx2<const ALIGNED: bool>(
+    rows: [[*const f32; 3]; 3],
+    shear: &Shear,
+    lanes: u32,
+    tmin: f32,
+    tmax: f32,
+    vertices: impl Fn(usize) -> [Vec3A; 3],
+) -> Block {
+    use std::arch::x86_64::{
+        __m256, _CMP_EQ_OQ, _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_NEQ_UQ, _mm256_add_ps, _mm256_and_ps,
+        _mm256_andnot_ps, _mm256_cmp_ps, _mm256_div_ps, _mm256_load_ps, _mm256_loadu_ps, _mm256_movemask_ps,
+        _mm256_mul_ps, _mm256_or_ps, _mm256_set1_ps, _mm256_setzero_ps, _mm256_storeu_ps, _mm256_sub_ps,
+    };
+    // SAFETY: the CPU has AVX2 (this function's contract); the loads read
+    // eight floats behind each row pointer (aligned where `ALIGNED`), the
+    // stores write one [f32; 8] each.
+    unsafe {
+        let [ox, oy, oz] = shear.org_k.map(|o| _mm256_set1_ps(o));
+        let [sx, sy, sz] = shear.s.map(|s| _mm256_set1_ps(s));
+        macro_rules! load {
+            ($p:expr) => {
+                if ALIGNED { _mm256_load_ps($p) } else { _mm256_loadu_ps($p) }
+            };
+        }
+        // `rel` then the shear, as `Shear::raw_always`.
+        let (mut x, mut y, mut z) = ([_mm256_setzero_ps(); 3], [_mm256_setzero_ps(); 3], [_mm256_setzero_ps(); 3]);
+        for j in 0..3 {
+            let (rx, ry, rz) = (
+                _mm256_sub_ps(load!(rows[0][j]), ox),
+                _mm256_sub_ps(load!(rows[1][j]), oy),
+                _mm256_sub_ps(load!(rows[2][j]), oz),
+            );
+            x[j] = _mm256_sub_ps(rx, _mm256_mul_ps(sx, rz));
+            y[j] = _mm256_sub_ps(ry, _mm256_mul_ps(sy, rz));
+            z[j] = rz;
+        }
+        let ([ax, bx, cx], [ay, by, cy], [az, bz, cz]) = (x, y, z);
+        let u = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
+        let w = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
+        let vv = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
+        let zero = _mm256_setzero_ps();
+        let or3 = |a: __m256, b: __m256, c: __m256| _mm256_or_ps(_mm256_or_ps(a, b), c);
+        let exact = or3(
+            _mm256_cmp_ps::<_CMP_EQ_OQ>(u, zero),
+            _mm256_cmp_ps::<_CMP_EQ_OQ>(vv, zero),
+            _mm256_cmp_ps::<_CMP_EQ_OQ>(w, zero),
+        );
+        let exact = _mm256_movemask_ps(exact) as u32 & lanes;
+        let neg = or3(
+            _mm256_cmp_ps::<_CMP_LT_OQ>(u, zero),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(vv, zero),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(w, zero),
+        );
+        let pos = or3(
+            _mm256_cmp_ps::<_CMP_GT_OQ>(u, zero),
+            _mm256_cmp_ps::<_CMP_GT_OQ>(vv, zero),
+            _mm256_cmp_ps::<_CMP_GT_OQ>(w, zero),
+        );
+        let det = _mm256_add_ps(_mm256_add_ps(u, vv), w);
+        let num = _mm256_add_ps(
+            _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(u, sz), az), _mm256_mul_ps(_mm256_mul_ps(vv, sz), bz)),
+            _mm256_mul_ps(_mm256_mul_ps(w, sz), cz),
+        );
+        let t = _mm256_div_ps(num, det);
+        // Rust's `det != 0.0` is true for NaN: the unordered comparison.
+        let crossed = _mm256_andnot_ps(_mm256_and_ps(neg, pos), _mm256_cmp_ps::<_CMP_NEQ_UQ>(det, zero));
+        let within = _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_GE_OQ>(t, _mm256_set1_ps(tmin)),
+            _mm256_cmp_ps::<_CMP_LE_OQ>(t, _mm256_set1_ps(tmax)),
+        );
+        let mut b = Block {
+            hit: _mm256_movemask_ps(_mm256_and_ps(crossed, within)) as u32 & lanes & !exact,
+            ..Block::default()
+        };
+        _mm256_storeu_ps(b.t.as_mut_ptr(), t);
+        _mm256_storeu_ps(b.w1.as_mut_ptr(), vv);
+        _mm256_storeu_ps(b.w2.as_mut_ptr(), w);
+        _mm256_storeu_ps(b.det.as_mut_ptr(), det);
+        let mut l = exact;
+        while l != 0 {
+            let i = l.trailing_zeros() as usize;
+            l &= l - 1;
+            b.set_scalar(i, shear, &vertices(i), tmin, tmax);
+        }
+        b
     }
 }
 
@@ -459,7 +545,8 @@ mod tests {
     use crate::scene::built_in;
     use crate::tracer::node8::has_avx2;
 
-    /// Every lane of a block, AVX2 or not, is the scalar test's answer to
+    /// Every lane of a block, AVX2 or not, from the BVH-ordered arrays or
+    /// a [`Leaf8`], is the scalar test's answer to
     /// the bit (`t`, crossed within `[tmin, tmax]`, barycentrics), for
     /// random rays and for rays along the axes from grid points, which
     /// meet vertices and edges exactly (the edge functions' exact zeros).
@@ -487,11 +574,17 @@ mod tests {
                 for first in (0..tris.len()).step_by(BLOCK) {
                     let n = (tris.len() - first).min(BLOCK);
                     let all = (1u32 << n) - 1;
+                    let mut leaf = Leaf8::EMPTY;
+                    for k in 0..n {
+                        leaf.set(k, (first + k) as u32, &tris[first + k]);
+                    }
                     // SAFETY: `true` only where the CPU has AVX2.
                     let blocks = unsafe {
                         [
                             Some(lanes.block::<false>(tris, &shear, first, all, l.tmin, l.tmax)),
                             has_avx2().then(|| lanes.block::<true>(tris, &shear, first, all, l.tmin, l.tmax)),
+                            Some(leaf.test::<false>(&shear, all, l.tmin, l.tmax)),
+                            has_avx2().then(|| leaf.test::<true>(&shear, all, l.tmin, l.tmax)),
                         ]
                     };
                     for b in blocks.iter().flatten() {

@@ -21,7 +21,13 @@
 //! walk does, `node8::walk_groups`), then the internal children hit are
 //! visited nearest first (one: go; two: one compare; more: a small sort by
 //! entry distance), the others pushed with their entry distance, and a
-//! popped node whose entry is beyond the best hit so far is skipped.
+//! popped node whose entry is beyond the best hit so far is skipped. The
+//! any-hit walk keeps no order (any crossing ends it).
+//!
+//! Each node's primitive group is also copied into aligned blocks of eight
+//! triangles ([`Leaf8`], [`Wide8::leaves`]), so the leaf test reads one
+//! aligned row per axis and vertex and finds each lane's triangle index
+//! beside its coordinates.
 
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::{
@@ -31,10 +37,12 @@ use std::arch::x86_64::{
 };
 use std::mem::MaybeUninit;
 
+use glam::Vec3A;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::Ray;
 
 use super::node8::{NODE_EPSILON, Tally};
+use super::watertight::{BLOCK, Block, Leaf8, Shear};
 
 /// A leaf child's entry in [`Node::child`]: this bit, and the child's
 /// primitives as a mask over the node's primitive group (bits 0..24).
@@ -58,27 +66,93 @@ pub(crate) struct Node {
     pub(super) prim_base: u32,
     /// Bit `i`: slot `i` is an internal child.
     pub(super) imask: u32,
+    /// The node's primitive group in [`Wide8::leaves`]: primitive
+    /// `prim_base + j` is lane `j % 8` of block `leaf_base + j / 8`.
+    pub(super) leaf_base: u32,
 }
 
 const _: () = assert!(size_of::<Node>() == 256);
 
-/// The CPU backend's BVH as uncompressed 8-wide nodes.
+/// The CPU backend's BVH as uncompressed 8-wide nodes, and each node's
+/// leaf triangles in aligned blocks of eight.
 #[derive(Clone, Debug)]
 pub(crate) struct Wide8 {
     pub(super) nodes: Vec<Node>,
+    /// Each node's primitive group (its leaf children's triangles, in BVH
+    /// order) from an aligned block on ([`Node::leaf_base`]): one aligned
+    /// load per coordinate for eight of them, the group's primitive mask
+    /// read block by block, and each lane's triangle index beside its
+    /// coordinates.
+    pub(super) leaves: Vec<Leaf8>,
 }
 
 impl Wide8 {
-    /// Decodes `bvh` node for node; `None` if some walk of it could need
+    /// Decodes `bvh` node for node, with its triangles `ordered` (BVH
+    /// order: `ordered[k]` is triangle `bvh.primitive_indices[k]`) copied
+    /// into each node's leaf blocks; `None` if some walk of it could need
     /// more than [`STACK`] stack entries, or if its nodes (256 bytes each,
-    /// `bvh.nodes.len()` of them, known before allocating) cannot be
-    /// allocated: then the CWBVH walk serves, with the same answers.
-    pub(crate) fn new(bvh: &CwBvh) -> Option<Self> {
+    /// `bvh.nodes.len()` of them) or its leaf blocks (320 bytes per eight
+    /// lanes of each node's group, counted from the nodes) cannot be
+    /// allocated (both known before allocating): then the CWBVH walk
+    /// serves, with the same answers.
+    pub(crate) fn new(bvh: &CwBvh, ordered: &[[Vec3A; 3]]) -> Option<Self> {
         let mut nodes: Vec<Node> = Vec::new();
         nodes.try_reserve_exact(bvh.nodes.len()).ok()?;
         nodes.extend(bvh.nodes.iter().map(decode));
-        let tree = Self { nodes };
+        let blocks: usize = nodes.iter().map(|n| group_len(n).div_ceil(BLOCK)).sum();
+        u32::try_from(blocks).ok()?;
+        let mut leaves: Vec<Leaf8> = Vec::new();
+        leaves.try_reserve_exact(blocks).ok()?;
+        for n in &mut nodes {
+            n.leaf_base = leaves.len() as u32;
+            let len = group_len(n);
+            for b in 0..len.div_ceil(BLOCK) {
+                let mut leaf = Leaf8::EMPTY;
+                for (i, j) in (b * BLOCK..len.min((b + 1) * BLOCK)).enumerate() {
+                    let k = n.prim_base as usize + j;
+                    leaf.set(i, bvh.primitive_indices[k], &ordered[k]);
+                }
+                leaves.push(leaf);
+            }
+        }
+        let tree = Self { nodes, leaves };
         (tree.nodes.is_empty() || tree.stack_need(0) < STACK).then_some(tree)
+    }
+
+    /// Tests the primitives of `mask` (bit `j`: primitive `prim_base + j`
+    /// of `n`'s group, as [`walk_nodes`] hands them) against the ray of
+    /// `shear` within `[tmin, tmax]`, one [`Leaf8`] block of up to eight
+    /// at a time, handing each block's answers and the block to `each`;
+    /// stops, returning `true`, when `each` does.
+    ///
+    /// # Safety
+    /// `AVX2` only where the CPU has AVX2 (`node8::has_avx2`).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub(super) unsafe fn leaf_blocks<const AVX2: bool>(
+        &self,
+        n: &Node,
+        mask: u32,
+        shear: &Shear,
+        tmin: f32,
+        tmax: f32,
+        tally: &impl Tally,
+        mut each: impl FnMut(&Block, &Leaf8) -> bool,
+    ) -> bool {
+        let mut m = mask;
+        while m != 0 {
+            let b = m.trailing_zeros() / BLOCK as u32;
+            let lanes = (m >> (b * BLOCK as u32)) & 0xff;
+            m &= !(0xff << (b * BLOCK as u32));
+            tally.triangles(lanes);
+            let leaf = &self.leaves[(n.leaf_base + b) as usize];
+            // SAFETY: `AVX2` only where the CPU has it (this function's contract).
+            let block = unsafe { leaf.test::<AVX2>(shear, lanes, tmin, tmax) };
+            if each(&block, leaf) {
+                return true;
+            }
+        }
+        false
     }
 
     /// Nodes in the tree.
@@ -87,10 +161,10 @@ impl Wide8 {
         self.nodes.len()
     }
 
-    /// Bytes of the node array.
+    /// Bytes of the node array and of the leaf blocks.
     #[cfg(test)]
-    pub(crate) fn bytes(&self) -> usize {
-        self.nodes.len() * size_of::<Node>()
+    pub(crate) fn bytes(&self) -> (usize, usize) {
+        (self.nodes.len() * size_of::<Node>(), self.leaves.len() * size_of::<Leaf8>())
     }
 
     /// The most stack entries a walk from `node` holds: at each node it
@@ -102,6 +176,14 @@ impl Wide8 {
         let below = (0..8).filter(|&i| n.imask >> i & 1 == 1).map(|i| self.stack_need(n.child[i])).max().unwrap_or(0);
         kids.saturating_sub(1) + below
     }
+}
+
+/// Primitives in `n`'s group: its leaf children's primitive masks are
+/// contiguous from bit 0 (a CWBVH node's leaves share one run of
+/// primitives from `primitive_base_idx`).
+fn group_len(n: &Node) -> usize {
+    let prims = (0..8).filter(|&i| n.imask >> i & 1 == 0).fold(0, |m, i| m | n.child[i]) & !LEAF;
+    (32 - prims.leading_zeros()) as usize
 }
 
 /// Node `n` of a CWBVH, uncompressed.
@@ -118,6 +200,7 @@ fn decode(n: &obvhs::cwbvh::node::CwBvhNode) -> Node {
         child: [0; 8],
         prim_base: n.primitive_base_idx,
         imask: u32::from(n.imask),
+        leaf_base: 0,
     };
     for slot in 0..8 {
         if n.is_child_empty(slot) {
@@ -247,16 +330,44 @@ unsafe fn leaf_prims_avx2(n: &Node, hit: u32) -> u32 {
 /// bit `i` of `mask`, below 24, in BVH order) as the CWBVH walk
 /// (`node8::walk_groups`) does; `group` may shrink `tmax` (closest hit)
 /// and returns `true` to end the walk (any hit). `tally` counts the nodes
-/// tested.
+/// tested. [`walk_nodes`] with the internal children nearest first.
 ///
 /// # Safety
 /// `AVX2` only where the CPU has AVX2 (`node8::has_avx2`).
 #[inline(always)]
+#[allow(dead_code, reason = "the BVH-order entry kept for `trace_all`'s walks (interleave.rs), which are to call it")]
 pub(super) unsafe fn walk<const AVX2: bool, F: FnMut(u32, u32, &mut f32) -> bool>(
     tree: &Wide8,
     ray: &Ray,
     tally: &impl Tally,
     mut group: F,
+) {
+    // SAFETY: this function's contract.
+    unsafe { walk_nodes::<AVX2, true, _>(tree, ray, tally, |n, mask, tmax| group(n.prim_base, mask, tmax)) }
+}
+
+/// Walks `tree` along `ray`, calling `leaves(node, mask, &mut tmax)` with
+/// each visited node and the primitives of its hit leaf children (bit `j`
+/// of `mask`, below 24: primitive `node.prim_base + j` in BVH order, lane
+/// `j % 8` of its block `node.leaf_base + j / 8` in [`Wide8::leaves`]);
+/// `leaves` may shrink `tmax` (closest hit) and returns `true` to end the
+/// walk (any hit). `tally` counts the nodes tested.
+///
+/// `ORDERED` (closest hit): a node's internal children are visited
+/// nearest first, the others pushed with their entry distance, and a
+/// popped node entered beyond `tmax` is skipped. Not `ORDERED` (any hit,
+/// where the order cannot change the answer): they are visited in slot
+/// order, the stack holds node indices only, and no entry distance is kept
+/// or compared (a popped node is visited whatever `tmax` is then).
+///
+/// # Safety
+/// `AVX2` only where the CPU has AVX2 (`node8::has_avx2`).
+#[inline(always)]
+pub(super) unsafe fn walk_nodes<const AVX2: bool, const ORDERED: bool, F: FnMut(&Node, u32, &mut f32) -> bool>(
+    tree: &Wide8,
+    ray: &Ray,
+    tally: &impl Tally,
+    mut leaves: F,
 ) {
     if tree.nodes.is_empty() {
         return;
@@ -264,6 +375,7 @@ pub(super) unsafe fn walk<const AVX2: bool, F: FnMut(u32, u32, &mut f32) -> bool
     let c = Consts::new(ray);
     let mut tmax = ray.tmax;
     // (node, entry distance); at most `STACK - 1` entries (`Wide8::new`).
+    // The unordered walk leaves the distances unwritten and unread.
     let mut stack = [MaybeUninit::<(u32, f32)>::uninit(); STACK];
     let mut depth = 0usize;
     let mut node = 0u32;
@@ -276,7 +388,9 @@ pub(super) unsafe fn walk<const AVX2: bool, F: FnMut(u32, u32, &mut f32) -> bool
             // SAFETY: `AVX2` only where the CPU has AVX2 (this function's contract).
             unsafe {
                 let (hit, lo) = test_avx2(n, &c, tmax);
-                _mm256_storeu_ps(near.as_mut_ptr(), lo);
+                if ORDERED {
+                    _mm256_storeu_ps(near.as_mut_ptr(), lo);
+                }
                 (hit, leaf_prims_avx2(n, hit))
             }
         } else {
@@ -292,11 +406,11 @@ pub(super) unsafe fn walk<const AVX2: bool, F: FnMut(u32, u32, &mut f32) -> bool
         };
         let mut m = hit & n.imask;
         if prims != 0 {
-            if group(n.prim_base, prims, &mut tmax) {
+            if leaves(n, prims, &mut tmax) {
                 return;
             }
             // Children entered beyond a hit just found are not visited.
-            let mut k = m;
+            let mut k = if ORDERED { m } else { 0 };
             while k != 0 {
                 let i = k.trailing_zeros();
                 k &= k - 1;
@@ -304,6 +418,25 @@ pub(super) unsafe fn walk<const AVX2: bool, F: FnMut(u32, u32, &mut f32) -> bool
                     m &= !(1 << i);
                 }
             }
+        }
+        if !ORDERED {
+            if m != 0 {
+                node = n.child[m.trailing_zeros() as usize];
+                m &= m - 1;
+                while m != 0 {
+                    stack[depth] = MaybeUninit::new((n.child[m.trailing_zeros() as usize], 0.0));
+                    depth += 1;
+                    m &= m - 1;
+                }
+                continue;
+            }
+            if depth == 0 {
+                return;
+            }
+            depth -= 1;
+            // SAFETY: as the pop below.
+            node = unsafe { stack[depth].assume_init() }.0;
+            continue;
         }
         if m != 0 {
             let first = m.trailing_zeros() as usize;
@@ -379,16 +512,30 @@ mod tests {
     use crate::tracer::{Prepared, bvh_input};
 
     /// Every decoded box contains its compressed box, leaves hold the
-    /// CWBVH's primitives, and the AVX2 node test returns the scalar
+    /// CWBVH's primitives, each node's leaf blocks hold its group's
+    /// triangles lane by lane, and the AVX2 node test returns the scalar
     /// test's mask and entry distances on every node for many rays.
     #[test]
     fn decoded_nodes_and_node_tests_agree() {
         for spec in ["cube-enclosure:6", "cubes-room:16", "geosphere", "table-chairs:2", "mirror-room"] {
             let p = Prepared::new(&built_in(spec).unwrap());
             let bvh = build_bvh(&p, bvh_input(&p).1);
-            let tree = Wide8::new(&bvh).unwrap();
+            let tree = Wide8::new(&bvh, &ordered(&p, &bvh)).unwrap();
             assert_eq!(tree.len(), bvh.nodes.len());
             for (n, w) in bvh.nodes.iter().zip(&tree.nodes) {
+                // The group's triangles, lane by lane, then empty lanes.
+                let len = group_len(w);
+                for j in 0..len.div_ceil(BLOCK) * BLOCK {
+                    let leaf = &tree.leaves[w.leaf_base as usize + j / BLOCK];
+                    let k = w.prim_base as usize + j;
+                    if j < len {
+                        let tri = bvh.primitive_indices[k];
+                        assert_eq!(leaf.tri[j % BLOCK], tri, "{spec}");
+                        assert_eq!(leaf.vertices(j % BLOCK), p.triangles[tri as usize], "{spec}");
+                    } else {
+                        assert_eq!(leaf.tri[j % BLOCK], u32::MAX, "{spec}");
+                    }
+                }
                 let mut prims = 0u32;
                 for slot in 0..8 {
                     if n.is_child_empty(slot) {
@@ -438,7 +585,12 @@ mod tests {
         }
     }
 
-    /// The wide walk visits, for each ray, a superset of the leaf
+    /// The scene's triangles in `bvh`'s order.
+    fn ordered(p: &Prepared, bvh: &CwBvh) -> Vec<[Vec3A; 3]> {
+        bvh.primitive_indices.iter().map(|&i| p.triangles[i as usize]).collect()
+    }
+
+    /// The wide walk, ordered or not, visits, for each ray, a superset of the leaf
     /// primitives that can hold its closest hit: with a leaf test that
     /// records every candidate, a ray's crossings found by the reference
     /// (every triangle) before its `tmax` are all among them. Checked on
@@ -448,7 +600,7 @@ mod tests {
         for spec in ["cube-enclosure:6", "cubes-room:16", "table-chairs:2", "mirror-room", "cornell-box"] {
             let p = Prepared::new(&built_in(spec).unwrap());
             let bvh = build_bvh(&p, bvh_input(&p).1);
-            let tree = Wide8::new(&bvh).unwrap();
+            let tree = Wide8::new(&bvh, &ordered(&p, &bvh)).unwrap();
             let mut reached = 0u64;
             for i in 0..2_000u64 {
                 let r = LineRng::new(8, i);
@@ -457,22 +609,23 @@ mod tests {
                 let l = Line::ray(o, d, 0.0, 2.0 * r.uniform(6));
                 let (shear, dir) = crate::tracer::watertight::Shear::of(&l);
                 let ray = Ray::new(Vec3A::from(l.origin), dir, l.tmin, l.tmax);
-                for avx2 in [false, has_avx2()] {
+                for (avx2, ordered) in [(false, true), (has_avx2(), true), (false, false), (has_avx2(), false)] {
                     let mut seen = vec![false; bvh.primitive_indices.len()];
-                    let visit = |first: u32, mask: u32, _: &mut f32| {
+                    let visit = |n: &Node, mask: u32, _: &mut f32| {
                         let mut m = mask;
                         while m != 0 {
-                            seen[(first + m.trailing_zeros()) as usize] = true;
+                            seen[(n.prim_base + m.trailing_zeros()) as usize] = true;
                             m &= m - 1;
                         }
                         false
                     };
                     // SAFETY: `avx2` only where the CPU has it.
                     unsafe {
-                        if avx2 {
-                            walk::<true, _>(&tree, &ray, &(), visit)
-                        } else {
-                            walk::<false, _>(&tree, &ray, &(), visit)
+                        match (avx2, ordered) {
+                            (true, true) => walk_nodes::<true, true, _>(&tree, &ray, &(), visit),
+                            (false, true) => walk_nodes::<false, true, _>(&tree, &ray, &(), visit),
+                            (true, false) => walk_nodes::<true, false, _>(&tree, &ray, &(), visit),
+                            (false, false) => walk_nodes::<false, false, _>(&tree, &ray, &(), visit),
                         }
                     }
                     for (k, &tri) in bvh.primitive_indices.iter().enumerate() {

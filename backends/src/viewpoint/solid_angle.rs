@@ -148,7 +148,11 @@ struct View {
 /// not taken for an occluder).
 fn towards(eye: DVec3, p: DVec3) -> Line {
     let d = p - eye;
-    let r = d.length();
+    towards_along(eye, d, d.length())
+}
+
+/// [`towards`] from `d = p − eye` and its length `r`.
+fn towards_along(eye: DVec3, d: DVec3, r: f64) -> Line {
     Line::ray(eye, d / r, 0.0, r * (1.0 - 1e-5))
 }
 
@@ -367,9 +371,11 @@ impl View {
             let v = &tris[s.tri as usize];
             let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
             for q in sub_centroids(v, self.m) {
+                // One length for the weight and the ray (the same value).
                 let d = q - self.eye;
-                weights.push(n.dot(d).abs() / d.length().powi(3));
-                lines.push(towards(self.eye, q));
+                let r = d.length();
+                weights.push(n.dot(d).abs() / r.powi(3));
+                lines.push(towards_along(self.eye, d, r));
             }
         }
         let visible = unoccluded(tracer, &lines)?;

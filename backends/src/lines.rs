@@ -338,6 +338,16 @@ pub fn cosine_direction(n: DVec3, u: f64, v: f64) -> DVec3 {
     (t * x + b * y + n * z).normalize()
 }
 
+/// `⌊f⌋` as an integer without libm's `floorf` (a call where SSE2, which
+/// has no rounding instruction, is the target): truncation, one less where
+/// it rounded up. Exact for `|f| < 2³¹`; NaN gives 0, as
+/// `f.floor() as i32` does.
+#[inline]
+fn floor_i32(f: f32) -> i32 {
+    let t = f as i32;
+    t - i32::from(t as f32 > f)
+}
+
 /// `(cos 2πv, sin 2πv)` for `v` in `[0, 1)` in f32 without a library
 /// call: the quarter turn `⌊4v⌋` is applied exactly, and the angle left,
 /// in `[0, π/2)`, goes through Taylor polynomials to `x¹¹`/`x¹²` (error
@@ -346,8 +356,8 @@ pub fn cosine_direction(n: DVec3, u: f64, v: f64) -> DVec3 {
 #[must_use]
 pub fn cos_sin_turn(v: f32) -> (f32, f32) {
     let f = v * 4.0;
-    let q = f.floor();
-    let x = (f - q) * std::f32::consts::FRAC_PI_2;
+    let q = floor_i32(f);
+    let x = (f - q as f32) * std::f32::consts::FRAC_PI_2;
     let x2 = x * x;
     let s = x
         * (1.0
@@ -357,7 +367,7 @@ pub fn cos_sin_turn(v: f32) -> (f32, f32) {
         + x2 * (-0.5
             + x2 * (1.0 / 24.0
                 + x2 * (-1.0 / 720.0 + x2 * (1.0 / 40_320.0 + x2 * (-1.0 / 3_628_800.0 + x2 / 479_001_600.0)))));
-    match (q as i32) & 3 {
+    match q & 3 {
         0 => (c, s),
         1 => (-s, c),
         2 => (-c, -s),
@@ -375,6 +385,220 @@ pub fn cosine_direction32(n: Vec3A, u: f32, v: f32) -> Vec3A {
     let z = (1.0 - u).max(0.0).sqrt();
     let (t, b) = n.any_orthonormal_pair();
     (t * (r * c) + b * (r * s) + n * z).normalize()
+}
+
+/// Eight 3-vectors as three f32 columns (`x`, `y`, `z`, lane `l` holding
+/// vector `l`): the path tracer's 8-wide shading. Each operation is glam's
+/// `Vec3A` operation lane by lane, in the same order (a dot product is
+/// `(x·x' + y·y') + z·z'`, as glam's SSE2 `dot3`), so the results are the
+/// scalar code's bits.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+pub(crate) struct Vec3x8 {
+    pub(crate) x: std::arch::x86_64::__m256,
+    pub(crate) y: std::arch::x86_64::__m256,
+    pub(crate) z: std::arch::x86_64::__m256,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Vec3x8 {
+    /// The eight vectors `rows` as columns (a 4 × 4 transpose in each
+    /// 128-bit half; exact: moves only).
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(crate) fn from_rows(rows: [Vec3A; 8]) -> Self {
+        use std::arch::x86_64::{__m128, _mm256_set_m128, _mm256_shuffle_ps, _mm256_unpackhi_ps, _mm256_unpacklo_ps};
+        let r = rows.map(__m128::from);
+        // Rows `l` and `l + 4` side by side, then the in-lane transpose.
+        let [a0, a1, a2, a3] = [0, 1, 2, 3].map(|l| _mm256_set_m128(r[l + 4], r[l]));
+        let (xy01, xy23) = (_mm256_unpacklo_ps(a0, a1), _mm256_unpacklo_ps(a2, a3));
+        let (zw01, zw23) = (_mm256_unpackhi_ps(a0, a1), _mm256_unpackhi_ps(a2, a3));
+        Self {
+            x: _mm256_shuffle_ps::<0b01_00_01_00>(xy01, xy23),
+            y: _mm256_shuffle_ps::<0b11_10_11_10>(xy01, xy23),
+            z: _mm256_shuffle_ps::<0b01_00_01_00>(zw01, zw23),
+        }
+    }
+
+    /// Lane `l` of each column, as one array per column.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(crate) fn lanes(self) -> [[f32; 8]; 3] {
+        [store8f(self.x), store8f(self.y), store8f(self.z)]
+    }
+
+    /// `self + o`.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(crate) fn add(self, o: Self) -> Self {
+        use std::arch::x86_64::_mm256_add_ps;
+        Self { x: _mm256_add_ps(self.x, o.x), y: _mm256_add_ps(self.y, o.y), z: _mm256_add_ps(self.z, o.z) }
+    }
+
+    /// `self − o`.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(crate) fn sub(self, o: Self) -> Self {
+        use std::arch::x86_64::_mm256_sub_ps;
+        Self { x: _mm256_sub_ps(self.x, o.x), y: _mm256_sub_ps(self.y, o.y), z: _mm256_sub_ps(self.z, o.z) }
+    }
+
+    /// `self * o`, component by component.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(crate) fn mul(self, o: Self) -> Self {
+        use std::arch::x86_64::_mm256_mul_ps;
+        Self { x: _mm256_mul_ps(self.x, o.x), y: _mm256_mul_ps(self.y, o.y), z: _mm256_mul_ps(self.z, o.z) }
+    }
+
+    /// `self * s`, lane `l` scaled by `s`'s lane `l`.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(crate) fn scale(self, s: std::arch::x86_64::__m256) -> Self {
+        use std::arch::x86_64::_mm256_mul_ps;
+        Self { x: _mm256_mul_ps(self.x, s), y: _mm256_mul_ps(self.y, s), z: _mm256_mul_ps(self.z, s) }
+    }
+
+    /// `self / s`, lane `l` divided by `s`'s lane `l`.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(crate) fn div(self, s: std::arch::x86_64::__m256) -> Self {
+        use std::arch::x86_64::_mm256_div_ps;
+        Self { x: _mm256_div_ps(self.x, s), y: _mm256_div_ps(self.y, s), z: _mm256_div_ps(self.z, s) }
+    }
+
+    /// `(x·x' + y·y') + z·z'`.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(crate) fn dot(self, o: Self) -> std::arch::x86_64::__m256 {
+        use std::arch::x86_64::{_mm256_add_ps, _mm256_mul_ps};
+        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(self.x, o.x), _mm256_mul_ps(self.y, o.y)), _mm256_mul_ps(self.z, o.z))
+    }
+
+    /// `√(self · self)`.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(crate) fn length(self) -> std::arch::x86_64::__m256 {
+        std::arch::x86_64::_mm256_sqrt_ps(self.dot(self))
+    }
+
+    /// `self / |self|` (glam's `normalize`: a division by the length).
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(crate) fn normalize(self) -> Self {
+        self.div(self.length())
+    }
+
+    /// glam's `any_orthonormal_pair` of unit vectors (Duff et al. 2017),
+    /// lane by lane.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn any_orthonormal_pair(self) -> (Self, Self) {
+        use std::arch::x86_64::{
+            _CMP_UNORD_Q, _mm256_add_ps, _mm256_and_ps, _mm256_blendv_ps, _mm256_cmp_ps, _mm256_div_ps, _mm256_mul_ps,
+            _mm256_or_ps, _mm256_set1_ps, _mm256_xor_ps,
+        };
+        let (x, y, z) = (self.x, self.y, self.z);
+        let sign_bit = _mm256_set1_ps(-0.0);
+        let one = _mm256_set1_ps(1.0);
+        // `z.signum()`: ±1 with `z`'s sign, NaN for NaN.
+        let sign =
+            _mm256_blendv_ps(_mm256_or_ps(_mm256_and_ps(z, sign_bit), one), z, _mm256_cmp_ps::<_CMP_UNORD_Q>(z, z));
+        let a = _mm256_div_ps(_mm256_set1_ps(-1.0), _mm256_add_ps(sign, z));
+        let b = _mm256_mul_ps(_mm256_mul_ps(x, y), a);
+        let neg = |v| _mm256_xor_ps(v, sign_bit);
+        let t = Self {
+            x: _mm256_add_ps(one, _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(sign, x), x), a)),
+            y: _mm256_mul_ps(sign, b),
+            z: _mm256_mul_ps(neg(sign), x),
+        };
+        let u = Self { x: b, y: _mm256_add_ps(sign, _mm256_mul_ps(_mm256_mul_ps(y, y), a)), z: neg(y) };
+        (t, u)
+    }
+}
+
+/// Eight f32 lanes from `a`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(crate) fn load8f(a: &[f32; 8]) -> std::arch::x86_64::__m256 {
+    // SAFETY: `a` is 32 readable bytes; the load is unaligned.
+    unsafe { std::arch::x86_64::_mm256_loadu_ps(a.as_ptr()) }
+}
+
+/// The eight f32 lanes of `v`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(crate) fn store8f(v: std::arch::x86_64::__m256) -> [f32; 8] {
+    let mut a = [0f32; 8];
+    // SAFETY: `a` is 32 writable bytes; the store is unaligned.
+    unsafe { std::arch::x86_64::_mm256_storeu_ps(a.as_mut_ptr(), v) };
+    a
+}
+
+/// [`cos_sin_turn`] of 8 lanes: the same f32 operations lane by lane
+/// (AVX's rounding instruction for the floor), so the same bits.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(crate) fn cos_sin_turn8(v: std::arch::x86_64::__m256) -> (std::arch::x86_64::__m256, std::arch::x86_64::__m256) {
+    use std::arch::x86_64::{
+        _mm256_add_epi32, _mm256_add_ps, _mm256_and_si256, _mm256_blendv_ps, _mm256_castsi256_ps, _mm256_cmpeq_epi32,
+        _mm256_cvttps_epi32, _mm256_div_ps, _mm256_floor_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_slli_epi32,
+        _mm256_sub_ps, _mm256_xor_ps,
+    };
+    let k = _mm256_set1_ps;
+    let f = _mm256_mul_ps(v, k(4.0));
+    let q = _mm256_floor_ps(f);
+    let x = _mm256_mul_ps(_mm256_sub_ps(f, q), k(std::f32::consts::FRAC_PI_2));
+    let x2 = _mm256_mul_ps(x, x);
+    // `a + x2 · b`, as the scalar polynomials nest.
+    let step = |a: f32, b| _mm256_add_ps(k(a), _mm256_mul_ps(x2, b));
+    let s = _mm256_mul_ps(
+        x,
+        step(
+            1.0,
+            step(-1.0 / 6.0, step(1.0 / 120.0, step(-1.0 / 5040.0, step(1.0 / 362_880.0, k(-1.0 / 39_916_800.0))))),
+        ),
+    );
+    let c = step(
+        1.0,
+        step(
+            -0.5,
+            step(
+                1.0 / 24.0,
+                step(
+                    -1.0 / 720.0,
+                    step(1.0 / 40_320.0, _mm256_add_ps(k(-1.0 / 3_628_800.0), _mm256_div_ps(x2, k(479_001_600.0)))),
+                ),
+            ),
+        ),
+    );
+    // Quarter `q & 3`: 0 (c, s), 1 (−s, c), 2 (−c, −s), 3 (s, −c).
+    let q = _mm256_cvttps_epi32(q);
+    let odd = _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(q, splat8(1)), splat8(1)));
+    let (cos, sin) = (_mm256_blendv_ps(c, s, odd), _mm256_blendv_ps(s, c, odd));
+    // The sign bit where the quarter negates: cos for 1 and 2 (bit 1 of
+    // `q + 1`), sin for 2 and 3 (bit 1 of `q`), moved to bit 31.
+    let flip = |m| _mm256_castsi256_ps(_mm256_slli_epi32::<30>(_mm256_and_si256(m, splat8(2))));
+    (_mm256_xor_ps(cos, flip(_mm256_add_epi32(q, splat8(1)))), _mm256_xor_ps(sin, flip(q)))
+}
+
+/// [`cosine_direction32`] of 8 lanes (unit normals `n`, draws `u`, `v`):
+/// the same operations lane by lane, so the same bits.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(crate) fn cosine_direction32x8(n: Vec3x8, u: std::arch::x86_64::__m256, v: std::arch::x86_64::__m256) -> Vec3x8 {
+    use std::arch::x86_64::{
+        _mm256_max_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_setzero_ps, _mm256_sqrt_ps, _mm256_sub_ps,
+    };
+    let r = _mm256_sqrt_ps(u);
+    let (c, s) = cos_sin_turn8(v);
+    let z = _mm256_sqrt_ps(_mm256_max_ps(_mm256_sub_ps(_mm256_set1_ps(1.0), u), _mm256_setzero_ps()));
+    let (t, b) = n.any_orthonormal_pair();
+    t.scale(_mm256_mul_ps(r, c)).add(b.scale(_mm256_mul_ps(r, s))).add(n.scale(z)).normalize()
 }
 
 /// Element `i` of a pseudo-random permutation of `0..len` chosen by `key`
@@ -465,6 +689,20 @@ mod tests {
     }
 
     #[test]
+    fn floor_i32_is_floor() {
+        let r = LineRng::new(9, 1);
+        for k in 0..100_000 {
+            for f in [(r.uniform32(k) - 0.5) * 2e6, r.uniform32(k) * 4.0] {
+                assert_eq!(floor_i32(f), f.floor() as i32, "{f}");
+            }
+        }
+        for f in [0.0f32, -0.0, 1.0, -1.0, 3.999_999_8, 4.0, -2.5, 0.5, f32::MIN_POSITIVE, -f32::MIN_POSITIVE, f32::NAN]
+        {
+            assert_eq!(floor_i32(f), f.floor() as i32, "{f}");
+        }
+    }
+
+    #[test]
     fn cos_sin_turn_matches_the_library() {
         let mut worst = 0.0f64;
         for i in 0..100_000u32 {
@@ -474,6 +712,54 @@ mod tests {
             worst = worst.max((f64::from(c) - lc).abs()).max((f64::from(s) - ls).abs());
         }
         assert!(worst < 3e-7, "worst error {worst}");
+    }
+
+    /// The 8-lane cosine directions are the scalar ones bit for bit:
+    /// normals all over the sphere (both signs of `z`, the poles), draws
+    /// over the unit square with the quarter turns' edges.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn cosine_direction32x8_is_the_scalar_direction() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let mut cases = Vec::new();
+        for i in 0..4000u32 {
+            let r = LineRng::new(4, u64::from(i));
+            let n = r.sphere_point(0).as_vec3a();
+            let v = if i % 5 == 0 {
+                [0.25f32, 0.5, 0.75, 1.0 - f32::EPSILON / 2.0][(i / 5) as usize % 4]
+            } else {
+                r.uniform32(8)
+            };
+            cases.push((n, r.uniform32(9), v));
+        }
+        cases.extend([(Vec3A::Z, 0.3, 0.2), (Vec3A::NEG_Z, 0.7, 0.6), (Vec3A::X, 0.5, 0.9), (Vec3A::NEG_Y, 0.1, 0.4)]);
+        cases.extend([(Vec3A::Z, 0.3, 0.2); 4]);
+        for group in cases.chunks_exact(8) {
+            let col = |f: &dyn Fn(&(Vec3A, f32, f32)) -> f32| -> [f32; 8] { std::array::from_fn(|l| f(&group[l])) };
+            // SAFETY: AVX2 was detected above.
+            let [x, y, z] = unsafe {
+                let n = Vec3x8::from_rows(std::array::from_fn(|l| group[l].0));
+                let columns =
+                    Vec3x8 { x: load8f(&col(&|c| c.0.x)), y: load8f(&col(&|c| c.0.y)), z: load8f(&col(&|c| c.0.z)) };
+                assert_eq!(n.lanes().map(|c| c.map(f32::to_bits)), columns.lanes().map(|c| c.map(f32::to_bits)));
+                cosine_direction32x8(n, load8f(&col(&|c| c.1)), load8f(&col(&|c| c.2))).lanes()
+            };
+            for (l, &(n, u, v)) in group.iter().enumerate() {
+                let want = cosine_direction32(n, u, v);
+                assert_eq!([x[l], y[l], z[l]].map(f32::to_bits), want.to_array().map(f32::to_bits), "{n} {u} {v}");
+            }
+            // SAFETY: AVX2 was detected above.
+            let (c, s) = unsafe {
+                let (c, s) = cos_sin_turn8(load8f(&col(&|c| c.2)));
+                (store8f(c), store8f(s))
+            };
+            for (l, &(_, _, v)) in group.iter().enumerate() {
+                let (wc, ws) = cos_sin_turn(v);
+                assert_eq!((c[l].to_bits(), s[l].to_bits()), (wc.to_bits(), ws.to_bits()), "{v}");
+            }
+        }
     }
 
     #[test]

@@ -201,6 +201,7 @@ pub fn trace_geometry(
             Ok(())
         };
     let seed = SeedHash::new(view.seed);
+    let tan = view.camera.tan_half_fov();
     for b in batches {
         let (x, y) = (b.pixel % view.width, b.pixel / view.width);
         let pilot = if b.pilot { PILOT } else { 0 };
@@ -209,7 +210,7 @@ pub fn trace_geometry(
         for i in b.first..b.first + b.n {
             let rng = LineRng::of(seed, (u64::from(b.pixel) << 24) | u64::from(i | pilot));
             let (sx, sy) = position(x, y, i, b.first, b.n, &rng, b.odd);
-            let direction = view.camera.direction(sx, sy, view.width, view.height);
+            let direction = view.camera.direction_tan(tan, sx, sy, view.width, view.height);
             starts.push(Start { origin: view.camera.eye, direction, rng });
             strata.push(Stratum { index: i - b.first, count: b.n, key });
             if starts.len() >= CHUNK {

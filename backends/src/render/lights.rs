@@ -10,6 +10,8 @@
 use glam::{DVec3, Vec3A};
 use itgfx_core::pixel::luminance;
 
+#[cfg(target_arch = "x86_64")]
+use crate::lines::Vec3x8;
 use crate::scene::{Material, Scene};
 use crate::tracer::Prepared;
 
@@ -41,6 +43,21 @@ pub struct Lights {
     pub(crate) fast: Vec<FastLight>,
     /// [`Lights::cdf`] in f32.
     pub(crate) cdf32: Vec<f32>,
+    /// [`Lights::fast`] as columns for the 8-wide shading: `v0`, `e1`, `e2`,
+    /// `normal`, `radiance` (x, y, z each), then `density`; padded with the
+    /// last light to at least 8 rows.
+    pub(crate) columns: [Vec<f32>; 16],
+}
+
+/// Eight lanes of next-event estimation's light sample
+/// ([`Lights::sample32x8`]): the point, and its light's normal, radiance
+/// and `P(light) / area`.
+#[cfg(target_arch = "x86_64")]
+pub(crate) struct Light8 {
+    pub(crate) point: Vec3x8,
+    pub(crate) normal: Vec3x8,
+    pub(crate) radiance: Vec3x8,
+    pub(crate) density: std::arch::x86_64::__m256,
 }
 
 /// A light triangle as the f32 shading reads it: a vertex and two edges,
@@ -84,18 +101,8 @@ impl Lights {
         }
         let total: f64 = weights.iter().sum();
         let probability: Vec<f64> = weights.iter().map(|w| w / total).collect();
-        let mut acc = 0.0;
-        let mut cdf: Vec<f64> = probability
-            .iter()
-            .map(|p| {
-                acc += p;
-                acc
-            })
-            .collect();
-        if let Some(last) = cdf.last_mut() {
-            *last = 1.0;
-        }
-        let fast = triangles
+        let cdf = cumulative(&probability);
+        let fast: Vec<FastLight> = triangles
             .iter()
             .zip(&probability)
             .map(|(l, p)| {
@@ -111,17 +118,79 @@ impl Lights {
             })
             .collect();
         let cdf32 = cdf.iter().map(|&c| c as f32).collect();
-        Some(Self { triangles, cdf, probability, of_triangle, fast, cdf32 })
+        let columns = light_columns(&fast);
+        Some(Self { triangles, cdf, probability, of_triangle, fast, cdf32, columns })
+    }
+
+    /// The light that draw `u` chooses: the first whose cumulative
+    /// probability (f32) exceeds `u`.
+    #[inline]
+    fn choose32(&self, u: f32) -> usize {
+        self.cdf32.partition_point(|&c| c <= u).min(self.cdf32.len() - 1)
     }
 
     /// [`Lights::sample`] in f32: `(light, point)`, the point
     /// `v0 + √a (1 − b) e1 + √a b e2` (uniform on the triangle).
     #[inline]
     pub(crate) fn sample32(&self, u: f32, a: f32, b: f32) -> (usize, Vec3A) {
-        let i = self.cdf32.partition_point(|&c| c <= u).min(self.cdf32.len() - 1);
+        let i = self.choose32(u);
         let l = &self.fast[i];
         let s = a.sqrt();
         (i, l.v0 + l.e1 * (s * (1.0 - b)) + l.e2 * (s * b))
+    }
+
+    /// [`Lights::sample32`] of 8 lanes, with the chosen lights' normal,
+    /// radiance and density: the same choice and the same f32 operations
+    /// lane by lane, so the same bits. Up to 8 lights the choice counts the
+    /// cumulative probabilities at or below `u` (the partition point of a
+    /// non-decreasing list) and the fields are permuted out of one register
+    /// each; with more, each lane's choice is [`Lights::choose32`]'s and the
+    /// fields are gathered.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(crate) fn sample32x8(
+        &self,
+        u: std::arch::x86_64::__m256,
+        a: std::arch::x86_64::__m256,
+        b: std::arch::x86_64::__m256,
+    ) -> Light8 {
+        use std::arch::x86_64::{
+            _CMP_LE_OQ, _mm256_castps_si256, _mm256_cmp_ps, _mm256_i32gather_ps, _mm256_min_epu32, _mm256_mul_ps,
+            _mm256_permutevar8x32_ps, _mm256_set1_ps, _mm256_setzero_si256, _mm256_sqrt_ps, _mm256_sub_epi32,
+            _mm256_sub_ps,
+        };
+
+        use crate::lines::{load8, load8f, splat8, store8f};
+
+        let few = self.fast.len() <= 8;
+        let i = if few {
+            let mut count = _mm256_setzero_si256();
+            for &c in &self.cdf32 {
+                // A lane's mask is −1 where `c ≤ u`: subtracting it counts.
+                count = _mm256_sub_epi32(count, _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(_mm256_set1_ps(c), u)));
+            }
+            _mm256_min_epu32(count, splat8(self.cdf32.len() as u32 - 1))
+        } else {
+            load8(&store8f(u).map(|u| self.choose32(u) as u32))
+        };
+        let field = |k: usize| {
+            let column = &self.columns[k];
+            if few {
+                _mm256_permutevar8x32_ps(load8f(column[..8].try_into().expect("eight rows")), i)
+            } else {
+                // SAFETY: every lane of `i` is a light's index, below
+                // `fast.len()`, which is `column.len()` here (no padding
+                // above 8 lights); the gather reads those f32s only.
+                unsafe { _mm256_i32gather_ps::<4>(column.as_ptr(), i) }
+            }
+        };
+        let vec = |k: usize| Vec3x8 { x: field(k), y: field(k + 1), z: field(k + 2) };
+        let s = _mm256_sqrt_ps(a);
+        let point = vec(0)
+            .add(vec(3).scale(_mm256_mul_ps(s, _mm256_sub_ps(_mm256_set1_ps(1.0), b))))
+            .add(vec(6).scale(_mm256_mul_ps(s, b)));
+        Light8 { point, normal: vec(9), radiance: vec(12), density: field(15) }
     }
 
     /// [`Lights::pdf`] in f32.
@@ -146,6 +215,42 @@ impl Lights {
     pub fn pdf(&self, i: usize, distance: f64, cos_light: f64) -> f64 {
         self.probability[i] / self.triangles[i].area * distance * distance / cos_light
     }
+}
+
+/// The cumulative sums of `probability`, the last set to exactly 1.
+fn cumulative(probability: &[f64]) -> Vec<f64> {
+    let mut acc = 0.0;
+    let mut cdf: Vec<f64> = probability
+        .iter()
+        .map(|p| {
+            acc += p;
+            acc
+        })
+        .collect();
+    if let Some(last) = cdf.last_mut() {
+        *last = 1.0;
+    }
+    cdf
+}
+
+/// The columns of [`Lights::columns`].
+fn light_columns(fast: &[FastLight]) -> [Vec<f32>; 16] {
+    let rows = fast.len().max(8);
+    std::array::from_fn(|k| {
+        (0..rows)
+            .map(|i| {
+                let l = &fast[i.min(fast.len() - 1)];
+                match k {
+                    0..=2 => l.v0[k],
+                    3..=5 => l.e1[k - 3],
+                    6..=8 => l.e2[k - 6],
+                    9..=11 => l.normal[k - 9],
+                    12..=14 => l.radiance[k - 12],
+                    _ => l.density,
+                }
+            })
+            .collect()
+    })
 }
 
 /// Materials of a scene by triangle.
@@ -194,5 +299,88 @@ impl Surfaces {
     #[must_use]
     pub fn of(&self, t: u32) -> &Material {
         &self.materials[self.material[t as usize] as usize]
+    }
+}
+
+#[cfg(test)]
+impl Lights {
+    /// Lights of these selection probabilities, each a random triangle
+    /// about the origin (for the tests of the batched shading).
+    pub(crate) fn random(probability: &[f64]) -> Self {
+        let r = crate::lines::LineRng::new(3, probability.len() as u64);
+        let v = |k: u32| Vec3A::new(r.uniform32(k), r.uniform32(k + 1), r.uniform32(k + 2)) - 0.5;
+        let fast: Vec<FastLight> = (0..probability.len() as u32)
+            .map(|i| FastLight {
+                v0: v(20 * i),
+                e1: v(20 * i + 3),
+                e2: v(20 * i + 6),
+                normal: v(20 * i + 9).normalize(),
+                radiance: v(20 * i + 12) + 1.0,
+                density: r.uniform32(20 * i + 15) * 5.0,
+            })
+            .collect();
+        let cdf = cumulative(probability);
+        Self {
+            triangles: Vec::new(),
+            cdf32: cdf.iter().map(|&c| c as f32).collect(),
+            cdf,
+            probability: probability.to_vec(),
+            of_triangle: Vec::new(),
+            columns: light_columns(&fast),
+            fast,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lines::LineRng;
+
+    /// The 8-lane light samples are the scalar ones bit for bit: one
+    /// light, two, eight (one register), thirteen (gathered), with
+    /// probabilities of zero among them and draws at the cumulative
+    /// probabilities' edges.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn sample32x8_is_sample32() {
+        use crate::lines::{load8f, store8f};
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        for probability in [
+            &[1.0][..],
+            &[0.5, 0.5],
+            &[0.1, 0.0, 0.2, 0.05, 0.15, 0.1, 0.3, 0.1],
+            &[0.05, 0.1, 0.0, 0.1, 0.1, 0.05, 0.1, 0.05, 0.1, 0.1, 0.05, 0.1, 0.1],
+        ] {
+            let l = Lights::random(probability);
+            let r = LineRng::new(8, 1);
+            let mut u: Vec<f32> = (0..400).map(|k| r.uniform32(k)).collect();
+            u.extend(l.cdf32.iter().copied());
+            u.extend(l.cdf32.iter().map(|c| c - f32::EPSILON / 4.0));
+            u.resize(u.len().div_ceil(8) * 8, 0.5);
+            for (g, group) in u.chunks_exact(8).enumerate() {
+                let u8: [f32; 8] = group.try_into().unwrap();
+                let a: [f32; 8] = std::array::from_fn(|k| r.uniform32(1000 + 16 * g as u32 + k as u32));
+                let b: [f32; 8] = std::array::from_fn(|k| r.uniform32(1008 + 16 * g as u32 + k as u32));
+                // SAFETY: AVX2 was detected above.
+                let (p, n, e, d) = unsafe {
+                    let s = l.sample32x8(load8f(&u8), load8f(&a), load8f(&b));
+                    (s.point.lanes(), s.normal.lanes(), s.radiance.lanes(), store8f(s.density))
+                };
+                for k in 0..8 {
+                    let (i, want) = l.sample32(u8[k], a[k], b[k]);
+                    let f = &l.fast[i];
+                    let got = |c: [[f32; 8]; 3]| [c[0][k], c[1][k], c[2][k]].map(f32::to_bits);
+                    let bits = |v: Vec3A| v.to_array().map(f32::to_bits);
+                    assert_eq!(got(p), bits(want), "{probability:?} u {}", u8[k]);
+                    assert_eq!(
+                        (got(n), got(e), d[k].to_bits()),
+                        (bits(f.normal), bits(f.radiance), f.density.to_bits())
+                    );
+                }
+            }
+        }
     }
 }

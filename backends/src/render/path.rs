@@ -185,12 +185,15 @@ struct Scratch {
     /// Per live path this step (index as `live`): its fate and reflectance.
     fate: Vec<Fate>,
     rho: Vec<Vec3A>,
-    /// The diffuse vertices of this step: index into `live`, the shading
-    /// normal facing the arriving ray, and the vertex's five draws (light
-    /// choice, light point, direction).
+    /// The diffuse vertices of this step: index into `live`; the offset
+    /// vertex the next segment and the shadow ray leave from, the shading
+    /// normal facing the arriving ray and the throughput times the
+    /// reflectance (one push a vertex, transposed for 8 lanes where they
+    /// are read); the vertex's five draws (light choice, light point,
+    /// direction) as columns, one row a vertex.
     diffuse: Vec<u32>,
-    normal: Vec<Vec3A>,
-    draws: Vec<[f32; 5]>,
+    vertex: Vec<[Vec3A; 3]>,
+    draws: [Vec<f32>; 5],
     shadow: Vec<Line>,
     shadow_add: Vec<(u32, Vec3A)>,
     blocked: Vec<bool>,
@@ -220,6 +223,132 @@ fn power(a: f32, b: f32) -> f32 {
         let r2 = r * r;
         r2 / (1.0 + r2)
     }
+}
+
+/// [`power`] of 8 lanes: each lane's branch's operations, selected per
+/// lane (one division for `r`, one for the weight), so the same bits.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn power8(a: std::arch::x86_64::__m256, b: std::arch::x86_64::__m256) -> std::arch::x86_64::__m256 {
+    use std::arch::x86_64::{
+        _CMP_GE_OQ, _CMP_GT_OQ, _mm256_add_ps, _mm256_andnot_ps, _mm256_blendv_ps, _mm256_cmp_ps, _mm256_div_ps,
+        _mm256_mul_ps, _mm256_set1_ps, _mm256_setzero_ps,
+    };
+    let one = _mm256_set1_ps(1.0);
+    let ge = _mm256_cmp_ps::<_CMP_GE_OQ>(a, b);
+    // `a ≥ b`: `r = b / a`, weight `1 / (1 + r²)`; else `r = a / b`, weight `r² / (1 + r²)`.
+    let r = _mm256_div_ps(_mm256_blendv_ps(a, b, ge), _mm256_blendv_ps(b, a, ge));
+    let r2 = _mm256_mul_ps(r, r);
+    let w = _mm256_div_ps(_mm256_blendv_ps(r2, one, ge), _mm256_add_ps(one, r2));
+    // `a ≥ b` with `a` not above 0: weight 0.
+    let zero = _mm256_andnot_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(a, _mm256_setzero_ps()), ge);
+    _mm256_andnot_ps(zero, w)
+}
+
+/// A shadow ray ends this fraction of the way to the light point.
+const SHADOW_SHORT: f32 = 1.0 - 1e-4;
+
+/// What next-event estimation and the BSDF sample make of a diffuse
+/// vertex ([`shade`]).
+struct Shaded {
+    /// The shadow ray toward the light point and the radiance it adds
+    /// when unblocked; `None` where the light cannot contribute.
+    light: Option<(Line, Vec3A)>,
+    /// The next segment's direction (cosine-distributed about the normal).
+    direction: Vec3A,
+    /// Its solid-angle density, `cos / π` (0: the path ends).
+    pdf: f32,
+}
+
+/// One diffuse vertex: leaving from `o` with the shading normal `nf` and
+/// throughput times reflectance `weight`, its five draws `[light choice,
+/// light point (2), direction (2)]`. Next-event estimation toward a point
+/// of an area light (solid-angle density eq. of [`Lights::pdf32`]) weighted
+/// against the cosine BSDF sample by the power heuristic ([`power`]), and
+/// the cosine-distributed next direction.
+#[inline(always)]
+fn shade(lights: &Lights, o: Vec3A, nf: Vec3A, weight: Vec3A, [u0, l1, l2, d1, d2]: [f32; 5]) -> Shaded {
+    let (li, y) = lights.sample32(u0, l1, l2);
+    let to = y - o;
+    let dist = to.length();
+    let w = to / dist;
+    let cos_x = nf.dot(w);
+    let fl = &lights.fast[li];
+    let cos_l = -fl.normal.dot(w);
+    let mut light = None;
+    if cos_x > 0.0 && cos_l > 0.0 && dist > 0.0 {
+        let pdf_l = lights.pdf32(li, dist, cos_l);
+        let mis = power(pdf_l, cos_x * FRAC_1_PI);
+        let c = weight * fl.radiance * (FRAC_1_PI * cos_x / pdf_l * mis);
+        if c.max_element() > 0.0 {
+            light = Some((Line::ray32(o, w, 0.0, dist * SHADOW_SHORT), c));
+        }
+    }
+    let d = cosine_direction32(nf, d1, d2);
+    Shaded { light, direction: d, pdf: (nf.dot(d) * FRAC_1_PI).max(0.0) }
+}
+
+/// [`shade`] for whole groups of eight diffuse vertices, 8 lanes at once
+/// (`vertex`: `[at, normal, weight]` each; `draws`): the same f32 operations
+/// lane by lane, so the same bits; each vertex's result goes to `apply`
+/// in order. Returns how many vertices it shaded (a multiple of 8).
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn shade_avx2(
+    lights: &Lights,
+    vertex: &[[Vec3A; 3]],
+    draws: &[Vec<f32>; 5],
+    apply: &mut impl FnMut(usize, Shaded),
+) -> usize {
+    use std::arch::x86_64::{
+        _CMP_GT_OQ, _mm256_and_ps, _mm256_cmp_ps, _mm256_div_ps, _mm256_max_ps, _mm256_movemask_ps, _mm256_mul_ps,
+        _mm256_set1_ps, _mm256_setzero_ps, _mm256_xor_ps,
+    };
+
+    use crate::lines::{Vec3x8, cosine_direction32x8, load8f, store8f};
+
+    let n = draws[0].len() / 8 * 8;
+    let zero = _mm256_setzero_ps();
+    let inv_pi = _mm256_set1_ps(FRAC_1_PI);
+    for base in (0..n).step_by(8) {
+        let rows = |k: usize| Vec3x8::from_rows(std::array::from_fn(|l| vertex[base + l][k]));
+        let (o, nf, wt) = (rows(0), rows(1), rows(2));
+        let [u0, l1, l2, d1, d2] = draws.each_ref().map(|c| load8f(c[base..base + 8].try_into().expect("eight rows")));
+        let l = lights.sample32x8(u0, l1, l2);
+        let to = l.point.sub(o);
+        let dist = to.length();
+        let w = to.div(dist);
+        let cos_x = nf.dot(w);
+        let cos_l = _mm256_xor_ps(l.normal.dot(w), _mm256_set1_ps(-0.0));
+        let gt0 = |v| _mm256_cmp_ps::<_CMP_GT_OQ>(v, zero);
+        let seen = _mm256_and_ps(_mm256_and_ps(gt0(cos_x), gt0(cos_l)), gt0(dist));
+        // `Lights::pdf32`: `density · dist · dist / cos_l`.
+        let pdf_l = _mm256_div_ps(_mm256_mul_ps(_mm256_mul_ps(l.density, dist), dist), cos_l);
+        let mis = power8(pdf_l, _mm256_mul_ps(cos_x, inv_pi));
+        let c = wt.mul(l.radiance).scale(_mm256_mul_ps(_mm256_div_ps(_mm256_mul_ps(inv_pi, cos_x), pdf_l), mis));
+        // glam's `max_element`: `max(max(x, z), max(y, z))`.
+        let c_max = _mm256_max_ps(_mm256_max_ps(c.x, c.z), _mm256_max_ps(c.y, c.z));
+        let lit = _mm256_movemask_ps(_mm256_and_ps(seen, gt0(c_max)));
+        let d = cosine_direction32x8(nf, d1, d2);
+        let pdf = store8f(_mm256_max_ps(_mm256_mul_ps(nf.dot(d), inv_pi), zero));
+        let [ox, oy, oz] = o.lanes();
+        let [wx, wy, wz] = w.lanes();
+        let [cx, cy, cz] = c.lanes();
+        let [dx, dy, dz] = d.lanes();
+        let dist = store8f(dist);
+        for k in 0..8 {
+            let light = (lit & (1 << k) != 0).then(|| {
+                let (o, w) = (Vec3A::new(ox[k], oy[k], oz[k]), Vec3A::new(wx[k], wy[k], wz[k]));
+                (Line::ray32(o, w, 0.0, dist[k] * SHADOW_SHORT), Vec3A::new(cx[k], cy[k], cz[k]))
+            });
+            apply(base + k, Shaded { light, direction: Vec3A::new(dx[k], dy[k], dz[k]), pdf: pdf[k] });
+        }
+    }
+    n
 }
 
 impl PathTracer<'_> {
@@ -278,7 +407,8 @@ impl PathTracer<'_> {
     /// Each step runs in passes over the live paths' arrays: the hit
     /// vertices (emission, mirrors, which paths go on), the diffuse
     /// vertices' draws (integer hashing only, [`vertex_draws`]), their
-    /// next-event estimation and BSDF directions (f32 only), then the
+    /// next-event estimation and BSDF directions ([`shade`], 8 vertices at
+    /// a time where AVX2 runs: [`shade_avx2`]), then the
     /// roulette and the next segments in the live order. Per path, the
     /// arithmetic and its order are the single loop's before this split,
     /// so the images are the same bit for bit.
@@ -303,7 +433,7 @@ impl PathTracer<'_> {
             fate,
             rho,
             diffuse,
-            normal,
+            vertex,
             draws,
             shadow,
             shadow_add,
@@ -336,7 +466,7 @@ impl PathTracer<'_> {
             fate.clear();
             rho.clear();
             diffuse.clear();
-            normal.clear();
+            vertex.clear();
             // Pass 1: the vertices. Emission, the depth cap, absorption,
             // mirrors; diffuse vertices listed for the passes below.
             for (j, (&p, hit)) in live.iter().zip(hits.iter()).enumerate() {
@@ -383,7 +513,7 @@ impl PathTracer<'_> {
                     pdf[p] = 0.0;
                 } else {
                     diffuse.push(j as u32);
-                    normal.push(nf);
+                    vertex.push([origin[p], nf, beta[p] * m.reflectance]);
                 }
             }
             // Pass 2: the diffuse vertices' draws.
@@ -392,31 +522,30 @@ impl PathTracer<'_> {
             // Pass 3: next-event estimation and the BSDF direction.
             shadow.clear();
             shadow_add.clear();
-            for ((&j, &nf), &[u0, l1, l2, d1, d2]) in diffuse.iter().zip(normal.iter()).zip(draws.iter()) {
-                let p = live[j as usize] as usize;
-                let o = origin[p];
-                let (li, y) = self.lights.sample32(u0, l1, l2);
-                let to = y - o;
-                let dist = to.length();
-                let w = to / dist;
-                let cos_x = nf.dot(w);
-                let fl = &self.lights.fast[li];
-                let cos_l = -fl.normal.dot(w);
-                if cos_x > 0.0 && cos_l > 0.0 && dist > 0.0 {
-                    let pdf_l = self.lights.pdf32(li, dist, cos_l);
-                    let weight = power(pdf_l, cos_x * FRAC_1_PI);
-                    let c = beta[p] * rho[j as usize] * fl.radiance * (FRAC_1_PI * cos_x / pdf_l * weight);
-                    if c.max_element() > 0.0 {
-                        shadow.push(Line::ray32(o, w, 0.0, dist * (1.0 - 1e-4)));
-                        shadow_add.push((p as u32, c));
-                    }
+            let mut apply = |i: usize, v: Shaded| {
+                let j = diffuse[i] as usize;
+                let p = live[j] as usize;
+                if let Some((line, c)) = v.light {
+                    shadow.push(line);
+                    shadow_add.push((p as u32, c));
                 }
-                let d = cosine_direction32(nf, d1, d2);
-                pdf[p] = (nf.dot(d) * FRAC_1_PI).max(0.0);
-                direction[p] = d;
-                if !(pdf[p] > 0.0) {
-                    fate[j as usize] = Fate::Ended;
+                pdf[p] = v.pdf;
+                direction[p] = v.direction;
+                if !(v.pdf > 0.0) {
+                    fate[j] = Fate::Ended;
                 }
+            };
+            #[allow(unused_mut)]
+            let mut done = 0;
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: AVX2 was detected just above.
+                done = unsafe { shade_avx2(self.lights, vertex, draws, &mut apply) };
+            }
+            for i in done..diffuse.len() {
+                let d = draws.each_ref().map(|c| c[i]);
+                let [o, nf, w] = vertex[i];
+                apply(i, shade(self.lights, o, nf, w, d));
             }
             // Pass 4: throughput, the roulette, and the next segments, in
             // the live order.
@@ -470,9 +599,12 @@ fn vertex_draws(
     strata: Option<&[Stratum]>,
     k: u32,
     depth: u32,
-    draws: &mut Vec<[f32; 5]>,
+    draws: &mut [Vec<f32>; 5],
 ) {
-    draws.clear();
+    for c in draws.iter_mut() {
+        c.clear();
+        c.resize(diffuse.len(), 0.0);
+    }
     #[allow(unused_mut)]
     let mut done = 0;
     #[cfg(target_arch = "x86_64")]
@@ -480,8 +612,16 @@ fn vertex_draws(
         // SAFETY: AVX2 was detected just above.
         done = unsafe { vertex_draws_avx2(live, diffuse, rng, strata, k, depth, draws) };
     }
-    for &j in &diffuse[done..] {
-        draws.push(vertex_draw(live[j as usize] as usize, rng, strata, k, which(depth)));
+    for (i, &j) in diffuse.iter().enumerate().skip(done) {
+        put5(draws, i, vertex_draw(live[j as usize] as usize, rng, strata, k, which(depth)));
+    }
+}
+
+/// Writes `d` as row `i` of five columns.
+#[inline]
+fn put5(columns: &mut [Vec<f32>; 5], i: usize, d: [f32; 5]) {
+    for (c, x) in columns.iter_mut().zip(d) {
+        c[i] = x;
     }
 }
 
@@ -519,14 +659,14 @@ unsafe fn vertex_draws_avx2(
     strata: Option<&[Stratum]>,
     k: u32,
     depth: u32,
-    draws: &mut Vec<[f32; 5]>,
+    draws: &mut [Vec<f32>; 5],
 ) -> usize {
     use std::arch::x86_64::{
         __m256, _mm256_add_ps, _mm256_and_si256, _mm256_castsi256_ps, _mm256_cvtepi32_ps, _mm256_min_ps, _mm256_mul_ps,
-        _mm256_set1_ps, _mm256_srlv_epi32, _mm256_storeu_ps, _mm256_xor_si256,
+        _mm256_set1_ps, _mm256_srlv_epi32, _mm256_xor_si256,
     };
 
-    use crate::lines::{load8, pcg8, permute8_pow2, splat8, uniform32x8};
+    use crate::lines::{load8, pcg8, permute8_pow2, splat8, store8f, uniform32x8};
 
     let words = which(depth);
     let below_one = _mm256_set1_ps(1.0 - f32::EPSILON / 2.0);
@@ -537,14 +677,9 @@ unsafe fn vertex_draws_avx2(
         let y = _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(_mm256_srlv_epi32(cell, ka)), v), invb);
         (_mm256_min_ps(x, below_one), _mm256_min_ps(y, below_one))
     };
-    let store = |v: __m256| {
-        let mut a = [0f32; 8];
-        // SAFETY: `a` is 32 writable bytes; the store is unaligned.
-        unsafe { _mm256_storeu_ps(a.as_mut_ptr(), v) };
-        a
-    };
     let groups = diffuse.len() / 8;
-    for group in diffuse.chunks_exact(8) {
+    for (g, group) in diffuse.chunks_exact(8).enumerate() {
+        let base = 8 * g;
         let slot: [usize; 8] = std::array::from_fn(|l| live[group[l] as usize] as usize);
         let [w1, w2] = [0, 1].map(|w| load8(&slot.map(|p| rng[p].words()[w])));
         let u: [__m256; 5] = std::array::from_fn(|i| uniform32x8(w1, w2, k + i as u32));
@@ -552,8 +687,8 @@ unsafe fn vertex_draws_avx2(
         if let Some(s) = strata {
             let s = slot.map(|p| s[p]);
             if !s.iter().all(|s| s.count.is_power_of_two()) {
-                for &p in &slot {
-                    draws.push(vertex_draw(p, rng, strata, k, words));
+                for (l, &p) in slot.iter().enumerate() {
+                    put5(draws, base + l, vertex_draw(p, rng, strata, k, words));
                 }
                 continue;
             }
@@ -569,9 +704,8 @@ unsafe fn vertex_draws_avx2(
             (l1, l2) = place(cell(words[0]), amask, ka, inva, invb, l1, l2);
             (d1, d2) = place(cell(words[1]), amask, ka, inva, invb, d1, d2);
         }
-        let [u0, l1, l2, d1, d2] = [u[0], l1, l2, d1, d2].map(store);
-        for l in 0..8 {
-            draws.push([u0[l], l1[l], l2[l], d1[l], d2[l]]);
+        for (c, v) in draws.iter_mut().zip([u[0], l1, l2, d1, d2]) {
+            c[base..base + 8].copy_from_slice(&store8f(v));
         }
     }
     groups * 8
@@ -612,6 +746,77 @@ mod tests {
         assert_ne!(order(1), order(2));
     }
 
+    /// The 8-lane power heuristic is the scalar one bit for bit, both
+    /// branches, zeros, ties, infinities and NaN included.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn power8_is_power() {
+        use crate::lines::{load8f, store8f};
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let values = [0.0f32, -0.0, 1e-30, 0.3, 1.0, 2.5, 1e30, f32::MAX, f32::INFINITY, -1.0, f32::NAN, 7.0];
+        let pairs: Vec<(f32, f32)> = values.iter().flat_map(|&a| values.iter().map(move |&b| (a, b))).collect();
+        for g in pairs.chunks(8) {
+            let a: [f32; 8] = std::array::from_fn(|l| g[l % g.len()].0);
+            let b: [f32; 8] = std::array::from_fn(|l| g[l % g.len()].1);
+            // SAFETY: AVX2 was detected above.
+            let w = unsafe { store8f(power8(load8f(&a), load8f(&b))) };
+            for l in 0..8 {
+                assert_eq!(w[l].to_bits(), power(a[l], b[l]).to_bits(), "{} {}", a[l], b[l]);
+            }
+        }
+    }
+
+    /// The 8-lane shading is the scalar [`shade`] bit for bit (shadow ray,
+    /// its radiance, direction, density) on random vertices facing every
+    /// way, some with zero throughput, for one, two and thirteen lights; a
+    /// tail of fewer than eight is left to the scalar code.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn shade_avx2_is_shade() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        for probability in
+            [&[1.0][..], &[0.5, 0.5], &[0.1, 0.05, 0.1, 0.0, 0.1, 0.05, 0.1, 0.1, 0.1, 0.05, 0.1, 0.05, 0.1]]
+        {
+            let lights = Lights::random(probability);
+            let n = 1003;
+            let mut vertex = Vec::new();
+            let mut draws: [Vec<f32>; 5] = Default::default();
+            for i in 0..n {
+                let r = LineRng::new(6, i);
+                let v = |k: u32| Vec3A::new(r.uniform32(k), r.uniform32(k + 1), r.uniform32(k + 2));
+                let weight = if i % 7 == 0 { Vec3A::ZERO } else { v(10) };
+                vertex.push([v(0) * 2.0 - 1.0, r.sphere_point(3).as_vec3a(), weight]);
+                for (k, c) in draws.iter_mut().enumerate() {
+                    c.push(r.uniform32(20 + k as u32));
+                }
+            }
+            let mut got = Vec::new();
+            // SAFETY: AVX2 was detected above.
+            let done = unsafe { shade_avx2(&lights, &vertex, &draws, &mut |i, v| got.push((i, v))) };
+            assert_eq!(done, 1000);
+            let bits = |v: Vec3A| v.to_array().map(f32::to_bits);
+            let mut lit = 0;
+            for (i, v) in got {
+                let d = draws.each_ref().map(|c| c[i]);
+                let [o, nf, w] = vertex[i];
+                let want = shade(&lights, o, nf, w, d);
+                assert_eq!(
+                    (bits(v.direction), v.pdf.to_bits()),
+                    (bits(want.direction), want.pdf.to_bits()),
+                    "vertex {i}"
+                );
+                let line = |l: Option<(Line, Vec3A)>| l.map(|(l, c)| (l, bits(c)));
+                assert_eq!(line(v.light), line(want.light), "vertex {i}");
+                lit += usize::from(v.light.is_some());
+            }
+            assert!(lit > 100 && lit < 900, "{lit} of 1000 vertices see the light");
+        }
+    }
+
     /// The 8-lane draws are the scalar draws bit for bit: batches of a
     /// power of two (one permutation round) and of other sizes (the scalar
     /// fallback) mixed within groups, a tail that is not a whole group,
@@ -632,10 +837,11 @@ mod tests {
             for s in [Some(&strata[..]), None] {
                 for depth in [0u32, 3] {
                     let k = CAMERA_DRAWS + DRAWS_PER_BOUNCE * depth;
-                    let mut draws = Vec::new();
+                    let mut draws = Default::default();
                     vertex_draws(&live, &diffuse, &rng, s, k, depth, &mut draws);
-                    assert_eq!(draws.len(), diffuse.len());
-                    for (&j, d) in diffuse.iter().zip(&draws) {
+                    assert!(draws.iter().all(|c| c.len() == diffuse.len()));
+                    for (i, &j) in diffuse.iter().enumerate() {
+                        let d = draws.each_ref().map(|c| c[i]);
                         let want = vertex_draw(live[j as usize] as usize, &rng, s, k, which(depth));
                         assert_eq!(d.map(f32::to_bits), want.map(f32::to_bits), "vertex {j}, sizes {sizes:?}");
                     }

@@ -311,6 +311,7 @@ fn node_starts(view: &View, nodes: &[Node], pilot: bool, ns: u32) -> Vec<Start> 
     let (a, b) = strata(ns / REGIONS);
     let (columns, rows) = (2 * b, 2 * a);
     let mut starts = Vec::with_capacity(nodes.len() * ns as usize);
+    let tan = view.camera.tan_half_fov();
     for n in nodes {
         for i in 0..ns {
             let index = (n.serial * ns + i) | if pilot { PILOT } else { 0 };
@@ -318,7 +319,7 @@ fn node_starts(view: &View, nodes: &[Node], pilot: bool, ns: u32) -> Vec<Start> 
             let (cx, cy) = (f64::from(i % columns), f64::from(i / columns));
             let sx = n.x + (cx + rng.uniform(0)) / f64::from(columns) * n.size;
             let sy = n.y + (cy + rng.uniform(1)) / f64::from(rows) * n.size;
-            let direction = view.camera.direction(sx, sy, view.width, view.height);
+            let direction = view.camera.direction_tan(tan, sx, sy, view.width, view.height);
             starts.push(Start { origin: view.camera.eye, direction, rng });
         }
     }

@@ -340,12 +340,12 @@ pub fn cosine_direction(n: DVec3, u: f64, v: f64) -> DVec3 {
 
 /// `⌊f⌋` as an integer without libm's `floorf` (a call where SSE2, which
 /// has no rounding instruction, is the target): truncation, one less where
-/// it rounded up. Exact for `|f| < 2³¹`; NaN gives 0, as
-/// `f.floor() as i32` does.
+/// it rounded up. Exact for `|f| < 2³¹`; NaN gives 0 and the ends
+/// saturate, as `f.floor() as i32` does.
 #[inline]
 fn floor_i32(f: f32) -> i32 {
     let t = f as i32;
-    t - i32::from(t as f32 > f)
+    t.saturating_sub(i32::from(t as f32 > f))
 }
 
 /// `(cos 2πv, sin 2πv)` for `v` in `[0, 1)` in f32 without a library
@@ -538,7 +538,10 @@ pub(crate) fn store8f(v: std::arch::x86_64::__m256) -> [f32; 8] {
 }
 
 /// [`cos_sin_turn`] of 8 lanes: the same f32 operations lane by lane
-/// (AVX's rounding instruction for the floor), so the same bits.
+/// (AVX's rounding instruction for the floor), so the same bits for `v`
+/// in `[0, 1)`, its contract (outside it, `-0.0` gives `sin`'s zero the
+/// other sign and `|4v| ≥ 2³¹` another quarter; every caller passes a
+/// draw in `(0, 1)`).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
@@ -696,8 +699,23 @@ mod tests {
                 assert_eq!(floor_i32(f), f.floor() as i32, "{f}");
             }
         }
-        for f in [0.0f32, -0.0, 1.0, -1.0, 3.999_999_8, 4.0, -2.5, 0.5, f32::MIN_POSITIVE, -f32::MIN_POSITIVE, f32::NAN]
-        {
+        for f in [
+            0.0f32,
+            -0.0,
+            1.0,
+            -1.0,
+            3.999_999_8,
+            4.0,
+            -2.5,
+            0.5,
+            f32::MIN_POSITIVE,
+            -f32::MIN_POSITIVE,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            -3e9,
+            3e9,
+        ] {
             assert_eq!(floor_i32(f), f.floor() as i32, "{f}");
         }
     }

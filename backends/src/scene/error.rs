@@ -111,7 +111,8 @@ const GIB: f64 = (1u64 << 30) as f64;
 /// which has fewer nodes than triangles) and their leaf blocks (320 B per
 /// eight lanes of a node's leaf triangles: 51 B a triangle on
 /// `mirror-room`, 40 B plus 320 B a node at most) are allocated, with a
-/// fallible reservation, at the first closest-hit or shadow query, after
+/// fallible reservation, at the first query that walks them (closest hit,
+/// shadow ray, occlusion packet or `trace_all`'s interleaved walk), after
 /// the build's temporaries (about 200 B a triangle) are given back.
 /// Per patch: the [`super::Patch`] with its name and the visibility
 /// counters and per-patch results: 256 B (a sphere's cells measure 200 B).

@@ -167,14 +167,25 @@ impl Wide8 {
         (self.nodes.len() * size_of::<Node>(), self.leaves.len() * size_of::<Leaf8>())
     }
 
-    /// The most stack entries a walk from `node` holds: at each node it
-    /// pushes all but one of its internal children (recursion depth is the
-    /// tree's depth, a few dozen at most for obvhs's trees).
+    /// The most stack entries a walk from `node` holds, or [`STACK`] if
+    /// that many or more: at each node it pushes all but one of its
+    /// internal children, so the need is the largest sum of those counts
+    /// over a path from `node` down. Walked with a heap stack, not by
+    /// recursion, so a degenerate (chain-shaped) tree cannot overflow the
+    /// thread's own stack here.
     fn stack_need(&self, node: u32) -> usize {
-        let n = &self.nodes[node as usize];
-        let kids = n.imask.count_ones() as usize;
-        let below = (0..8).filter(|&i| n.imask >> i & 1 == 1).map(|i| self.stack_need(n.child[i])).max().unwrap_or(0);
-        kids.saturating_sub(1) + below
+        let mut todo = vec![(node, 0usize)];
+        let mut most = 0;
+        while let Some((i, above)) = todo.pop() {
+            let n = &self.nodes[i as usize];
+            let need = above + (n.imask.count_ones() as usize).saturating_sub(1);
+            most = most.max(need);
+            if most >= STACK {
+                return STACK;
+            }
+            todo.extend((0..8).filter(|&k| n.imask >> k & 1 == 1).map(|k| (n.child[k], need)));
+        }
+        most
     }
 }
 
@@ -354,7 +365,7 @@ pub(super) unsafe fn walk_nodes<const AVX2: bool, const ORDERED: bool, F: FnMut(
     let c = Consts::new(ray);
     let mut tmax = ray.tmax;
     // (node, entry distance); at most `STACK - 1` entries (`Wide8::new`).
-    // The unordered walk leaves the distances unwritten and unread.
+    // The unordered walk writes its distances as 0 and never reads them.
     let mut stack = [MaybeUninit::<(u32, f32)>::uninit(); STACK];
     let mut depth = 0usize;
     let mut node = 0u32;

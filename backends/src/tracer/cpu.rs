@@ -11,8 +11,8 @@ use super::interleave;
 use super::node8::{self, Tally};
 use super::packet::{self, LANES};
 use super::watertight::{
-    BLOCK, Block, Shear, TriangleLanes, barycentric, before, finish, push_crossing, sphere_crossings, sphere_hit,
-    triangle_hit, walk_direction,
+    BLOCK, Block, Shear, TriangleLanes, barycentric, before, finish, mask_blocks, push_crossing, sphere_crossings,
+    sphere_hit, triangle_hit, walk_direction,
 };
 use super::wide8::{self, Wide8};
 use super::{BackendError, CrossingBuffer, Hit, Prepared, Tracer};
@@ -309,11 +309,7 @@ impl CpuTracer {
         tally: &impl Tally,
         mut each: impl FnMut(&Block, usize) -> bool,
     ) -> bool {
-        let mut m = mask;
-        while m != 0 {
-            let b = m.trailing_zeros() / BLOCK as u32;
-            let lanes = (m >> (b * BLOCK as u32)) & 0xff;
-            m &= !(0xff << (b * BLOCK as u32));
+        for (b, lanes) in mask_blocks(mask) {
             let base = first as usize + (b as usize) * BLOCK;
             tally.triangles(lanes);
             // SAFETY: `AVX2` is true only in the `*_avx2` callers, entered after `has_avx2()`.

@@ -261,6 +261,21 @@ pub(crate) struct TriangleLanes {
 /// Lanes of a [`TriangleLanes`] block.
 pub(crate) const BLOCK: usize = 8;
 
+/// The non-empty 8-lane blocks of a primitive `mask` (bit `i`: lane
+/// `i % 8` of block `i / 8`), lowest first, as (block, lanes): how the
+/// walks split a node's hit leaf primitives into block tests.
+#[inline(always)]
+pub(crate) fn mask_blocks(mask: u32) -> impl Iterator<Item = (u32, u32)> {
+    let mut m = mask;
+    std::iter::from_fn(move || {
+        (m != 0).then(|| {
+            let b = m.trailing_zeros() / BLOCK as u32;
+            m &= !(0xff << (b * BLOCK as u32));
+            (b, (mask >> (b * BLOCK as u32)) & 0xff)
+        })
+    })
+}
+
 /// One block's answers: `t` and the raw barycentric numerators and
 /// determinant of each lane, and the lanes crossed within `[tmin, tmax]`.
 #[derive(Clone, Copy, Debug, Default)]

@@ -42,7 +42,7 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::ray::Ray;
 
 use super::node8::{NODE_EPSILON, Tally};
-use super::watertight::{BLOCK, Block, Leaf8, Shear};
+use super::watertight::{BLOCK, Block, Leaf8, Shear, mask_blocks};
 
 /// A leaf child's entry in [`Node::child`]: this bit, and the child's
 /// primitives as a mask over the node's primitive group (bits 0..24).
@@ -139,11 +139,7 @@ impl Wide8 {
         tally: &impl Tally,
         mut each: impl FnMut(&Block, &Leaf8) -> bool,
     ) -> bool {
-        let mut m = mask;
-        while m != 0 {
-            let b = m.trailing_zeros() / BLOCK as u32;
-            let lanes = (m >> (b * BLOCK as u32)) & 0xff;
-            m &= !(0xff << (b * BLOCK as u32));
+        for (b, lanes) in mask_blocks(mask) {
             tally.triangles(lanes);
             let leaf = &self.leaves[(n.leaf_base + b) as usize];
             // SAFETY: `AVX2` only where the CPU has it (this function's contract).

@@ -4,12 +4,12 @@
 use glam::Vec3A;
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::CwBvh;
-use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::ray::Ray;
 
 use super::interleave;
 use super::node8::{self, Tally};
 use super::packet::{self, LANES};
+use super::tree8::{self, Tree8};
 use super::watertight::{
     BLOCK, Block, Shear, TriangleLanes, barycentric, before, finish, mask_blocks, push_crossing, sphere_crossings,
     sphere_hit, triangle_hit, walk_direction,
@@ -43,25 +43,32 @@ pub(crate) fn bvh_input(scene: &Prepared) -> (Vec<Aabb>, obvhs::BvhBuildParams) 
 /// build): a triangle may then sit in several leaves, and the walks meet
 /// it once per leaf (the same `t` each time, so closest hits, occlusion
 /// and `trace_all`'s merged crossings are unchanged). Every box, split or
-/// not, is padded as [`bvh_input`]'s.
+/// not, is padded as [`bvh_input`]'s. (The tracer itself keeps the binary
+/// tree for [`Tree8`] too: [`CpuTracer::with_params`].)
+#[cfg(test)]
 pub(crate) fn build_bvh(scene: &Prepared, params: obvhs::BvhBuildParams) -> CwBvh {
+    cwbvh_of(&build_bvh2(scene, params), params)
+}
+
+/// The binary tree [`build_bvh`] collapses: obvhs's `build_cwbvh` up to
+/// its collapse, step for step (PLOC, then reinsertion), so that the
+/// CWBVH is the one `build_cwbvh` builds.
+pub(super) fn build_bvh2(scene: &Prepared, params: obvhs::BvhBuildParams) -> obvhs::bvh2::Bvh2 {
     use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
-    use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
     use obvhs::ploc::PlocBuilder;
     let (mut aabbs, _) = bvh_input(scene);
-    if !params.pre_split {
-        return build_cwbvh(&aabbs, params, &mut std::time::Duration::default());
+    let mut indices: Vec<u32> = (0..aabbs.len() as u32).collect();
+    if params.pre_split {
+        let tris: Vec<obvhs::triangle::Triangle> =
+            scene.triangles.iter().map(|&[v0, v1, v2]| obvhs::triangle::Triangle { v0, v1, v2 }).collect();
+        // Split the unpadded boxes (as obvhs's own `build_cwbvh_from_tris`), then pad every part.
+        let mut boxes: Vec<Aabb> = tris.iter().map(|t| t.aabb()).collect();
+        let (largest, sum) = boxes.iter().fold((0.0f32, 0.0f32), |(m, s), b| (m.max(b.half_area()), s + b.half_area()));
+        obvhs::splits::split_aabbs_preset(&mut boxes, &mut indices, &tris, sum / tris.len() as f32, largest);
+        aabbs.clear();
+        let pad = Vec3A::splat(1e-5);
+        aabbs.extend(boxes.iter().map(|b| Aabb { min: b.min - pad, max: b.max + pad }));
     }
-    let tris: Vec<obvhs::triangle::Triangle> =
-        scene.triangles.iter().map(|&[v0, v1, v2]| obvhs::triangle::Triangle { v0, v1, v2 }).collect();
-    // Split the unpadded boxes (as obvhs's own `build_cwbvh_from_tris`), then pad every part.
-    let mut boxes: Vec<Aabb> = tris.iter().map(|t| t.aabb()).collect();
-    let (largest, sum) = boxes.iter().fold((0.0f32, 0.0f32), |(m, s), b| (m.max(b.half_area()), s + b.half_area()));
-    let mut indices: Vec<u32> = (0..tris.len() as u32).collect();
-    obvhs::splits::split_aabbs_preset(&mut boxes, &mut indices, &tris, sum / tris.len() as f32, largest);
-    aabbs.clear();
-    let pad = Vec3A::splat(1e-5);
-    aabbs.extend(boxes.iter().map(|b| Aabb { min: b.min - pad, max: b.max + pad }));
     let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
         params.ploc_search_distance,
         &aabbs,
@@ -69,9 +76,14 @@ pub(crate) fn build_bvh(scene: &Prepared, params: obvhs::BvhBuildParams) -> CwBv
         params.sort_precision,
         params.search_depth_threshold,
     );
-    bvh2.uses_spatial_splits = true;
+    bvh2.uses_spatial_splits = params.pre_split;
     ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
-    bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false)
+    bvh2
+}
+
+/// `bvh2` collapsed into obvhs's CWBVH, as `build_cwbvh` does.
+fn cwbvh_of(bvh2: &obvhs::bvh2::Bvh2, params: obvhs::BvhBuildParams) -> CwBvh {
+    obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh(bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false)
 }
 
 /// The CPU backend.
@@ -90,6 +102,11 @@ pub struct CpuTracer {
     /// interleaved walk), built at the first call that needs it; `None`
     /// inside where [`Wide8::new`] declines, and the CWBVH walks serve.
     wide: std::sync::OnceLock<Option<Wide8>>,
+    /// The single-ray walks' tree (`tree8.rs`: leaves of up to eight
+    /// triangles in one block each), collapsed from the same binary tree
+    /// as `bvh`; `None` where [`Tree8::new`] declines, and the CWBVH walks
+    /// serve.
+    tree: Option<Tree8>,
     /// Whether the 8-lane AVX2 node test is used (`node8`).
     avx2: bool,
     /// Whether `trace_all` interleaves walks (`interleave.rs`): AVX2 and
@@ -98,6 +115,15 @@ pub struct CpuTracer {
     /// Centre and half-extents of the box around every triangle, padded.
     bounds: (Vec3A, Vec3A),
 }
+
+/// The single-ray walks' trees ([`CpuTracer::walk_kind`]): obvhs's CWBVH
+/// (`node8::walk_groups`), the CWBVH decoded into wide nodes (`wide8.rs`),
+/// the tree collapsed for these walks (`tree8.rs`).
+const CWBVH: u8 = 0;
+/// See [`CWBVH`].
+const WIDE8: u8 = 1;
+/// See [`CWBVH`].
+const TREE8: u8 = 2;
 
 /// Padding of [`CpuTracer`]'s bounding box (normalised units): far above
 /// the f32 rounding of the line–box test and of the triangle test (~1e-7 at
@@ -131,7 +157,9 @@ impl CpuTracer {
 
     /// [`CpuTracer::new`] with the BVH built with `params` ([`build_bvh`]).
     pub(crate) fn with_params(scene: &Prepared, params: obvhs::BvhBuildParams) -> Self {
-        let bvh = (!scene.triangles.is_empty()).then(|| build_bvh(scene, params));
+        let bvh2 = (!scene.triangles.is_empty()).then(|| build_bvh2(scene, params));
+        let bvh = bvh2.as_ref().map(|b| cwbvh_of(b, params));
+        let tree = bvh2.and_then(|b| Tree8::new(&b, &scene.triangles, tree8::MAX_LEAF));
         let ordered: Vec<[Vec3A; 3]> = bvh
             .as_ref()
             .map(|b| b.primitive_indices.iter().map(|&i| scene.triangles[i as usize]).collect())
@@ -146,7 +174,7 @@ impl CpuTracer {
         let interleave = avx2 && scene.sphere.is_none();
         let lanes = TriangleLanes::new(&ordered);
         let wide = std::sync::OnceLock::new();
-        Self { scene: scene.clone(), bvh, ordered, lanes, wide, avx2, interleave, bounds }
+        Self { scene: scene.clone(), bvh, ordered, lanes, wide, tree, avx2, interleave, bounds }
     }
 
     /// The uncompressed tree, built at the first call.
@@ -169,9 +197,10 @@ impl CpuTracer {
             // SAFETY: `self.avx2` came from `has_avx2()`.
             return unsafe { self.closest_avx2(l) };
         }
-        match self.wide() {
-            Some(w) => self.closest_with::<false, true>(l, Some(w), &()),
-            None => self.closest_with::<false, false>(l, None, &()),
+        match self.walk_kind() {
+            TREE8 => self.closest_with::<false, TREE8>(l, &()),
+            WIDE8 => self.closest_with::<false, WIDE8>(l, &()),
+            _ => self.closest_with::<false, CWBVH>(l, &()),
         }
     }
 
@@ -183,22 +212,48 @@ impl CpuTracer {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     unsafe fn closest_avx2(&self, l: &Line) -> Option<Hit> {
-        match self.wide() {
-            Some(w) => self.closest_with::<true, true>(l, Some(w), &()),
-            None => self.closest_with::<true, false>(l, None, &()),
+        if self.tree.is_some() {
+            return self.closest_with::<true, TREE8>(l, &());
+        }
+        // SAFETY: as this function's.
+        unsafe { self.closest_fallback_avx2(l) }
+    }
+
+    /// [`CpuTracer::closest_avx2`] where [`Tree8::new`] declined: out of
+    /// line, so that the walk above stays small.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline(never)]
+    #[cold]
+    unsafe fn closest_fallback_avx2(&self, l: &Line) -> Option<Hit> {
+        match self.walk_kind() {
+            WIDE8 => self.closest_with::<true, WIDE8>(l, &()),
+            _ => self.closest_with::<true, CWBVH>(l, &()),
         }
     }
 
-    /// The closest hit with the AVX2 tests or not, walking `wide` (where
-    /// `WIDE`; it must then be `Some`) or the CWBVH: one walk per
-    /// instance, so that the leaf closure is inlined into the AVX2 caller.
+    /// Which tree the single-ray walks read: [`TREE8`] where it was
+    /// built, else [`WIDE8`] where [`Wide8::new`] accepts, else [`CWBVH`].
+    #[inline]
+    fn walk_kind(&self) -> u8 {
+        if self.tree.is_some() {
+            TREE8
+        } else if self.wide().is_some() {
+            WIDE8
+        } else {
+            CWBVH
+        }
+    }
+
+    /// The closest hit with the AVX2 tests or not, walking the tree `WALK`
+    /// ([`CpuTracer::walk_kind`]; `None` if that tree is absent): one walk
+    /// per instance, so that the leaf closure is inlined into the AVX2
+    /// caller.
     #[inline(always)]
-    fn closest_with<const AVX2: bool, const WIDE: bool>(
-        &self,
-        l: &Line,
-        wide: Option<&Wide8>,
-        tally: &impl Tally,
-    ) -> Option<Hit> {
+    fn closest_with<const AVX2: bool, const WALK: u8>(&self, l: &Line, tally: &impl Tally) -> Option<Hit> {
         if let Some(s) = &self.scene.sphere {
             return sphere_hit(s, l);
         }
@@ -209,8 +264,15 @@ impl CpuTracer {
         let ray = Ray::new(Vec3A::from(l.origin), dir, l.tmin, l.tmax);
         // SAFETY: `AVX2` is true only in `closest_avx2`, entered after `has_avx2()`.
         unsafe {
-            if WIDE {
-                let w = wide?;
+            if WALK == TREE8 {
+                let w = self.tree.as_ref()?;
+                tree8::walk::<AVX2, true, _>(w, &ray, tally, |leaf, lanes, tmax| {
+                    let block = leaf.test::<AVX2>(&shear, lanes, l.tmin, l.tmax);
+                    keep_best(&block, |i| leaf.tri[i], &mut best, &mut numerators, tmax);
+                    false
+                });
+            } else if WALK == WIDE8 {
+                let w = self.wide()?;
                 wide8::walk_nodes::<AVX2, true, _>(w, &ray, tally, |n, mask, tmax| {
                     w.leaf_blocks::<AVX2>(n, mask, &shear, l.tmin, l.tmax, tally, |block, leaf| {
                         keep_best(block, |i| leaf.tri[i], &mut best, &mut numerators, tmax);
@@ -247,9 +309,10 @@ impl CpuTracer {
             // SAFETY: `self.avx2` came from `has_avx2()`.
             return unsafe { self.any_avx2(l) };
         }
-        match self.wide() {
-            Some(w) => self.any_with::<false, true>(l, Some(w), &()),
-            None => self.any_with::<false, false>(l, None, &()),
+        match self.walk_kind() {
+            TREE8 => self.any_with::<false, TREE8>(l, &()),
+            WIDE8 => self.any_with::<false, WIDE8>(l, &()),
+            _ => self.any_with::<false, CWBVH>(l, &()),
         }
     }
 
@@ -260,15 +323,32 @@ impl CpuTracer {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     unsafe fn any_avx2(&self, l: &Line) -> bool {
-        match self.wide() {
-            Some(w) => self.any_with::<true, true>(l, Some(w), &()),
-            None => self.any_with::<true, false>(l, None, &()),
+        if self.tree.is_some() {
+            return self.any_with::<true, TREE8>(l, &());
+        }
+        // SAFETY: as this function's.
+        unsafe { self.any_fallback_avx2(l) }
+    }
+
+    /// [`CpuTracer::any_avx2`] where [`Tree8::new`] declined: out of
+    /// line, so that the walk above stays small.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline(never)]
+    #[cold]
+    unsafe fn any_fallback_avx2(&self, l: &Line) -> bool {
+        match self.walk_kind() {
+            WIDE8 => self.any_with::<true, WIDE8>(l, &()),
+            _ => self.any_with::<true, CWBVH>(l, &()),
         }
     }
 
     /// Occlusion, as [`CpuTracer::closest_with`].
     #[inline(always)]
-    fn any_with<const AVX2: bool, const WIDE: bool>(&self, l: &Line, wide: Option<&Wide8>, tally: &impl Tally) -> bool {
+    fn any_with<const AVX2: bool, const WALK: u8>(&self, l: &Line, tally: &impl Tally) -> bool {
         if let Some(s) = &self.scene.sphere {
             return sphere_hit(s, l).is_some();
         }
@@ -278,9 +358,15 @@ impl CpuTracer {
         let ray = Ray::new(Vec3A::from(l.origin), dir, l.tmin, l.tmax);
         // SAFETY: `AVX2` is true only in `any_avx2`, entered after `has_avx2()`.
         unsafe {
-            if WIDE {
-                let Some(w) = wide else { return false };
-                // Any crossing ends the walk: the nodes in no order.
+            // Any crossing ends the walk: the nodes in no order.
+            if WALK == TREE8 {
+                let Some(w) = &self.tree else { return false };
+                tree8::walk::<AVX2, false, _>(w, &ray, tally, |leaf, lanes, _| {
+                    hit = leaf.test::<AVX2>(&shear, lanes, l.tmin, l.tmax).hit != 0;
+                    hit
+                });
+            } else if WALK == WIDE8 {
+                let Some(w) = self.wide() else { return false };
                 wide8::walk_nodes::<AVX2, false, _>(w, &ray, tally, |n, mask, _| {
                     hit = w.leaf_blocks::<AVX2>(n, mask, &shear, l.tmin, l.tmax, tally, |block, _| block.hit != 0);
                     hit
@@ -594,6 +680,7 @@ mod tests {
     struct Counts {
         nodes: std::cell::Cell<u64>,
         triangles: std::cell::Cell<u64>,
+        blocks: std::cell::Cell<u64>,
     }
 
     impl Tally for Counts {
@@ -602,7 +689,46 @@ mod tests {
         }
         fn triangles(&self, mask: u32) {
             self.triangles.set(self.triangles.get() + u64::from(mask.count_ones()));
+            self.blocks.set(self.blocks.get() + 1);
         }
+    }
+
+    /// Per ray: nodes, triangles and 8-lane blocks tested.
+    fn per_ray(c: &Counts, rays: usize) -> String {
+        let per = |x: &std::cell::Cell<u64>| x.get() as f64 / rays as f64;
+        format!("{:.2} nodes {:.2} tris {:.2} blocks", per(&c.nodes), per(&c.triangles), per(&c.blocks))
+    }
+
+    /// The single-ray walks of `t` over the tree `WALK`, counted, with
+    /// their answers.
+    fn counted<const WALK: u8>(
+        t: &CpuTracer,
+        closest: &[Line],
+        shadow: &[Line],
+    ) -> (String, String, Vec<Option<Hit>>, Vec<bool>) {
+        let (c, s) = (Counts::default(), Counts::default());
+        let hits: Vec<Option<Hit>> = closest.iter().map(|l| t.closest_with::<false, WALK>(l, &c)).collect();
+        let blocked: Vec<bool> = shadow.iter().map(|l| t.any_with::<false, WALK>(l, &s)).collect();
+        (per_ray(&c, closest.len()), per_ray(&s, shadow.len()), hits, blocked)
+    }
+
+    /// Best of 5 single walks (`closest`, `any`: AVX2 where the CPU has
+    /// it, no packets) of each tracer in turn, ns per closest-hit and per
+    /// shadow ray.
+    fn single_walk_ns(tracers: &[&CpuTracer], closest: &[Line], shadow: &[Line]) -> Vec<(f64, f64)> {
+        let mut best = vec![(f64::MAX, f64::MAX); tracers.len()];
+        for _ in 0..5 {
+            for (k, tracer) in tracers.iter().enumerate() {
+                let clock = std::time::Instant::now();
+                let n = closest.iter().filter(|l| tracer.closest(l).is_some()).count();
+                best[k].0 = best[k].0.min(clock.elapsed().as_secs_f64() / closest.len() as f64 * 1e9);
+                let clock = std::time::Instant::now();
+                let m = shadow.iter().filter(|l| tracer.any(l)).count();
+                best[k].1 = best[k].1.min(clock.elapsed().as_secs_f64() / shadow.len() as f64 * 1e9);
+                assert!(n + m > 0);
+            }
+        }
+        best
     }
 
     /// A tracer that records the lines a render asks about.
@@ -655,11 +781,13 @@ mod tests {
         (p, rec.closest.into_inner().unwrap(), rec.shadow.into_inner().unwrap())
     }
 
-    /// Per-ray statistics (nodes and triangles tested by the single-ray
-    /// walks) and trace times of a render's rays for BVHs built with
-    /// several obvhs parameter sets, whose answers must all be the
-    /// default's: the table of `docs/TRACING.md`, run with `--release
-    /// --ignored --nocapture`.
+    /// Per-ray statistics (nodes, triangles and blocks tested by the
+    /// single-ray walks) and trace times of a render's rays for BVHs built
+    /// with several obvhs parameter sets, each walked over the collapsed
+    /// tree (`tree8.rs`), the decoded CWBVH (`wide8.rs`) and the CWBVH,
+    /// whose answers must all be the default's; then the collapsed tree
+    /// with leaves of 1 to 8 triangles: the tables of `docs/TRACING.md`,
+    /// run with `--release --ignored --nocapture`.
     #[test]
     #[ignore = "timing"]
     fn walk_statistics() {
@@ -668,68 +796,35 @@ mod tests {
         let base = bvh_input(&Prepared::new(&built_in("cube-enclosure:1").unwrap())).1;
         let mut configs: Vec<(&str, BvhBuildParams)> = vec![("default", base)];
         configs.push(("pre_split", BvhBuildParams { pre_split: true, ..base }));
-        configs.push(("leaf 1", BvhBuildParams { max_prims_per_leaf: 1, ..base }));
-        configs.push(("leaf 2", BvhBuildParams { max_prims_per_leaf: 2, ..base }));
         configs.push(("reinsert 1.0", BvhBuildParams { reinsertion_batch_ratio: 1.0, ..base }));
         configs.push(("ploc high", BvhBuildParams { ploc_search_distance: PlocSearchDistance::High, ..base }));
         configs.push(("ploc very high", BvhBuildParams { ploc_search_distance: PlocSearchDistance::VeryHigh, ..base }));
         configs.push(("sort u128", BvhBuildParams { sort_precision: SortPrecision::U128, ..base }));
         let slow = BvhBuildParams { search_depth_threshold: 0, ..BvhBuildParams::very_slow_build() };
         configs.push(("very slow, sdt 0", slow));
-        configs.push(("very slow, no split", BvhBuildParams { pre_split: false, ..slow }));
-        configs.push((
-            "pre_split, reinsert 1.0",
-            BvhBuildParams { pre_split: true, reinsertion_batch_ratio: 1.0, ..base },
-        ));
         for spec in ["mirror-room", "cornell-box"] {
             let (p, closest, shadow) = render_rays(spec);
             eprintln!("{spec}: {} closest-hit rays, {} shadow rays", closest.len(), shadow.len());
             let mut expect: Option<(Vec<Option<Hit>>, Vec<bool>)> = None;
+            let mut check = |name: &str, hits: Vec<Option<Hit>>, blocked: Vec<bool>| match &expect {
+                None => expect = Some((hits, blocked)),
+                Some((h, b)) => {
+                    assert!(*h == hits, "{spec} {name}: closest hits differ");
+                    assert!(*b == blocked, "{spec} {name}: occlusion differs");
+                }
+            };
             for (name, params) in &configs {
                 let clock = std::time::Instant::now();
                 let t = CpuTracer::with_params(&p, *params);
                 let build = clock.elapsed().as_secs_f64();
-                let (c, s) = (Counts::default(), Counts::default());
-                let mut hits: Vec<Option<Hit>> =
-                    closest.iter().map(|l| t.closest_with::<false, true>(l, t.wide(), &c)).collect();
-                let blocked: Vec<bool> = shadow.iter().map(|l| t.any_with::<false, true>(l, t.wide(), &s)).collect();
-                // The batch calls, as the renderer makes them (packets included): best of 5.
-                let (mut tc, mut ts) = (f64::MAX, f64::MAX);
-                for _ in 0..5 {
-                    let clock = std::time::Instant::now();
-                    for chunk in closest.chunks(1024) {
-                        t.closest_hit(chunk, &mut Vec::new()).unwrap();
-                    }
-                    tc = tc.min(clock.elapsed().as_secs_f64());
-                    let clock = std::time::Instant::now();
-                    for chunk in shadow.chunks(1024) {
-                        t.occluded(chunk, &mut Vec::new()).unwrap();
-                    }
-                    ts = ts.min(clock.elapsed().as_secs_f64());
-                }
-                // The same rays one at a time, no packets, the wide walk
-                // and the CWBVH walk (`wide: None`) alternating: best of 5.
-                let cwbvh = CpuTracer { wide: None.into(), ..t.clone() };
-                let mut best = [f64::MAX; 4];
-                for _ in 0..5 {
-                    for (k, tracer) in [&t, &cwbvh].into_iter().enumerate() {
-                        let clock = std::time::Instant::now();
-                        let n = closest.iter().filter(|l| tracer.closest(l).is_some()).count();
-                        best[2 * k] = best[2 * k].min(clock.elapsed().as_secs_f64());
-                        let clock = std::time::Instant::now();
-                        let m = shadow.iter().filter(|l| tracer.any(l)).count();
-                        best[2 * k + 1] = best[2 * k + 1].min(clock.elapsed().as_secs_f64());
-                        assert!(n + m > 0);
-                    }
-                }
-                let ns = |s: f64, n: usize| s / n as f64 * 1e9;
-                eprintln!(
-                    "{spec} | {name} | single walks, no packets: wide closest {:.1} ns, shadow {:.1} ns | CWBVH closest {:.1} ns, shadow {:.1} ns",
-                    ns(best[0], closest.len()),
-                    ns(best[1], shadow.len()),
-                    ns(best[2], closest.len()),
-                    ns(best[3], shadow.len()),
-                );
+                assert_eq!(t.walk_kind(), TREE8);
+                let wide = CpuTracer { tree: None, ..t.clone() };
+                let cwbvh = CpuTracer { tree: None, wide: None.into(), ..t.clone() };
+                let ns = single_walk_ns(&[&t, &wide, &cwbvh], &closest, &shadow);
+                let (tc, ts, hits, blocked) = counted::<TREE8>(&t, &closest, &shadow);
+                let (wc, ws, wh, wb) = counted::<WIDE8>(&t, &closest, &shadow);
+                let (cc, cs, ch, cb) = counted::<CWBVH>(&t, &closest, &shadow);
+                assert!(hits == wh && hits == ch && blocked == wb && blocked == cb, "{spec} {name}: walks differ");
                 let mut batch = Vec::new();
                 for chunk in closest.chunks(1024) {
                     let mut out = Vec::new();
@@ -737,42 +832,42 @@ mod tests {
                     batch.extend(out);
                 }
                 assert_eq!(batch, hits, "{spec} {name}: batch and single walks differ");
-                let bvh = t.bvh.as_ref().unwrap();
-                let per = |x: &std::cell::Cell<u64>, n: usize| x.get() as f64 / n as f64;
-                // The CWBVH walk's counts on the same tree (the walk before `wide8`).
-                let cw = CpuTracer { wide: None.into(), ..t.clone() };
-                let (cc, cs) = (Counts::default(), Counts::default());
-                closest.iter().for_each(|l| assert_eq!(cw.closest_with::<false, false>(l, None, &cc), t.closest(l)));
-                shadow.iter().for_each(|l| assert_eq!(cw.any_with::<false, false>(l, None, &cs), t.any(l)));
+                let tree = t.tree.as_ref().unwrap();
                 eprintln!(
-                    "{spec} | {name} | wide nodes {} ({:?} bytes of nodes and leaf blocks, {} CWBVH bytes) | CWBVH walk: closest {:.2} nodes {:.2} tris | shadow {:.2} nodes {:.2} tris",
+                    "{spec} | {name} | build {:.1} ms | tree8 {:?} nodes/blocks, {:?} bytes, fill {:.2} | wide8 {} nodes, {:?} bytes",
+                    build * 1e3,
+                    tree.len(),
+                    tree.bytes(),
+                    tree.fill(),
                     t.wide().map_or(0, Wide8::len),
                     t.wide().map_or((0, 0), Wide8::bytes),
-                    bvh.nodes.len() * size_of::<obvhs::cwbvh::node::CwBvhNode>(),
-                    per(&cc.nodes, closest.len()),
-                    per(&cc.triangles, closest.len()),
-                    per(&cs.nodes, shadow.len()),
-                    per(&cs.triangles, shadow.len()),
                 );
-                eprintln!(
-                    "{spec} | {name} | build {:.1} ms, {} nodes, {} prims | closest {:.2} nodes {:.2} tris {:.1} ns | shadow {:.2} nodes {:.2} tris {:.1} ns",
-                    build * 1e3,
-                    bvh.nodes.len(),
-                    bvh.primitive_indices.len(),
-                    per(&c.nodes, closest.len()),
-                    per(&c.triangles, closest.len()),
-                    tc / closest.len() as f64 * 1e9,
-                    per(&s.nodes, shadow.len()),
-                    per(&s.triangles, shadow.len()),
-                    ts / shadow.len() as f64 * 1e9,
-                );
-                match &expect {
-                    None => expect = Some((std::mem::take(&mut hits), blocked)),
-                    Some((h, b)) => {
-                        assert!(*h == hits, "{spec} {name}: closest hits differ");
-                        assert!(*b == blocked, "{spec} {name}: occlusion differs");
-                    }
+                for (walk, (c, s), (nc, ns)) in
+                    [("tree8", (tc, ts), ns[0]), ("wide8", (wc, ws), ns[1]), ("cwbvh", (cc, cs), ns[2])]
+                {
+                    eprintln!("{spec} | {name} | {walk} | closest {c}, {nc:.0} ns | shadow {s}, {ns:.0} ns");
                 }
+                check(name, hits, blocked);
+            }
+            let t = CpuTracer::new(&p);
+            let bvh2 = build_bvh2(&p, base);
+            let trees: Vec<CpuTracer> = (1..=tree8::MAX_LEAF)
+                .map(|leaf| CpuTracer { tree: Tree8::new(&bvh2, &p.triangles, leaf), ..t.clone() })
+                .collect();
+            let ns = single_walk_ns(&trees.iter().collect::<Vec<_>>(), &closest, &shadow);
+            for (k, t) in trees.iter().enumerate() {
+                let (c, s, hits, blocked) = counted::<TREE8>(t, &closest, &shadow);
+                let tree = t.tree.as_ref().unwrap();
+                eprintln!(
+                    "{spec} | leaves of <= {} | {:?} nodes/blocks, {:?} bytes, fill {:.2} | closest {c}, {:.0} ns | shadow {s}, {:.0} ns",
+                    k + 1,
+                    tree.len(),
+                    tree.bytes(),
+                    tree.fill(),
+                    ns[k].0,
+                    ns[k].1
+                );
+                check("leaves", hits, blocked);
             }
         }
     }

@@ -37,6 +37,7 @@ mod interleave;
 mod node8;
 mod packet;
 mod reference;
+mod tree8;
 pub(crate) mod watertight;
 mod wide8;
 

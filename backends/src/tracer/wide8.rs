@@ -229,7 +229,7 @@ fn decode(n: &obvhs::cwbvh::node::CwBvhNode) -> Node {
 }
 
 /// A ray's constants for the node test.
-struct Consts {
+pub(super) struct Consts {
     org: [f32; 3],
     inv: [f32; 3],
     /// Row of [`Node::bounds`] holding each axis's near plane; the far
@@ -238,7 +238,7 @@ struct Consts {
 }
 
 impl Consts {
-    fn new(ray: &Ray) -> Self {
+    pub(super) fn new(ray: &Ray) -> Self {
         let inv = ray.inv_direction.to_array();
         Self { org: ray.origin.to_array(), inv, near: [0, 1, 2].map(|a| 2 * a + usize::from(inv[a] < 0.0)) }
     }
@@ -247,7 +247,7 @@ impl Consts {
 /// The children of `n` that the ray enters within `[NODE_EPSILON, tmax]`
 /// (bit `i` for slot `i`) and each child's entry distance.
 #[inline(always)]
-fn test_scalar(n: &Node, c: &Consts, tmax: f32) -> (u32, [f32; 8]) {
+pub(super) fn test_scalar(n: &Node, c: &Consts, tmax: f32) -> (u32, [f32; 8]) {
     let mut hit = 0;
     let mut near = [0.0f32; 8];
     for (i, entry) in near.iter_mut().enumerate() {
@@ -268,7 +268,7 @@ fn test_scalar(n: &Node, c: &Consts, tmax: f32) -> (u32, [f32; 8]) {
 /// The CPU must support AVX2.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-unsafe fn test_avx2(n: &Node, c: &Consts, tmax: f32) -> (u32, __m256) {
+pub(super) unsafe fn test_avx2(n: &Node, c: &Consts, tmax: f32) -> (u32, __m256) {
     // SAFETY: AVX2 (this function's contract); every load reads one
     // 32-byte row of `n.bounds`, 32-byte aligned (`Node` is 64-aligned,
     // rows are 32 bytes).

@@ -111,9 +111,17 @@ const GIB: f64 = (1u64 << 30) as f64;
 /// which has fewer nodes than triangles) and their leaf blocks (320 B per
 /// eight lanes of a node's leaf triangles: 51 B a triangle on
 /// `mirror-room`, 40 B plus 320 B a node at most) are allocated, with a
-/// fallible reservation, at the first query that walks them (closest hit,
-/// shadow ray, occlusion packet or `trace_all`'s interleaved walk), after
-/// the build's temporaries (about 200 B a triangle) are given back.
+/// fallible reservation, at the first query that walks them (an
+/// occlusion packet or `trace_all`'s interleaved walk, or a single-ray
+/// walk where the tree below is declined), after the build's temporaries
+/// (about 200 B a triangle) are given back. The single-ray walks' own tree
+/// (`tracer/tree8.rs`: 256 B a node, 320 B a leaf of up to eight
+/// triangles; 66 B a triangle on `mirror-room`, BUNNYB B on the 69k bunny,
+/// under 576 B at most: a block and a node a triangle) is built with the
+/// tracer from obvhs's binary tree, by
+/// fallible reservations (a tree that cannot be allocated is declined and
+/// the walks above serve); the BVH-ordered triangle lanes (36 B a
+/// triangle) are built only where the CWBVH's own walk serves.
 /// Per patch: the [`super::Patch`] with its name and the visibility
 /// counters and per-patch results: 256 B (a sphere's cells measure 200 B).
 /// Plus [`Limits::BASE_BYTES`] for the program, its line buffers and

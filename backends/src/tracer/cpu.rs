@@ -82,7 +82,7 @@ pub(super) fn build_bvh2(scene: &Prepared, params: obvhs::BvhBuildParams) -> obv
 }
 
 /// `bvh2` collapsed into obvhs's CWBVH, as `build_cwbvh` does.
-fn cwbvh_of(bvh2: &obvhs::bvh2::Bvh2, params: obvhs::BvhBuildParams) -> CwBvh {
+pub(super) fn cwbvh_of(bvh2: &obvhs::bvh2::Bvh2, params: obvhs::BvhBuildParams) -> CwBvh {
     obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh(bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false)
 }
 
@@ -95,17 +95,20 @@ pub struct CpuTracer {
     /// `bvh.primitive_indices[k]`): a leaf's candidates lie side by side in
     /// memory instead of behind an indirection each.
     ordered: Vec<[Vec3A; 3]>,
-    /// `ordered` as a structure of arrays for the 8-wide triangle test.
-    lanes: TriangleLanes,
-    /// `bvh` uncompressed (`wide8.rs`): the tree every CPU walk reads
-    /// (`closest_hit`, `occluded`, the occlusion packets and `trace_all`'s
-    /// interleaved walk), built at the first call that needs it; `None`
+    /// `ordered` as a structure of arrays for the 8-wide triangle test of
+    /// the CWBVH walk, built at its first use: only where neither
+    /// [`Tree8`] nor [`Wide8`] serves the single-ray walks (36 B a
+    /// triangle not held otherwise).
+    lanes: std::sync::OnceLock<TriangleLanes>,
+    /// `bvh` uncompressed (`wide8.rs`): the tree the occlusion packets and
+    /// `trace_all`'s interleaved walk read (and the single-ray walks where
+    /// `tree` is `None`), built at the first call that needs it; `None`
     /// inside where [`Wide8::new`] declines, and the CWBVH walks serve.
     wide: std::sync::OnceLock<Option<Wide8>>,
     /// The single-ray walks' tree (`tree8.rs`: leaves of up to eight
     /// triangles in one block each), collapsed from the same binary tree
-    /// as `bvh`; `None` where [`Tree8::new`] declines, and the CWBVH walks
-    /// serve.
+    /// as `bvh`, when the tracer is built; `None` where [`Tree8::new`]
+    /// declines, and `wide`'s walk serves (or the CWBVH's).
     tree: Option<Tree8>,
     /// Whether the 8-lane AVX2 node test is used (`node8`).
     avx2: bool,
@@ -172,7 +175,7 @@ impl CpuTracer {
         let bounds = ((lo + hi) * 0.5, (hi - lo) * 0.5 + BOUNDS_PAD);
         let avx2 = node8::has_avx2();
         let interleave = avx2 && scene.sphere.is_none();
-        let lanes = TriangleLanes::new(&ordered);
+        let lanes = std::sync::OnceLock::new();
         let wide = std::sync::OnceLock::new();
         Self { scene: scene.clone(), bvh, ordered, lanes, wide, tree, avx2, interleave, bounds }
     }
@@ -185,8 +188,9 @@ impl CpuTracer {
 
     /// The first crossing of one line: the walk shrinks the interval as hits
     /// are found, and ties in `t` go to the smaller triangle. Each node's
-    /// leaf triangles are tested eight at a time ([`Wide8::leaf_blocks`],
-    /// or [`TriangleLanes::block`] on the CWBVH walk; [`Shear::hit`]'s
+    /// leaf triangles are tested eight at a time (a [`Tree8`] leaf's block,
+    /// [`Wide8::leaf_blocks`] on the decoded tree's walk, or
+    /// [`TriangleLanes::block`] on the CWBVH walk; [`Shear::hit`]'s
     /// arithmetic per lane), and the best one's
     /// barycentric numerators are kept from its block, not recomputed, and
     /// divided once the walk ends (the same [`Hit`] as [`triangle_hit`]'s,
@@ -395,11 +399,12 @@ impl CpuTracer {
         tally: &impl Tally,
         mut each: impl FnMut(&Block, usize) -> bool,
     ) -> bool {
+        let soa = self.lanes.get_or_init(|| TriangleLanes::new(&self.ordered));
         for (b, lanes) in mask_blocks(mask) {
             let base = first as usize + (b as usize) * BLOCK;
             tally.triangles(lanes);
             // SAFETY: `AVX2` is true only in the `*_avx2` callers, entered after `has_avx2()`.
-            let block = unsafe { self.lanes.block::<AVX2>(&self.ordered, shear, base, lanes, l.tmin, l.tmax) };
+            let block = unsafe { soa.block::<AVX2>(&self.ordered, shear, base, lanes, l.tmin, l.tmax) };
             if each(&block, base) {
                 return true;
             }

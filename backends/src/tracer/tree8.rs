@@ -59,8 +59,8 @@ impl Tree8 {
     /// `bvh.primitive_indices[k]`) into 8-wide nodes whose leaves hold up
     /// to `leaf` (1..=8) triangles; `None` if some walk of it could need
     /// more than [`STACK`] stack entries or if its nodes or blocks cannot
-    /// be allocated (reserved before they are filled): then the CWBVH walk
-    /// serves, with the same answers.
+    /// be allocated (fallible reservations as they grow): then the decoded
+    /// CWBVH's walk serves, with the same answers.
     pub(crate) fn new(bvh: &Bvh2, triangles: &[[Vec3A; 3]], leaf: usize) -> Option<Self> {
         assert!((1..=MAX_LEAF).contains(&leaf), "leaves of 1 to 8 triangles");
         if bvh.nodes.is_empty() {
@@ -69,14 +69,13 @@ impl Tree8 {
         let counts = prim_counts(bvh)?;
         // A binary leaf is never opened (its `first_index` is a primitive's).
         let leafy = |b: u32| counts[b as usize] as usize <= leaf || bvh.nodes[b as usize].is_leaf();
-        // Every wide node but the root is some binary node's child, and
-        // every leaf holds at least one primitive: bounds known before
-        // the collapse.
+        // Every leaf holds at least one primitive, so block indices fit.
+        (counts[0] < 1 << BLOCK_BITS).then_some(())?;
+        // Both arrays grow by fallible reservations (a node's children at
+        // a time), so a tree that cannot be allocated is declined.
         let mut nodes: Vec<Node> = Vec::new();
-        nodes.try_reserve(bvh.nodes.len().div_ceil(2)).ok()?;
         let mut leaves: Vec<Leaf8> = Vec::new();
-        leaves.try_reserve(counts[0] as usize).ok()?;
-        u32::try_from(counts[0]).ok().filter(|&n| n < 1 << BLOCK_BITS)?;
+        nodes.try_reserve(1).ok()?;
         nodes.push(EMPTY);
         // (binary node, wide node it fills)
         let mut todo: Vec<(u32, u32)> = vec![(0, 0)];
@@ -97,6 +96,8 @@ impl Tree8 {
                 kids[i] = c;
                 kids.push(c + 1);
             }
+            nodes.try_reserve(kids.len()).ok()?;
+            leaves.try_reserve(kids.len()).ok()?;
             // Internal children take consecutive nodes (their lines are
             // then neighbours, as the CWBVH's are).
             let mut next = nodes.len() as u32;
@@ -446,6 +447,46 @@ mod tests {
                 assert!(tree.stack_need() < STACK);
             }
         }
+    }
+
+    /// Build times (best of 3) of the binary tree, its CWBVH, this tree
+    /// and the decoded CWBVH on the 69k-triangle bunny, and the trees'
+    /// bytes: for `docs/TRACING.md`, run with `--release --ignored
+    /// --nocapture`.
+    #[test]
+    #[ignore = "timing"]
+    fn build_times() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/meshes/stanford-bunny.obj");
+        let Ok(scene) = crate::formats::load(&path) else { return eprintln!("no bunny at {}", path.display()) };
+        let p = Prepared::new(&scene);
+        let params = bvh_input(&p).1;
+        let mut best = [f64::MAX; 4];
+        for _ in 0..3 {
+            let clock = std::time::Instant::now();
+            let bvh2 = build_bvh2(&p, params);
+            best[0] = best[0].min(clock.elapsed().as_secs_f64());
+            let clock = std::time::Instant::now();
+            let cw = crate::tracer::cpu::cwbvh_of(&bvh2, params);
+            best[1] = best[1].min(clock.elapsed().as_secs_f64());
+            let clock = std::time::Instant::now();
+            let tree = Tree8::new(&bvh2, &p.triangles, MAX_LEAF).unwrap();
+            best[2] = best[2].min(clock.elapsed().as_secs_f64());
+            let ordered: Vec<[Vec3A; 3]> = cw.primitive_indices.iter().map(|&i| p.triangles[i as usize]).collect();
+            let clock = std::time::Instant::now();
+            let wide = crate::tracer::wide8::Wide8::new(&cw, &ordered).unwrap();
+            best[3] = best[3].min(clock.elapsed().as_secs_f64());
+            eprintln!(
+                "{} triangles: tree8 {:?} nodes/blocks {:?} bytes fill {:.2}; wide8 {} nodes {:?} bytes",
+                p.triangles.len(),
+                tree.len(),
+                tree.bytes(),
+                tree.fill(),
+                wide.len(),
+                wide.bytes()
+            );
+        }
+        let ms = best.map(|s| s * 1e3);
+        eprintln!("ms: binary tree {:.1}, CWBVH {:.1}, tree8 {:.1}, wide8 {:.1}", ms[0], ms[1], ms[2], ms[3]);
     }
 
     /// The walk, ordered or not, with AVX2 or not, tests every triangle a

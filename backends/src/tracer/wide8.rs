@@ -240,7 +240,10 @@ pub(super) struct Consts {
 impl Consts {
     pub(super) fn new(ray: &Ray) -> Self {
         let inv = ray.inv_direction.to_array();
-        Self { org: ray.origin.to_array(), inv, near: [0, 1, 2].map(|a| 2 * a + usize::from(inv[a] < 0.0)) }
+        // Written out, not `array::map`, which stayed a call in the
+        // collapsed tree's walk (1.2% of a mirror-room render).
+        let near = |a: usize| 2 * a + usize::from(inv[a] < 0.0);
+        Self { org: ray.origin.to_array(), inv, near: [near(0), near(1), near(2)] }
     }
 }
 

@@ -116,7 +116,7 @@ const GIB: f64 = (1u64 << 30) as f64;
 /// walk where the tree below is declined), after the build's temporaries
 /// (about 200 B a triangle) are given back. The single-ray walks' own tree
 /// (`tracer/tree8.rs`: 256 B a node, 320 B a leaf of up to eight
-/// triangles; 66 B a triangle on `mirror-room`, BUNNYB B on the 69k bunny,
+/// triangles; 66 B a triangle on `mirror-room`, 66 B on the 69k bunny,
 /// under 576 B at most: a block and a node a triangle) is built with the
 /// tracer from obvhs's binary tree, by
 /// fallible reservations (a tree that cannot be allocated is declined and

@@ -132,15 +132,17 @@ impl Lane {
 /// `done(line, found)` is called once per line taken whose walk found
 /// crossings, with their `(k, t)` in no particular order (`k` the triangle
 /// in BVH order, `ordered`'s index, which `tree`'s leaves hold), lines in
-/// the order their walks end.
+/// the order their walks end. `recorded[k]`, what `done` will read of
+/// crossing `k`, is prefetched as the crossing is found.
 ///
 /// # Safety
 /// The CPU must support AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-pub(super) unsafe fn trace(
+pub(super) unsafe fn trace<R>(
     tree: &Wide8,
     ordered: &[[Vec3A; 3]],
+    recorded: &[R],
     lines: &[Line],
     take: impl Fn(&Line) -> bool,
     mut done: impl FnMut(u32, &[(u32, f32)]),
@@ -176,7 +178,7 @@ pub(super) unsafe fn trace(
                 }
             }
             // SAFETY: AVX2 and FMA are enabled here, as `step` requires.
-            unsafe { step(tree, ordered, lines, lane) };
+            unsafe { step(tree, ordered, recorded, lines, lane) };
         }
         if active == 0 && next >= lines.len() {
             break;
@@ -266,7 +268,8 @@ unsafe fn visit(n: &WideNode, lane: &mut Lane) -> u32 {
 }
 
 /// One step of `lane`'s walk over the wide nodes: the leaf primitives
-/// found at its previous step tested, then the pending node visited (its
+/// found at its previous step tested (`recorded` of each crossing
+/// prefetched), then the pending node visited (its
 /// internal children hit pushed, its leaf primitives kept for the next
 /// step and prefetched) and the next node taken off the stack and
 /// prefetched: what a step loads was asked for a round of the other
@@ -277,7 +280,7 @@ unsafe fn visit(n: &WideNode, lane: &mut Lane) -> u32 {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 #[inline]
-unsafe fn step(tree: &Wide8, ordered: &[[Vec3A; 3]], lines: &[Line], lane: &mut Lane) {
+unsafe fn step<R>(tree: &Wide8, ordered: &[[Vec3A; 3]], recorded: &[R], lines: &[Line], lane: &mut Lane) {
     if lane.prims != 0 {
         let l = &lines[lane.line as usize];
         // A group holds at most 24 triangles; each is written to the spare
@@ -296,6 +299,9 @@ unsafe fn step(tree: &Wide8, ordered: &[[Vec3A; 3]], lines: &[Line], lane: &mut 
         // SAFETY: the first `found` spare entries were written above, and
         // `found` is at most the 24 reserved.
         unsafe { lane.found.set_len(lane.found.len() + found) };
+        for &(k, _) in &lane.found[lane.found.len() - found..] {
+            prefetch(recorded.as_ptr().wrapping_add(k as usize), size_of::<R>());
+        }
         lane.prims = 0;
     }
     if lane.pending == NONE {

@@ -325,3 +325,73 @@ unsafe fn step<R>(tree: &Wide8, ordered: &[[Vec3A; 3]], recorded: &[R], lines: &
     lane.pending = lane.stack[lane.depth];
     prefetch(tree.nodes.as_ptr().wrapping_add(lane.pending as usize), size_of::<WideNode>());
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lines::global_line;
+    use crate::scene::built_in;
+    use crate::tracer::{CpuTracer, CrossingBuffer, Prepared, Tracer};
+
+    /// What the walk does per global line on `cube-enclosure:30` and
+    /// `cubes-room:512`: nodes visited, triangles tested, crossings kept,
+    /// and the nodes a walk that stopped after the line's last crossing
+    /// could skip (those the line enters only past it, beyond the 1e-5
+    /// padding). The scalar slab test here is the one [`visit`] vectorises;
+    /// a figure for `docs/TRACING.md`, run with `--release --ignored
+    /// --nocapture`.
+    #[test]
+    #[ignore = "statistics"]
+    fn walk_statistics() {
+        for spec in ["cube-enclosure:30", "cubes-room:512"] {
+            let p = Prepared::new(&built_in(spec).unwrap());
+            let t = CpuTracer::new(&p);
+            let tree = t.wide().unwrap();
+            let n = 100_000u64;
+            let lines: Vec<Line> = (0..n).map(|i| global_line(1, i, crate::visibility::SPHERE_SCALE)).collect();
+            let mut buf = CrossingBuffer::default();
+            t.trace_all(&lines, &mut buf).unwrap();
+            let (mut nodes, mut tris, mut past, mut crossed) = (0u64, 0u64, 0u64, 0u64);
+            for (i, l) in lines.iter().enumerate() {
+                let Some(last) = buf.line(i).last().map(|c| c.t) else { continue };
+                crossed += 1;
+                let ray = Ray::new(Vec3A::from(l.origin), Shear::of(l).1, l.tmin, l.tmax);
+                let (inv, org) = (ray.inv_direction.to_array(), ray.origin.to_array());
+                let mut stack = vec![(0u32, 0.0f32)];
+                while let Some((k, entry)) = stack.pop() {
+                    nodes += 1;
+                    past += u64::from(entry > last + 1e-5);
+                    let node = &tree.nodes[k as usize];
+                    for slot in 0..8 {
+                        let mut lo = NODE_EPSILON;
+                        let mut hi = l.tmax;
+                        for (a, (&i, &o)) in inv.iter().zip(&org).enumerate() {
+                            // `plane · inverse − origin · inverse`, fused, as `visit`'s.
+                            let d = |row: usize| node.bounds[row][slot].mul_add(i, -(o * i));
+                            let (near, far) = if i < 0.0 { (2 * a + 1, 2 * a) } else { (2 * a, 2 * a + 1) };
+                            lo = lo.max(d(near));
+                            hi = hi.min(d(far));
+                        }
+                        if lo > hi {
+                            continue;
+                        }
+                        let c = node.child[slot];
+                        if node.imask >> slot & 1 == 1 {
+                            stack.push((c, lo));
+                        } else if c & wide8::LEAF != 0 {
+                            tris += u64::from((c & !wide8::LEAF).count_ones());
+                        }
+                    }
+                }
+            }
+            let per = |x: u64| x as f64 / crossed as f64;
+            eprintln!(
+                "{spec}: {crossed} of {n} lines cross; per crossing line: {:.2} nodes, {:.2} triangles tested, {:.2} crossings kept, {:.3} nodes entered only past the last crossing",
+                per(nodes),
+                per(tris),
+                per(buf.crossings.len() as u64),
+                per(past),
+            );
+        }
+    }
+}

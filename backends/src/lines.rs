@@ -183,9 +183,10 @@ fn global_line_from(rng: &LineRng, draws: [u32; 4], radius: f64) -> Line {
 
 /// The global lines `first`, `first + stride`, … (`count` of them),
 /// appended to `out`: [`global_line_of`] for each, bit for bit. With AVX2
-/// the integer hashing (each line's generator and its first draws, 13 of
-/// the ~15 [`pcg`] calls of a line) runs for 8 lines at once; the
-/// floating-point rest, and any rejected draw, is the scalar code.
+/// 8 lines go at once: the integer hashing (each line's generator and its
+/// first draws, 13 of the ~15 [`pcg`] calls of a line) in 8 lanes, the
+/// floating-point rest in two halves of 4 ([`global_lines8`]); only a
+/// rejected pair of draws goes through the scalar code.
 pub fn global_lines_of(seed: SeedHash, first: u64, stride: u64, count: u64, radius: f64, out: &mut Vec<Line>) {
     let mut k = 0;
     #[cfg(target_arch = "x86_64")]
@@ -193,15 +194,116 @@ pub fn global_lines_of(seed: SeedHash, first: u64, stride: u64, count: u64, radi
         while k + 8 <= count {
             let index: [u64; 8] = std::array::from_fn(|l| first + (k + l as u64) * stride);
             // SAFETY: AVX2 was detected just above.
-            let (w1, w2, d) = unsafe { hash8(seed, &index) };
-            for l in 0..8 {
-                let rng = LineRng { w1: w1[l], w2: w2[l] };
-                out.push(global_line_from(&rng, [d[0][l], d[1][l], d[2][l], d[3][l]], radius));
+            unsafe {
+                let (w1, w2, d) = hash8(seed, &index);
+                global_lines8(&w1, &w2, &d, radius, out);
             }
             k += 8;
         }
     }
     out.extend((k..count).map(|k| global_line_of(seed, first + k * stride, radius)));
+}
+
+/// [`global_line_from`] for 8 generators (lane `l`: words `w1[l]`,
+/// `w2[l]`, draws 0, 1, 64 and 65 in `draws[..][l]`), appended to `out`
+/// in lane order. The same f64 operations in the same order, 4 lanes at a
+/// time (IEEE multiplication, addition, square root and division are
+/// correctly rounded, and no fused multiply-add is formed, so every lane
+/// has the scalar bits); a lane whose first pair of draws for a point is
+/// rejected takes that point from [`LineRng::sphere_point_from`].
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn global_lines8(w1: &[u32; 8], w2: &[u32; 8], draws: &[[u32; 8]; 4], radius: f64, out: &mut Vec<Line>) {
+    use std::arch::x86_64::{
+        _CMP_GT_OQ, _mm_storeu_ps, _mm256_add_pd, _mm256_blendv_pd, _mm256_cmp_pd, _mm256_cvtpd_ps, _mm256_div_pd,
+        _mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd, _mm256_sqrt_pd, _mm256_sub_pd,
+    };
+    // Columns of the two points, the rejected lanes' from the scalar code
+    // (draws 0 and 1 in rows 0 and 1 of `draws`, 64 and 65 in rows 2 and 3).
+    let (mut pc, p_accepted) = sphere_points8(&draws[0], &draws[1], radius);
+    let (mut qc, q_accepted) = sphere_points8(&draws[2], &draws[3], radius);
+    for l in 0..8 {
+        for (first, row, accepted, c) in [(0, 0, p_accepted, &mut pc), (64, 2, q_accepted, &mut qc)] {
+            if accepted >> l & 1 == 0 {
+                let rng = LineRng { w1: w1[l], w2: w2[l] };
+                let v = rng.sphere_point_from(first, [draws[row][l], draws[row + 1][l]]) * radius;
+                [c[0][l], c[1][l], c[2][l]] = [v.x, v.y, v.z];
+            }
+        }
+    }
+    let mut cols = [[0f32; 8]; 7];
+    for h in [0, 4] {
+        // SAFETY: each load reads 4 of a column's 8 values, from `h <= 4`;
+        // each store writes 4 of `cols`' 8 f32 lanes.
+        unsafe {
+            let ld = |c: &[f64; 8]| _mm256_loadu_pd(c.as_ptr().add(h));
+            let [px, py, pz] = [ld(&pc[0]), ld(&pc[1]), ld(&pc[2])];
+            let (dx, dy, dz) =
+                (_mm256_sub_pd(ld(&qc[0]), px), _mm256_sub_pd(ld(&qc[1]), py), _mm256_sub_pd(ld(&qc[2]), pz));
+            // `DVec3::length`: √((x·x + y·y) + z·z).
+            let len = _mm256_sqrt_pd(_mm256_add_pd(
+                _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)),
+                _mm256_mul_pd(dz, dz),
+            ));
+            // `d / len` where `len > 0`, else +z.
+            let positive = _mm256_cmp_pd::<_CMP_GT_OQ>(len, _mm256_set1_pd(0.0));
+            let unit = |d, z: f64| _mm256_blendv_pd(_mm256_set1_pd(z), _mm256_div_pd(d, len), positive);
+            for (c, v) in [px, py, pz, unit(dx, 0.0), unit(dy, 0.0), unit(dz, 1.0), len].into_iter().enumerate() {
+                _mm_storeu_ps(cols[c].as_mut_ptr().add(h), _mm256_cvtpd_ps(v));
+            }
+        }
+    }
+    let [ox, oy, oz, dx, dy, dz, tmax] = cols;
+    out.extend((0..8).map(|l| Line {
+        origin: [ox[l], oy[l], oz[l]],
+        tmin: 0.0,
+        direction: [dx[l], dy[l], dz[l]],
+        tmax: tmax[l],
+    }));
+}
+
+/// [`LineRng::sphere_point_from`]'s first try, times `radius`, for 8
+/// lanes whose two draws are `a[l]` and `b[l]`: the point's `x`, `y` and
+/// `z` columns and the mask of lanes whose draws were accepted (the other
+/// lanes' columns are meaningless). The same f64 operations as the
+/// scalar code, 4 lanes at a time.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn sphere_points8(a: &[u32; 8], b: &[u32; 8], radius: f64) -> ([[f64; 8]; 3], u32) {
+    use std::arch::x86_64::{
+        _CMP_LT_OQ, _mm_loadu_si128, _mm_set1_epi32, _mm_xor_si128, _mm256_add_pd, _mm256_cmp_pd, _mm256_cvtepi32_pd,
+        _mm256_movemask_pd, _mm256_mul_pd, _mm256_set1_pd, _mm256_sqrt_pd, _mm256_storeu_pd, _mm256_sub_pd,
+    };
+    let k = _mm256_set1_pd;
+    let (mut c, mut accepted) = ([[0f64; 8]; 3], 0);
+    for h in [0, 4] {
+        // `2 · uniform_of(w) − 1` of 4 words from `h`: the word, as f64
+        // (its signed reading plus 2^31, exact), plus one half, times 2^-32.
+        // SAFETY: the load reads 4 of the 8 words, from `h <= 4`.
+        let signed = |w: &[u32; 8]| unsafe {
+            _mm256_cvtepi32_pd(_mm_xor_si128(_mm_loadu_si128(w.as_ptr().add(h).cast()), _mm_set1_epi32(i32::MIN)))
+        };
+        let uniform = |w| {
+            _mm256_mul_pd(_mm256_add_pd(_mm256_add_pd(signed(w), k(2_147_483_648.0)), k(0.5)), k(1.0 / 4_294_967_296.0))
+        };
+        let (u, v) = (
+            _mm256_sub_pd(_mm256_mul_pd(k(2.0), uniform(a)), k(1.0)),
+            _mm256_sub_pd(_mm256_mul_pd(k(2.0), uniform(b)), k(1.0)),
+        );
+        let s = _mm256_add_pd(_mm256_mul_pd(u, u), _mm256_mul_pd(v, v));
+        accepted |= (_mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(s, k(1.0))) as u32) << h;
+        let r = _mm256_mul_pd(k(2.0), _mm256_sqrt_pd(_mm256_sub_pd(k(1.0), s)));
+        let z = _mm256_sub_pd(k(1.0), _mm256_mul_pd(k(2.0), s));
+        for (col, x) in c.iter_mut().zip([_mm256_mul_pd(u, r), _mm256_mul_pd(v, r), z]) {
+            // SAFETY: the store writes 4 of the column's 8 values, from `h <= 4`.
+            unsafe { _mm256_storeu_pd(col.as_mut_ptr().add(h), _mm256_mul_pd(x, k(radius))) };
+        }
+    }
+    (c, accepted)
 }
 
 /// [`pcg`] on 8 lanes: the same 32-bit operations.

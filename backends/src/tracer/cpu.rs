@@ -15,7 +15,7 @@ use super::watertight::{
     sphere_hit, triangle_hit, walk_direction,
 };
 use super::wide8::{self, Wide8};
-use super::{BackendError, CrossingBuffer, Hit, Prepared, Tracer};
+use super::{BackendError, Crossing, CrossingBuffer, Hit, Prepared, Tracer};
 use crate::lines::Line;
 
 /// Triangle boxes and build parameters shared by the CPU and Vulkan BVHs:
@@ -110,6 +110,9 @@ pub struct CpuTracer {
     /// as `bvh`, when the tracer is built; `None` where [`Tree8::new`]
     /// declines, and `wide`'s walk serves (or the CWBVH's).
     tree: Option<Tree8>,
+    /// What `trace_all`'s interleaved walk records of each crossing, in
+    /// BVH order ([`Recorded`]), built at its first call.
+    recorded: std::sync::OnceLock<Vec<Recorded>>,
     /// Whether the 8-lane AVX2 node test is used (`node8`).
     avx2: bool,
     /// Whether `trace_all` interleaves walks (`interleave.rs`): AVX2 and
@@ -127,6 +130,31 @@ const CWBVH: u8 = 0;
 const WIDE8: u8 = 1;
 /// See [`CWBVH`].
 const TREE8: u8 = 2;
+
+/// What a crossing of the triangle at BVH position `k` records besides
+/// its `t` ([`Crossing`]): the triangle's front normal, patch and index,
+/// laid out in BVH order as [`CpuTracer`]'s `ordered` triangles are. A
+/// leaf's crossings then read one or two neighbouring cache lines, where
+/// `primitive_indices[k]` and then `normals`/`triangle_patch` at that
+/// index were two dependent misses per crossing (with the pair matrix
+/// sweeping the caches between batches).
+#[derive(Clone, Copy)]
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+struct Recorded {
+    normal: [f32; 3],
+    patch: u32,
+    primitive: u32,
+}
+
+impl Recorded {
+    /// The crossing at `t` of a line along `dir` (as [`push_crossing`]
+    /// records it: `cos` is the normal's dot product with `dir`, glam's on
+    /// the same three components).
+    #[inline]
+    fn crossing(&self, dir: Vec3A, t: f32) -> Crossing {
+        Crossing { t, patch: self.patch, cos: Vec3A::from(self.normal).dot(dir), primitive: self.primitive }
+    }
+}
 
 /// Padding of [`CpuTracer`]'s bounding box (normalised units): far above
 /// the f32 rounding of the line–box test and of the triangle test (~1e-7 at
@@ -176,8 +204,8 @@ impl CpuTracer {
         let avx2 = node8::has_avx2();
         let interleave = avx2 && scene.sphere.is_none();
         let lanes = std::sync::OnceLock::new();
-        let wide = std::sync::OnceLock::new();
-        Self { scene: scene.clone(), bvh, ordered, lanes, wide, tree, avx2, interleave, bounds }
+        let (wide, recorded) = (std::sync::OnceLock::new(), std::sync::OnceLock::new());
+        Self { scene: scene.clone(), bvh, ordered, lanes, wide, tree, recorded, avx2, interleave, bounds }
     }
 
     /// The uncompressed tree, built at the first call.
@@ -522,6 +550,15 @@ impl CpuTracer {
             Some(tree) if self.avx2 && std::is_x86_feature_detected!("fma") => tree,
             _ => return self.trace_single(lines, out),
         };
+        let recorded = self.recorded.get_or_init(|| {
+            let s = &self.scene;
+            let of = |i: usize| Recorded {
+                normal: s.normals[i].to_array(),
+                patch: s.triangle_patch[i],
+                primitive: i as u32,
+            };
+            bvh.primitive_indices.iter().map(|&i| of(i as usize)).collect()
+        });
         let take = |l: &Line| !line_misses_box(Vec3A::from(l.origin), Vec3A::from(l.direction), self.bounds);
         // `ended.line(at[i])`: line `i`'s crossings, where its walk found any.
         let mut at = vec![u32::MAX; lines.len()];
@@ -530,14 +567,12 @@ impl CpuTracer {
         let mut hits = Vec::with_capacity(16);
         let done = |li: u32, found: &[(u32, f32)]| {
             let dir = walk_direction(&lines[li as usize]);
-            for &(k, t) in found {
-                push_crossing(&self.scene, dir, t, bvh.primitive_indices[k as usize] as usize, &mut hits);
-            }
+            hits.extend(found.iter().map(|&(k, t)| recorded[k as usize].crossing(dir, t)));
             at[li as usize] = (ended.offsets.len() - 1) as u32;
             finish(&mut hits, &mut ended);
         };
         // SAFETY: `self.avx2` came from `has_avx2()`, FMA was detected just above.
-        unsafe { interleave::trace(tree, &self.ordered, lines, take, done) };
+        unsafe { interleave::trace(tree, &self.ordered, recorded, lines, take, done) };
         for &e in &at {
             if e != u32::MAX {
                 out.crossings.extend_from_slice(ended.line(e as usize));

@@ -132,15 +132,17 @@ impl Lane {
 /// `done(line, found)` is called once per line taken whose walk found
 /// crossings, with their `(k, t)` in no particular order (`k` the triangle
 /// in BVH order, `ordered`'s index, which `tree`'s leaves hold), lines in
-/// the order their walks end.
+/// the order their walks end. `recorded[k]`, what `done` will read of
+/// crossing `k`, is prefetched as the crossing is found.
 ///
 /// # Safety
 /// The CPU must support AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-pub(super) unsafe fn trace(
+pub(super) unsafe fn trace<R>(
     tree: &Wide8,
     ordered: &[[Vec3A; 3]],
+    recorded: &[R],
     lines: &[Line],
     take: impl Fn(&Line) -> bool,
     mut done: impl FnMut(u32, &[(u32, f32)]),
@@ -176,7 +178,7 @@ pub(super) unsafe fn trace(
                 }
             }
             // SAFETY: AVX2 and FMA are enabled here, as `step` requires.
-            unsafe { step(tree, ordered, lines, lane) };
+            unsafe { step(tree, ordered, recorded, lines, lane) };
         }
         if active == 0 && next >= lines.len() {
             break;
@@ -266,7 +268,8 @@ unsafe fn visit(n: &WideNode, lane: &mut Lane) -> u32 {
 }
 
 /// One step of `lane`'s walk over the wide nodes: the leaf primitives
-/// found at its previous step tested, then the pending node visited (its
+/// found at its previous step tested (`recorded` of each crossing
+/// prefetched), then the pending node visited (its
 /// internal children hit pushed, its leaf primitives kept for the next
 /// step and prefetched) and the next node taken off the stack and
 /// prefetched: what a step loads was asked for a round of the other
@@ -277,7 +280,7 @@ unsafe fn visit(n: &WideNode, lane: &mut Lane) -> u32 {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 #[inline]
-unsafe fn step(tree: &Wide8, ordered: &[[Vec3A; 3]], lines: &[Line], lane: &mut Lane) {
+unsafe fn step<R>(tree: &Wide8, ordered: &[[Vec3A; 3]], recorded: &[R], lines: &[Line], lane: &mut Lane) {
     if lane.prims != 0 {
         let l = &lines[lane.line as usize];
         // A group holds at most 24 triangles; each is written to the spare
@@ -296,6 +299,9 @@ unsafe fn step(tree: &Wide8, ordered: &[[Vec3A; 3]], lines: &[Line], lane: &mut 
         // SAFETY: the first `found` spare entries were written above, and
         // `found` is at most the 24 reserved.
         unsafe { lane.found.set_len(lane.found.len() + found) };
+        for &(k, _) in &lane.found[lane.found.len() - found..] {
+            prefetch(recorded.as_ptr().wrapping_add(k as usize), size_of::<R>());
+        }
         lane.prims = 0;
     }
     if lane.pending == NONE {
@@ -318,4 +324,74 @@ unsafe fn step(tree: &Wide8, ordered: &[[Vec3A; 3]], lines: &[Line], lane: &mut 
     lane.depth -= 1;
     lane.pending = lane.stack[lane.depth];
     prefetch(tree.nodes.as_ptr().wrapping_add(lane.pending as usize), size_of::<WideNode>());
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lines::global_line;
+    use crate::scene::built_in;
+    use crate::tracer::{CpuTracer, CrossingBuffer, Prepared, Tracer};
+
+    /// What the walk does per global line on `cube-enclosure:30` and
+    /// `cubes-room:512`: nodes visited, triangles tested, crossings kept,
+    /// and the nodes a walk that stopped after the line's last crossing
+    /// could skip (those the line enters only past it, beyond the 1e-5
+    /// padding). The scalar slab test here is the one [`visit`] vectorises;
+    /// a figure for `docs/TRACING.md`, run with `--release --ignored
+    /// --nocapture`.
+    #[test]
+    #[ignore = "statistics"]
+    fn walk_statistics() {
+        for spec in ["cube-enclosure:30", "cubes-room:512"] {
+            let p = Prepared::new(&built_in(spec).unwrap());
+            let t = CpuTracer::new(&p);
+            let tree = t.wide().unwrap();
+            let n = 100_000u64;
+            let lines: Vec<Line> = (0..n).map(|i| global_line(1, i, crate::visibility::SPHERE_SCALE)).collect();
+            let mut buf = CrossingBuffer::default();
+            t.trace_all(&lines, &mut buf).unwrap();
+            let (mut nodes, mut tris, mut past, mut crossed) = (0u64, 0u64, 0u64, 0u64);
+            for (i, l) in lines.iter().enumerate() {
+                let Some(last) = buf.line(i).last().map(|c| c.t) else { continue };
+                crossed += 1;
+                let ray = Ray::new(Vec3A::from(l.origin), Shear::of(l).1, l.tmin, l.tmax);
+                let (inv, org) = (ray.inv_direction.to_array(), ray.origin.to_array());
+                let mut stack = vec![(0u32, 0.0f32)];
+                while let Some((k, entry)) = stack.pop() {
+                    nodes += 1;
+                    past += u64::from(entry > last + 1e-5);
+                    let node = &tree.nodes[k as usize];
+                    for slot in 0..8 {
+                        let mut lo = NODE_EPSILON;
+                        let mut hi = l.tmax;
+                        for (a, (&i, &o)) in inv.iter().zip(&org).enumerate() {
+                            // `plane · inverse − origin · inverse`, fused, as `visit`'s.
+                            let d = |row: usize| node.bounds[row][slot].mul_add(i, -(o * i));
+                            let (near, far) = if i < 0.0 { (2 * a + 1, 2 * a) } else { (2 * a, 2 * a + 1) };
+                            lo = lo.max(d(near));
+                            hi = hi.min(d(far));
+                        }
+                        if lo > hi {
+                            continue;
+                        }
+                        let c = node.child[slot];
+                        if node.imask >> slot & 1 == 1 {
+                            stack.push((c, lo));
+                        } else if c & wide8::LEAF != 0 {
+                            tris += u64::from((c & !wide8::LEAF).count_ones());
+                        }
+                    }
+                }
+            }
+            let per = |x: u64| x as f64 / crossed as f64;
+            eprintln!(
+                "{spec}: {crossed} of {n} lines cross; per crossing line: {:.2} nodes, {:.2} triangles tested, {:.2} crossings kept, {:.3} nodes entered only past the last crossing",
+                per(nodes),
+                per(tris),
+                per(buf.crossings.len() as u64),
+                per(past),
+            );
+        }
+    }
 }

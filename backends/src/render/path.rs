@@ -680,12 +680,25 @@ unsafe fn vertex_draws_avx2(
     let groups = diffuse.len() / 8;
     for (g, group) in diffuse.chunks_exact(8).enumerate() {
         let base = 8 * g;
-        let slot: [usize; 8] = std::array::from_fn(|l| live[group[l] as usize] as usize);
-        let [w1, w2] = [0, 1].map(|w| load8(&slot.map(|p| rng[p].words()[w])));
+        // Written out, not as array maps: their closures were left out of
+        // line in some builds (docs/RENDER.md, *Camera packets on the wide
+        // nodes*).
+        let mut slot = [0usize; 8];
+        let mut state = [[0u32; 8]; 2];
+        for (l, &j) in group.iter().enumerate() {
+            let p = live[j as usize] as usize;
+            slot[l] = p;
+            [state[0][l], state[1][l]] = rng[p].words();
+        }
+        let (w1, w2) = (load8(&state[0]), load8(&state[1]));
         let u: [__m256; 5] = std::array::from_fn(|i| uniform32x8(w1, w2, k + i as u32));
         let [mut l1, mut l2, mut d1, mut d2] = [u[1], u[2], u[3], u[4]];
         if let Some(s) = strata {
-            let s = slot.map(|p| s[p]);
+            let mut lanes = [s[0]; 8];
+            for (x, &p) in lanes.iter_mut().zip(&slot) {
+                *x = s[p];
+            }
+            let s = lanes;
             if !s.iter().all(|s| s.count.is_power_of_two()) {
                 for (l, &p) in slot.iter().enumerate() {
                     put5(draws, base + l, vertex_draw(p, rng, strata, k, words));

@@ -12,7 +12,7 @@ use super::packet::{self, LANES};
 use super::tree8::{self, Tree8};
 use super::watertight::{
     BLOCK, Block, Shear, TriangleLanes, barycentric, before, finish, mask_blocks, push_crossing, sphere_crossings,
-    sphere_hit, triangle_hit, walk_direction,
+    sphere_hit, walk_direction,
 };
 use super::wide8::{self, Wide8};
 use super::{BackendError, Crossing, CrossingBuffer, Hit, Prepared, Tracer};
@@ -221,7 +221,7 @@ impl CpuTracer {
     /// [`TriangleLanes::block`] on the CWBVH walk; [`Shear::hit`]'s
     /// arithmetic per lane), and the best one's
     /// barycentric numerators are kept from its block, not recomputed, and
-    /// divided once the walk ends (the same [`Hit`] as [`triangle_hit`]'s,
+    /// divided once the walk ends (the same [`Hit`] as [`triangle_hit`](super::watertight::triangle_hit)'s,
     /// to the bit).
     pub(crate) fn closest(&self, l: &Line) -> Option<Hit> {
         #[cfg(target_arch = "x86_64")]
@@ -492,8 +492,8 @@ impl CpuTracer {
         #[cfg(target_arch = "x86_64")]
         if let Some((bvh, p)) = self.packet(lines) {
             // SAFETY: as in `occluded_packet`.
-            let best = unsafe { packet::closest(bvh, &self.ordered, &bvh.primitive_indices, &p, stack) };
-            out.extend(lines.iter().zip(best).map(|(l, b)| b.and_then(|(_, tri)| triangle_hit(&self.scene, l, tri))));
+            let best = unsafe { packet::closest(bvh, self.wide(), &self.ordered, &bvh.primitive_indices, &p, stack) };
+            best.hits(&self.scene, lines, out);
             return true;
         }
         let _ = (lines, stack, out);

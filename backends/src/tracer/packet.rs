@@ -44,8 +44,9 @@ use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::ray::safe_inverse;
 
 use super::node8::NODE_EPSILON;
-use super::watertight::{Shear, before};
+use super::watertight::{Shear, barycentric, before, triangle_hit, walk_direction};
 use super::wide8::{LEAF, Node as WideNode, Wide8};
+use super::{Hit, Prepared};
 use crate::lines::Line;
 
 /// Lanes of a packet.
@@ -186,8 +187,32 @@ impl<'a> Packet<'a> {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     unsafe fn crossing(&self, v: &[Vec3A; 3], lanes: u8, ts: &mut Lanes) -> u8 {
+        // SAFETY: AVX2 (this function's contract).
+        let (fast, exact) = unsafe { self.crossing_with::<false>(v, lanes, ts, &mut [[0.0; LANES]; 3]) };
+        fast | exact
+    }
+
+    /// [`Packet::crossing`], the lanes answered by the 8-lane test and
+    /// those answered by [`Shear::hit`] (an exact zero, or axes not
+    /// shared) apart; with `KEEP`, each lane's barycentric numerators
+    /// `[w1, w2, det]` ([`super::watertight::Block::numerators`]'s order:
+    /// [`Shear::hit_barycentric`] divides the same numbers) in `numerators`,
+    /// meaningful for the first mask's lanes.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn crossing_with<const KEEP: bool>(
+        &self,
+        v: &[Vec3A; 3],
+        lanes: u8,
+        ts: &mut Lanes,
+        numerators: &mut [Lanes; 3],
+    ) -> (u8, u8) {
         let Some([kx, ky, kz]) = self.axes else {
-            return self.crossing_each(v, lanes, ts);
+            return (0, self.crossing_each(v, lanes, ts));
         };
         // SAFETY: each load reads one [f32; 8] (unaligned loads are allowed).
         let load = |x: &Lanes| unsafe { _mm256_loadu_ps(x.as_ptr()) };
@@ -225,9 +250,17 @@ impl<'a> Packet<'a> {
             _mm256_cmp_ps::<_CMP_LE_OQ>(t, load(&self.tmax)),
         );
         let fast = _mm256_movemask_ps(_mm256_and_ps(inside, within)) as u8 & lanes & !exact;
-        // SAFETY: `ts` is 8 writable f32 (unaligned stores are allowed).
-        unsafe { _mm256_storeu_ps(ts.as_mut_ptr(), t) };
-        fast | self.crossing_each(v, exact, ts)
+        // SAFETY: `ts` and each row of `numerators` are 8 writable f32
+        // (unaligned stores are allowed).
+        unsafe {
+            _mm256_storeu_ps(ts.as_mut_ptr(), t);
+            if KEEP {
+                _mm256_storeu_ps(numerators[0].as_mut_ptr(), vv);
+                _mm256_storeu_ps(numerators[1].as_mut_ptr(), w);
+                _mm256_storeu_ps(numerators[2].as_mut_ptr(), det);
+            }
+        }
+        (fast, self.crossing_each(v, exact, ts))
     }
 
     /// [`Packet::crossing`] one lane at a time.
@@ -441,7 +474,9 @@ unsafe fn occluded_cwbvh(bvh: &CwBvh, triangles: &[[Vec3A; 3]], packet: &Packet,
 /// The closest crossing `(t, original[k])` of each lane of `packet` with
 /// `triangles` (in BVH order), ties in `t` to the smaller original index:
 /// each lane's walk shrinks its own `tmax` as hits are found, as the
-/// single-ray walk does.
+/// single-ray walk does. The walk is over `wide` where there is one
+/// ([`closest_wide`]), else over `bvh`; the answers are the same (the
+/// smallest `t` of the triangles crossed, whatever the order or the tree).
 ///
 /// # Safety
 /// The CPU must support AVX2.
@@ -449,19 +484,170 @@ unsafe fn occluded_cwbvh(bvh: &CwBvh, triangles: &[[Vec3A; 3]], packet: &Packet,
 #[target_feature(enable = "avx2")]
 pub(crate) unsafe fn closest(
     bvh: &CwBvh,
+    wide: Option<&Wide8>,
     triangles: &[[Vec3A; 3]],
     original: &[u32],
     packet: &Packet,
     stack: &mut Vec<(u32, u8)>,
-) -> [Option<(f32, u32)>; LANES] {
-    let mut best: [Option<(f32, u32)>; LANES] = [None; LANES];
+) -> Closest {
+    // SAFETY: AVX2 (the caller's promise).
+    unsafe {
+        match wide {
+            Some(w) => closest_wide(w, triangles, original, packet, stack),
+            None => closest_cwbvh(bvh, triangles, original, packet, stack),
+        }
+    }
+}
+
+/// What a closest-hit packet walk found, lane by lane.
+pub(crate) struct Closest {
+    /// Each lane's closest crossing `(t, triangle)`.
+    pub(crate) best: [Option<(f32, u32)>; LANES],
+    /// The barycentric numerators `[w1, w2, det]` of each lane's best
+    /// crossing, where the 8-lane test found it.
+    numerators: [[f32; 3]; LANES],
+    /// Lanes whose best crossing [`Shear::hit`] decided (an exact zero):
+    /// their numerators are not kept.
+    exact: u8,
+}
+
+impl Closest {
+    /// Nothing found yet.
+    fn new() -> Self {
+        Self { best: [None; LANES], numerators: [[0.0; 3]; LANES], exact: 0 }
+    }
+
+    /// Takes the crossings at `ts` of triangle `tri` for the lanes of
+    /// `fast` (numerators in `numerators`) and `exact`, where one comes
+    /// [`before`] the lane's best, and shrinks each lane's `tmax` to it.
+    #[inline(always)]
+    fn keep(&mut self, fast: u8, exact: u8, ts: &Lanes, numerators: &[Lanes; 3], tri: u32, tmax: &mut Lanes) {
+        let mut l = fast | exact;
+        while l != 0 {
+            let i = l.trailing_zeros() as usize;
+            l &= l - 1;
+            let t = ts[i];
+            if before(t, tri, self.best[i]) {
+                self.best[i] = Some((t, tri));
+                if exact >> i & 1 == 1 {
+                    self.exact |= 1 << i;
+                } else {
+                    self.exact &= !(1 << i);
+                    self.numerators[i] = [numerators[0][i], numerators[1][i], numerators[2][i]];
+                }
+            }
+            if t < tmax[i] {
+                tmax[i] = t;
+            }
+        }
+    }
+
+    /// Each lane's [`Hit`] on `scene` (whose triangles the walk tested;
+    /// lane `i` is `lines[i]`), appended to `out`: from the kept
+    /// numerators, which is [`triangle_hit`]'s answer to the bit (the same
+    /// `t`, and the same numbers divided), or by [`triangle_hit`] where
+    /// [`Shear::hit`] decided the lane.
+    pub(crate) fn hits(&self, scene: &Prepared, lines: &[Line], out: &mut Vec<Option<Hit>>) {
+        out.extend(lines.iter().enumerate().map(|(i, l)| {
+            let (t, tri) = self.best[i]?;
+            if self.exact >> i & 1 == 1 {
+                return triangle_hit(scene, l, tri);
+            }
+            let n = scene.normals[tri as usize];
+            Some(Hit {
+                t,
+                patch: scene.triangle_patch[tri as usize],
+                primitive: tri,
+                cos: n.dot(walk_direction(l)),
+                barycentric: barycentric(self.numerators[i]),
+                normal: n.into(),
+            })
+        }));
+    }
+}
+
+/// [`closest`] over the wide tree, as [`occluded_wide`] walks it: each
+/// node's eight boxes tested against the lanes from six aligned rows
+/// ([`wide_node`], no quantised planes decoded), each lane against its own
+/// shrinking `tmax`; the hit leaf children's triangles tested against
+/// their lanes, then the internal children pushed in the CWBVH walk's
+/// order.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn closest_wide(
+    tree: &Wide8,
+    triangles: &[[Vec3A; 3]],
+    original: &[u32],
+    packet: &Packet,
+    stack: &mut Vec<(u32, u8)>,
+) -> Closest {
+    let mut best = Closest::new();
+    stack.clear();
+    if tree.nodes.is_empty() {
+        return best;
+    }
+    let mut tmax = packet.tmax;
+    let oct = (packet.oct_inv4 & 7) as usize;
+    stack.push((0, ((1u16 << packet.len()) - 1) as u8));
+    let (mut ts, mut numerators) = ([0.0; LANES], [[0.0; LANES]; 3]);
+    while let Some((index, lanes)) = stack.pop() {
+        let n = &tree.nodes[index as usize];
+        let occupied = n.child.iter().enumerate().fold(0u32, |m, (c, &x)| m | u32::from(x != 0) << c);
+        // SAFETY: AVX2 (the caller's promise); reads one [f32; 8].
+        let hit = unsafe { wide_node(packet, n, occupied, _mm256_loadu_ps(tmax.as_ptr()), lanes) };
+        let mut leaves = occupied & !n.imask;
+        while leaves != 0 {
+            let c = leaves.trailing_zeros() as usize;
+            leaves &= leaves - 1;
+            if hit[c] == 0 {
+                continue;
+            }
+            let mut prims = n.child[c] & !LEAF;
+            while prims != 0 {
+                let k = (n.prim_base + prims.trailing_zeros()) as usize;
+                prims &= prims - 1;
+                // SAFETY: AVX2 as above.
+                let (fast, exact) =
+                    unsafe { packet.crossing_with::<true>(&triangles[k], hit[c], &mut ts, &mut numerators) };
+                best.keep(fast, exact, &ts, &numerators, original[k], &mut tmax);
+            }
+        }
+        // Internal children, lowest traversal priority first, as in
+        // [`occluded_wide`].
+        for q in 0..8 {
+            let c = q ^ oct;
+            if hit[c] != 0 && n.imask & (1 << c) != 0 {
+                stack.push((n.child[c], hit[c]));
+            }
+        }
+    }
+    best
+}
+
+/// [`closest`] over the compressed nodes.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn closest_cwbvh(
+    bvh: &CwBvh,
+    triangles: &[[Vec3A; 3]],
+    original: &[u32],
+    packet: &Packet,
+    stack: &mut Vec<(u32, u8)>,
+) -> Closest {
+    let mut best = Closest::new();
     stack.clear();
     if bvh.nodes.is_empty() {
         return best;
     }
     let mut tmax = packet.tmax;
     stack.push((0, ((1u16 << packet.len()) - 1) as u8));
-    let mut ts = [0.0; LANES];
+    let (mut ts, mut numerators) = ([0.0; LANES], [[0.0; LANES]; 3]);
     while let Some((index, lanes)) = stack.pop() {
         let node = &bvh.nodes[index as usize];
         // SAFETY: AVX2 (the caller's promise).
@@ -472,18 +658,9 @@ pub(crate) unsafe fn closest(
             }
             for k in leaf(node, c) {
                 // SAFETY: AVX2 as above.
-                let mut l = unsafe { packet.crossing(&triangles[k], lanes, &mut ts) };
-                while l != 0 {
-                    let i = l.trailing_zeros() as usize;
-                    l &= l - 1;
-                    let (t, tri) = (ts[i], original[k]);
-                    if before(t, tri, best[i]) {
-                        best[i] = Some((t, tri));
-                    }
-                    if t < tmax[i] {
-                        tmax[i] = t;
-                    }
-                }
+                let (fast, exact) =
+                    unsafe { packet.crossing_with::<true>(&triangles[k], lanes, &mut ts, &mut numerators) };
+                best.keep(fast, exact, &ts, &numerators, original[k], &mut tmax);
             }
         }
         push_children(node, &hit, packet.oct_inv4, stack);
@@ -546,6 +723,90 @@ mod tests {
                 }
             }
             assert!(packets > 100 && entered > 1000, "{spec}: {packets} packets, {entered} children entered");
+        }
+    }
+
+    /// Closest hits walked over the wide tree and over the CWBVH give every
+    /// lane [`triangle_hit`]'s [`Hit`] (bit for bit: the kept numerators
+    /// divided as it divides them) of the nearest triangle crossed within
+    /// its `[tmin, tmax]`, ties to the smaller index, found by testing
+    /// every triangle; for packets of camera rays (one eye, nearby
+    /// directions, as the renderer sends them) and of parallel lines, cut
+    /// short and not, and toward triangles' vertices.
+    #[test]
+    fn wide_and_compressed_packet_closest_hits_agree_with_every_triangle() {
+        if !has_avx2() {
+            return;
+        }
+        for spec in ["cube-enclosure:6", "cubes-room:16", "geosphere", "table-chairs:2", "mirror-room", "cornell-box"] {
+            let p = Prepared::new(&built_in(spec).unwrap());
+            let bvh = crate::tracer::cpu::build_bvh(&p, bvh_input(&p).1);
+            let ordered: Vec<[Vec3A; 3]> = bvh.primitive_indices.iter().map(|&i| p.triangles[i as usize]).collect();
+            let wide = Wide8::new(&bvh, &ordered).unwrap();
+            let mut stack = Vec::new();
+            let (mut packets, mut hits, mut misses) = (0, 0, 0);
+            for g in 0..400u64 {
+                let r = crate::lines::LineRng::new(11, g);
+                let eye = glam::DVec3::new(r.uniform(0), r.uniform(1), r.uniform(2)) * 1.2 - 0.6;
+                let target = glam::DVec3::new(r.uniform(3), r.uniform(4), r.uniform(5)) * 2.0 - 1.0;
+                let lines: Vec<Line> = (0..8)
+                    .map(|i| match g % 3 {
+                        0 => {
+                            let q = target + glam::DVec3::new(0.01 * f64::from(i), 0.004 * f64::from(i % 3), 0.0);
+                            Line::ray(eye, (q - eye).normalize(), 0.0, [1e5, 0.5, 0.05][i as usize % 3])
+                        }
+                        // Toward the vertices of one triangle and its
+                        // neighbours in the list (edges shared).
+                        1 => {
+                            let t = p.triangles[(g as usize * 7 + i as usize / 3) % p.triangles.len()];
+                            let q = t[i as usize % 3].as_dvec3();
+                            Line::ray(eye, (q - eye).normalize(), 0.0, 1e5)
+                        }
+                        _ => {
+                            let mut l = global_line(3, g, 1.1);
+                            l.origin[i as usize % 3] += 1e-3 * i as f32;
+                            l.tmax *= [1.0, 0.5, 0.1][i as usize % 3];
+                            l
+                        }
+                    })
+                    .collect();
+                let Some(pk) = Packet::new(&lines) else { continue };
+                packets += 1;
+                let (mut w, mut c) = (Vec::new(), Vec::new());
+                // SAFETY: AVX2 checked above.
+                let (bw, bc) = unsafe {
+                    (
+                        closest_wide(&wide, &ordered, &bvh.primitive_indices, &pk, &mut stack),
+                        closest_cwbvh(&bvh, &ordered, &bvh.primitive_indices, &pk, &mut stack),
+                    )
+                };
+                bw.hits(&p, &lines, &mut w);
+                bc.hits(&p, &lines, &mut c);
+                for (i, l) in lines.iter().enumerate() {
+                    let (shear, _) = Shear::of(l);
+                    let mut best = None;
+                    for (k, t) in p.triangles.iter().enumerate() {
+                        if let Some(t) = shear.hit(t).filter(|&t| t >= l.tmin && t <= l.tmax)
+                            && before(t, k as u32, best)
+                        {
+                            best = Some((t, k as u32));
+                        }
+                    }
+                    let want = best.and_then(|(_, k)| triangle_hit(&p, l, k));
+                    let bits = |h: Option<Hit>| {
+                        h.map(|h| (h.t.to_bits(), h.primitive, h.cos.to_bits(), h.barycentric.map(f32::to_bits)))
+                    };
+                    assert_eq!(bits(w[i]), bits(want), "{spec}: packet {g} lane {i}, wide tree");
+                    assert_eq!(bits(c[i]), bits(want), "{spec}: packet {g} lane {i}, CWBVH");
+                    assert_eq!(w[i], want);
+                    if want.is_some() {
+                        hits += 1;
+                    } else {
+                        misses += 1;
+                    }
+                }
+            }
+            assert!(packets > 150 && hits > 500 && misses > 50, "{spec}: {packets} packets, {hits}/{misses}");
         }
     }
 

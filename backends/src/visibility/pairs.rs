@@ -242,6 +242,19 @@ unsafe impl Send for Slots {}
 // SAFETY: as above: no index is written by two threads, none is read.
 unsafe impl Sync for Slots {}
 
+impl Slots {
+    /// Writes `p` into slot `i`.
+    ///
+    /// # Safety
+    /// `i` is below the capacity of the vector `self` points into, and no
+    /// other thread writes slot `i`.
+    #[inline]
+    unsafe fn write(&self, i: u32, p: PairCount) {
+        // SAFETY: the caller's contract.
+        unsafe { self.0.add(i as usize).write(p) };
+    }
+}
+
 /// The full sorted pair list from the sorted unordered pairs `upper`
 /// (`from <= to`), given as consecutive sorted pieces: `(i, j)` and
 /// `(j, i)` with the same count, the diagonal doubled; `None` if a doubled
@@ -284,26 +297,26 @@ fn both_directions(upper: &[&[PairCount]]) -> Option<Vec<PairCount>> {
             at += u64::from(c);
         }
     }
-    let total = usize::try_from(at).ok()?;
+    // The last slot handed out is below `at`, which must fit too.
+    let total = u32::try_from(at).ok()? as usize;
     let mut out: Vec<PairCount> = Vec::with_capacity(total);
     let slots = Slots(out.as_mut_ptr());
     let fits = upper
         .par_iter()
         .zip(per_piece.par_iter_mut())
         .map(|(piece, (own, mirrored))| {
-            let slots = slots;
             for p in piece.iter() {
                 let entry = if p.from == p.to { PairCount { count: p.count.checked_mul(2)?, ..*p } } else { *p };
                 let o = &mut own[p.from as usize];
                 // SAFETY: the slots of a row and kind are handed out once
                 // each by the prefix sums above, all below `total`, the
                 // capacity of `out`; no piece writes another's slot.
-                unsafe { slots.0.add(*o as usize).write(entry) };
+                unsafe { slots.write(*o, entry) };
                 *o += 1;
                 if p.from != p.to {
                     let m = &mut mirrored[p.to as usize];
                     // SAFETY: as above.
-                    unsafe { slots.0.add(*m as usize).write(PairCount { from: p.to, to: p.from, count: p.count }) };
+                    unsafe { slots.write(*m, PairCount { from: p.to, to: p.from, count: p.count }) };
                     *m += 1;
                 }
             }

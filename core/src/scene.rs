@@ -38,7 +38,12 @@ pub struct SceneMeasures {
 }
 
 impl SceneMeasures {
-    fn from_nats(patches: usize, unsampled: usize, hp: f64, hs: f64, base: Base) -> Self {
+    /// The measures in `base` from `H_P` and `H_S` in nats (eqs. (43),
+    /// (39)–(41)): `H_J` and `I_S` by eqs. (44)–(45), the ratios by (50)–(51).
+    /// Measures computed in nats give the same bits in another base through
+    /// this as computed there.
+    #[must_use]
+    pub fn from_nats(patches: usize, unsampled: usize, hp: f64, hs: f64, base: Base) -> Self {
         let k = base.per_nat();
         let hj = hp + hs;
         let is = hp - hs;

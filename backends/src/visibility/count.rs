@@ -442,9 +442,10 @@ pub fn count_visibility(
     let sampler = opts.local.then(|| Sampler::new(prepared));
     let radius = SPHERE_SCALE;
     // Chunks per wave: a wave ends at a join (the merge of the last one, its
-    // own tracing), where a thread may wait up to a chunk: 16 chunks a thread
-    // make a quarter as many joins as 4 did (an estimated ~6% of a 2-thread run).
-    let wave = (rayon::current_num_threads() as u64 * 16).max(16);
+    // own tracing), where a thread may wait up to a chunk (~7 ms). 64 chunks
+    // a thread make 6 joins a block at 10^8 lines, not 24 (16 a thread); at
+    // most 256 chunks (~0.3 MB of results each, two waves alive at a time).
+    let wave = (rayon::current_num_threads() as u64 * 64).clamp(16, 256);
     let overflow = |what: &str| CountsError::Overflow(what.into());
     let mut out = Vec::new();
     let mut endpoints = vec![0u64; n];

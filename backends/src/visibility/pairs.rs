@@ -154,7 +154,9 @@ impl Accumulator {
     /// # Errors
     /// [`CountsError::Overflow`] if a doubled diagonal count would pass 64 bits.
     pub(super) fn take_pairs(&mut self) -> Result<Vec<PairCount>, CountsError> {
-        let mut pairs: Vec<PairCount> = match &mut self.store {
+        let too_big = || CountsError::Overflow("a pair count".into());
+        // Sorted pieces, in order: their concatenation is the sorted list.
+        let pieces: Vec<Vec<PairCount>> = match &mut self.store {
             Store::Dense { n, counts, touched, overflow } => {
                 let n = *n;
                 let pair = |idx: usize, c: u32| PairCount {
@@ -162,17 +164,16 @@ impl Accumulator {
                     to: (idx % n) as u32,
                     count: u64::from(c),
                 };
-                let mut v: Vec<PairCount>;
-                if let Some(mut t) = touched.take() {
+                let mut pieces: Vec<Vec<PairCount>> = if let Some(mut t) = touched.take() {
                     // Distinct cells: any sort gives the same order; this
-                    // one runs on every thread (the rest wait for it).
+                    // one runs on every thread.
                     t.par_sort_unstable();
-                    v = t.iter().map(|&idx| pair(idx as usize, std::mem::take(&mut counts[idx as usize]))).collect();
+                    vec![t.iter().map(|&idx| pair(idx as usize, std::mem::take(&mut counts[idx as usize]))).collect()]
                 } else {
-                    // The sweep in pieces on every thread (the rest wait for
-                    // it), joined in order: the same sorted list.
-                    let piece = (counts.len() / (rayon::current_num_threads() * 8)).next_multiple_of(16).max(16);
-                    let parts: Vec<Vec<PairCount>> = counts
+                    // The sweep in pieces on every thread, kept in order:
+                    // the same sorted list.
+                    let piece = (counts.len() / pieces_per_thread()).next_multiple_of(16).max(16);
+                    counts
                         .par_chunks_mut(piece)
                         .enumerate()
                         .map(|(p, part)| {
@@ -187,67 +188,145 @@ impl Accumulator {
                             }
                             v
                         })
-                        .collect();
-                    v = parts.concat();
-                }
+                        .collect()
+                };
                 *touched = Some(Vec::new());
-                for (k, c) in overflow.drain() {
-                    let (i, j) = ((k >> 32) as u32, k as u32);
-                    match v.binary_search_by_key(&(i, j), |p| (p.from, p.to)) {
-                        Ok(pos) => v[pos].count += c,
-                        Err(pos) => v.insert(pos, PairCount { from: i, to: j, count: c }),
+                if !overflow.is_empty() {
+                    // Counts past 2^32 for one pair (rare): into one list.
+                    let mut v = pieces.concat();
+                    for (k, c) in overflow.drain() {
+                        let (i, j) = ((k >> 32) as u32, k as u32);
+                        match v.binary_search_by_key(&(i, j), |p| (p.from, p.to)) {
+                            Ok(pos) => v[pos].count += c,
+                            Err(pos) => v.insert(pos, PairCount { from: i, to: j, count: c }),
+                        }
                     }
+                    pieces = vec![v];
                 }
-                v
+                pieces
             }
             Store::Sparse(map) => {
-                map.drain().map(|(k, c)| PairCount { from: (k >> 32) as u32, to: k as u32, count: c }).collect()
+                let mut v: Vec<PairCount> =
+                    map.drain().map(|(k, c)| PairCount { from: (k >> 32) as u32, to: k as u32, count: c }).collect();
+                v.par_sort_unstable();
+                vec![v]
             }
         };
-        pairs.sort_unstable();
-        if self.symmetric {
-            pairs = both_directions(&pairs).ok_or_else(|| CountsError::Overflow("a pair count".into()))?;
+        if !self.symmetric {
+            return Ok(pieces.concat());
         }
-        Ok(pairs)
+        let pieces: Vec<&[PairCount]> = pieces.iter().map(|p| &p[..]).collect();
+        // One piece per row set: the per-piece row counts below cost
+        // `rows` entries per piece (a sparse store may have 10^6 rows).
+        let dense = matches!(self.store, Store::Dense { .. });
+        if dense {
+            both_directions(&pieces).ok_or_else(too_big)
+        } else {
+            both_directions(&[&pieces.concat()]).ok_or_else(too_big)
+        }
+    }
+}
+
+/// Pieces of the dense sweep per rayon thread.
+fn pieces_per_thread() -> usize {
+    rayon::current_num_threads() * 8
+}
+
+/// A pointer into the output of [`both_directions`], written by every
+/// thread at indices that no two pieces share.
+#[derive(Clone, Copy)]
+struct Slots(*mut PairCount);
+// SAFETY: `Slots` is only written through at disjoint indices (see
+// `both_directions`), each inside the allocation it points into.
+unsafe impl Send for Slots {}
+// SAFETY: as above: no index is written by two threads, none is read.
+unsafe impl Sync for Slots {}
+
+impl Slots {
+    /// Writes `p` into slot `i`.
+    ///
+    /// # Safety
+    /// `i` is below the capacity of the vector `self` points into, and no
+    /// other thread writes slot `i`.
+    #[inline]
+    unsafe fn write(&self, i: u32, p: PairCount) {
+        // SAFETY: the caller's contract.
+        unsafe { self.0.add(i as usize).write(p) };
     }
 }
 
 /// The full sorted pair list from the sorted unordered pairs `upper`
-/// (`from <= to`): `(i, j)` and `(j, i)` with the same count, the diagonal
-/// doubled; `None` if a doubled count passes 64 bits. A counting sort by
-/// row, no comparison sort: row `r` is its mirrored entries `(r, i < r)`,
-/// in the order of `i` (the order `upper` lists them), then its own.
-fn both_directions(upper: &[PairCount]) -> Option<Vec<PairCount>> {
-    let rows = upper.iter().map(|p| p.to as usize + 1).max().unwrap_or(0);
-    // start[r]: where row r's mirrored entries begin; own[r]: its own.
-    let mut start = vec![0usize; rows + 1];
-    for p in upper {
-        start[p.from as usize + 1] += 1;
-        if p.from != p.to {
-            start[p.to as usize + 1] += 1;
-        }
-    }
+/// (`from <= to`), given as consecutive sorted pieces: `(i, j)` and
+/// `(j, i)` with the same count, the diagonal doubled; `None` if a doubled
+/// count passes 64 bits (or the list would have 2^32 entries: 64 GB). A
+/// counting sort by row, no comparison sort: row `r` is its mirrored
+/// entries `(r, i < r)`, in the order of `i` (the order `upper` lists
+/// them), then its own. Each piece counts its entries per row, the prefix
+/// sums give every piece its slots in each row, and the pieces are written
+/// out side by side (the serial version of this, with the zeroing of its
+/// output, was most of a block's serial step: ~5% of a 2-thread run).
+fn both_directions(upper: &[&[PairCount]]) -> Option<Vec<PairCount>> {
+    let rows = upper.par_iter().filter_map(|p| p.iter().map(|p| p.to as usize + 1).max()).max().unwrap_or(0);
+    // Per piece: its own entries per row, then its mirrored ones; as
+    // slots, all below 2^32 (the dense store's 2·n² ≤ 2·DENSE_LIMIT).
+    let mut per_piece: Vec<(Vec<u32>, Vec<u32>)> = upper
+        .par_iter()
+        .map(|piece| {
+            let (mut own, mut mirrored) = (vec![0u32; rows], vec![0u32; rows]);
+            for p in piece.iter() {
+                own[p.from as usize] += 1;
+                if p.from != p.to {
+                    mirrored[p.to as usize] += 1;
+                }
+            }
+            (own, mirrored)
+        })
+        .collect();
+    // Counts into first slots: row r's mirrored entries from piece 0, 1,
+    // ..., then its own entries from piece 0, 1, ...
+    let mut at = 0u64;
     for r in 0..rows {
-        start[r + 1] += start[r];
-    }
-    let mut mirrored = vec![0usize; rows];
-    for p in upper.iter().filter(|p| p.from != p.to) {
-        mirrored[p.to as usize] += 1;
-    }
-    let mut own: Vec<usize> = start[..rows].iter().zip(&mirrored).map(|(s, m)| s + m).collect();
-    let mut next = start;
-    let mut out = vec![PairCount::default(); upper.len() * 2 - upper.iter().filter(|p| p.from == p.to).count()];
-    for p in upper {
-        if p.from == p.to {
-            out[own[p.from as usize]] = PairCount { count: p.count.checked_mul(2)?, ..*p };
-        } else {
-            out[own[p.from as usize]] = *p;
-            let m = &mut next[p.to as usize];
-            out[*m] = PairCount { from: p.to, to: p.from, count: p.count };
-            *m += 1;
+        for (_, m) in per_piece.iter_mut() {
+            let c = m[r];
+            m[r] = u32::try_from(at).ok()?;
+            at += u64::from(c);
         }
-        own[p.from as usize] += 1;
+        for (o, _) in per_piece.iter_mut() {
+            let c = o[r];
+            o[r] = u32::try_from(at).ok()?;
+            at += u64::from(c);
+        }
     }
+    // The last slot handed out is below `at`, which must fit too.
+    let total = u32::try_from(at).ok()? as usize;
+    let mut out: Vec<PairCount> = Vec::with_capacity(total);
+    let slots = Slots(out.as_mut_ptr());
+    let fits = upper
+        .par_iter()
+        .zip(per_piece.par_iter_mut())
+        .map(|(piece, (own, mirrored))| {
+            for p in piece.iter() {
+                let entry = if p.from == p.to { PairCount { count: p.count.checked_mul(2)?, ..*p } } else { *p };
+                let o = &mut own[p.from as usize];
+                // SAFETY: the slots of a row and kind are handed out once
+                // each by the prefix sums above, all below `total`, the
+                // capacity of `out`; no piece writes another's slot.
+                unsafe { slots.write(*o, entry) };
+                *o += 1;
+                if p.from != p.to {
+                    let m = &mut mirrored[p.to as usize];
+                    // SAFETY: as above.
+                    unsafe { slots.write(*m, PairCount { from: p.to, to: p.from, count: p.count }) };
+                    *m += 1;
+                }
+            }
+            Some(())
+        })
+        .collect::<Option<Vec<()>>>();
+    fits?;
+    // SAFETY: every one of the `total` slots was written exactly once: the
+    // prefix sums above count each entry of each piece into one slot.
+    unsafe { out.set_len(total) };
     Some(out)
 }
 
@@ -297,5 +376,49 @@ mod tests {
             }
             assert!(plain.take_pairs().unwrap().is_empty() && sym.take_pairs().unwrap().is_empty());
         }
+    }
+
+    /// The pieces written side by side give the sorted list of both
+    /// directions whatever the cut: one piece, many, empty ones, a row
+    /// split across pieces; and a doubled diagonal past 64 bits is refused.
+    #[test]
+    fn both_directions_is_the_sorted_mirror_for_any_cut() {
+        let mut state = 7u64;
+        let mut next = |m: u64| {
+            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            (state >> 33) % m
+        };
+        let mut upper: Vec<PairCount> = (0..5_000)
+            .map(|_| {
+                let (i, j) = (next(300) as u32, next(300) as u32);
+                PairCount { from: i.min(j), to: i.max(j), count: 1 + next(1_000) }
+            })
+            .collect();
+        upper.sort_unstable_by_key(|p| (p.from, p.to));
+        upper.dedup_by_key(|p| (p.from, p.to));
+        let mut want: Vec<PairCount> = upper
+            .iter()
+            .flat_map(|p| {
+                if p.from == p.to {
+                    vec![PairCount { count: 2 * p.count, ..*p }]
+                } else {
+                    vec![*p, PairCount { from: p.to, to: p.from, count: p.count }]
+                }
+            })
+            .collect();
+        want.sort_unstable();
+        for cuts in [vec![], vec![0, 0, 17], vec![1, 2, 3, 2_000], (1..40).map(|k| k * 97).collect(), vec![4_999]] {
+            let mut pieces: Vec<&[PairCount]> = Vec::new();
+            let mut at = 0;
+            for c in cuts.into_iter().map(|c: usize| c.min(upper.len())) {
+                pieces.push(&upper[at.min(c)..c]);
+                at = at.max(c);
+            }
+            pieces.push(&upper[at..]);
+            assert_eq!(both_directions(&pieces).unwrap(), want, "{} pieces", pieces.len());
+        }
+        assert_eq!(both_directions(&[]).unwrap(), vec![]);
+        let huge = [PairCount { from: 3, to: 3, count: 1 << 63 }];
+        assert!(both_directions(&[&huge]).is_none());
     }
 }

@@ -331,35 +331,7 @@ pub(super) unsafe fn walk<const AVX2: bool, const ORDERED: bool, F: FnMut(&Leaf8
                     item = n.child[a];
                     continue;
                 }
-                // Three or more: by entry distance (its bits order as the
-                // values do, all being at least `NODE_EPSILON > 0`), ties
-                // by slot; all but the nearest pushed, farthest first.
-                let key = |i: usize| u64::from(near[i].to_bits()) << 3 | i as u64;
-                let mut keys = [0u64; 8];
-                keys[0] = key(first);
-                keys[1] = key(second);
-                let mut k = 2;
-                while m != 0 {
-                    keys[k] = key(m.trailing_zeros() as usize);
-                    m &= m - 1;
-                    k += 1;
-                }
-                // Insertion sort, descending (k ≤ 8).
-                for a in 1..k {
-                    let v = keys[a];
-                    let mut j = a;
-                    while j > 0 && keys[j - 1] < v {
-                        keys[j] = keys[j - 1];
-                        j -= 1;
-                    }
-                    keys[j] = v;
-                }
-                for &v in &keys[..k - 1] {
-                    let i = (v & 7) as usize;
-                    stack[depth] = MaybeUninit::new((n.child[i], near[i]));
-                    depth += 1;
-                }
-                item = n.child[(keys[k - 1] & 7) as usize];
+                item = super::wide8::push_by_entry(&n.child, &near, first, second, m, &mut stack, &mut depth);
                 continue;
             }
         }

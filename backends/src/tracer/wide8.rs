@@ -335,6 +335,50 @@ unsafe fn leaf_prims_avx2(n: &Node, hit: u32) -> u32 {
     }
 }
 
+/// The descent of an ordered walk where three or more children are hit:
+/// `first`, `second` and the slots left in `m`, sorted by entry distance
+/// (its bits order as the values do, all being at least `NODE_EPSILON >
+/// 0`), ties by slot; all but the nearest pushed, farthest first, and the
+/// nearest returned to be visited next. Shared by this tree's walk and
+/// [`Tree8`](super::tree8::Tree8)'s.
+#[inline(always)]
+pub(super) fn push_by_entry(
+    child: &[u32; 8],
+    near: &[f32; 8],
+    first: usize,
+    second: usize,
+    mut m: u32,
+    stack: &mut [MaybeUninit<(u32, f32)>; STACK],
+    depth: &mut usize,
+) -> u32 {
+    let key = |i: usize| u64::from(near[i].to_bits()) << 3 | i as u64;
+    let mut keys = [0u64; 8];
+    keys[0] = key(first);
+    keys[1] = key(second);
+    let mut k = 2;
+    while m != 0 {
+        keys[k] = key(m.trailing_zeros() as usize);
+        m &= m - 1;
+        k += 1;
+    }
+    // Insertion sort, descending (k ≤ 8).
+    for a in 1..k {
+        let v = keys[a];
+        let mut j = a;
+        while j > 0 && keys[j - 1] < v {
+            keys[j] = keys[j - 1];
+            j -= 1;
+        }
+        keys[j] = v;
+    }
+    for &v in &keys[..k - 1] {
+        let i = (v & 7) as usize;
+        stack[*depth] = MaybeUninit::new((child[i], near[i]));
+        *depth += 1;
+    }
+    child[(keys[k - 1] & 7) as usize]
+}
+
 /// Walks `tree` along `ray`, calling `leaves(node, mask, &mut tmax)` with
 /// each visited node and the primitives of its hit leaf children (bit `j`
 /// of `mask`, below 24: primitive `node.prim_base + j` in BVH order, lane
@@ -443,35 +487,7 @@ pub(super) unsafe fn walk_nodes<const AVX2: bool, const ORDERED: bool, F: FnMut(
                 node = n.child[a];
                 continue;
             }
-            // Three or more: sort by entry distance (its bits order as the
-            // values do, all being at least `NODE_EPSILON > 0`), ties by
-            // slot, and push all but the nearest, farthest first.
-            let key = |i: usize| u64::from(near[i].to_bits()) << 3 | i as u64;
-            let mut keys = [0u64; 8];
-            keys[0] = key(first);
-            keys[1] = key(second);
-            let mut k = 2;
-            while m != 0 {
-                keys[k] = key(m.trailing_zeros() as usize);
-                m &= m - 1;
-                k += 1;
-            }
-            // Insertion sort, descending (k ≤ 8).
-            for a in 1..k {
-                let v = keys[a];
-                let mut j = a;
-                while j > 0 && keys[j - 1] < v {
-                    keys[j] = keys[j - 1];
-                    j -= 1;
-                }
-                keys[j] = v;
-            }
-            for &v in &keys[..k - 1] {
-                let i = (v & 7) as usize;
-                stack[depth] = MaybeUninit::new((n.child[i], near[i]));
-                depth += 1;
-            }
-            node = n.child[(keys[k - 1] & 7) as usize];
+            node = push_by_entry(&n.child, &near, first, second, m, &mut stack, &mut depth);
             continue;
         }
         while depth > 0 {

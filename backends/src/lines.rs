@@ -185,7 +185,7 @@ fn global_line_from(rng: &LineRng, draws: [u32; 4], radius: f64) -> Line {
 /// appended to `out`: [`global_line_of`] for each, bit for bit. With AVX2
 /// 8 lines go at once: the integer hashing (each line's generator and its
 /// first draws, 13 of the ~15 [`pcg`] calls of a line) in 8 lanes, the
-/// floating-point rest in two halves of 4 ([`global_lines8`]); only a
+/// floating-point rest in two halves of 4 (`global_lines8`); only a
 /// rejected pair of draws goes through the scalar code.
 pub fn global_lines_of(seed: SeedHash, first: u64, stride: u64, count: u64, radius: f64, out: &mut Vec<Line>) {
     let mut k = 0;

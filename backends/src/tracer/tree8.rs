@@ -58,9 +58,10 @@ impl Tree8 {
     /// Collapses `bvh` (over `triangles`: its primitive `k` is triangle
     /// `bvh.primitive_indices[k]`) into 8-wide nodes whose leaves hold up
     /// to `leaf` (1..=8) triangles; `None` if some walk of it could need
-    /// more than [`STACK`] stack entries or if its nodes or blocks cannot
-    /// be allocated (fallible reservations as they grow): then the decoded
-    /// CWBVH's walk serves, with the same answers.
+    /// [`STACK`] stack entries or more, if a leaf of `bvh` holds more than
+    /// eight triangles, if there are 2^28 primitives or more, or if its
+    /// nodes or blocks cannot be allocated (fallible reservations as they
+    /// grow): then the decoded CWBVH's walk serves, with the same answers.
     pub(crate) fn new(bvh: &Bvh2, triangles: &[[Vec3A; 3]], leaf: usize) -> Option<Self> {
         assert!((1..=MAX_LEAF).contains(&leaf), "leaves of 1 to 8 triangles");
         if bvh.nodes.is_empty() {

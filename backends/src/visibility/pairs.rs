@@ -266,6 +266,12 @@ impl Slots {
 /// out side by side (the serial version of this, with the zeroing of its
 /// output, was most of a block's serial step: ~5% of a 2-thread run).
 fn both_directions(upper: &[&[PairCount]]) -> Option<Vec<PairCount>> {
+    // The per-row counters below are `u32`: no piece may hold 2^32 entries
+    // or more, or a row's count could wrap and two entries share a slot
+    // (unreachable under `MAX_PATCHES`, refused rather than assumed).
+    if upper.iter().any(|p| u32::try_from(p.len()).is_err()) {
+        return None;
+    }
     let rows = upper.par_iter().filter_map(|p| p.iter().map(|p| p.to as usize + 1).max()).max().unwrap_or(0);
     // Per piece: its own entries per row, then its mirrored ones; as
     // slots, all below 2^32 (the dense store's 2·n² ≤ 2·DENSE_LIMIT).
@@ -309,8 +315,10 @@ fn both_directions(upper: &[&[PairCount]]) -> Option<Vec<PairCount>> {
                 let entry = if p.from == p.to { PairCount { count: p.count.checked_mul(2)?, ..*p } } else { *p };
                 let o = &mut own[p.from as usize];
                 // SAFETY: the slots of a row and kind are handed out once
-                // each by the prefix sums above, all below `total`, the
-                // capacity of `out`; no piece writes another's slot.
+                // each by the prefix sums above (exact: no piece holds
+                // 2^32 entries, checked at the top, so no count wrapped),
+                // all below `total`, the capacity of `out`; no piece writes
+                // another's slot.
                 unsafe { slots.write(*o, entry) };
                 *o += 1;
                 if p.from != p.to {

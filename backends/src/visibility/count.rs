@@ -81,7 +81,8 @@ impl Endpoints {
 }
 
 struct ChunkResult {
-    keys: Vec<(u64, u64)>,
+    /// One pair key per segment, in the order the lines gave them.
+    keys: Vec<u64>,
     background: Vec<(u32, u64)>,
     cont: ContinuousSums,
     /// Segment endpoints: `log(A_T F)` summed per patch.
@@ -300,18 +301,10 @@ fn process_chunk(
         factors.clear();
         ends.clear();
     }
-    keys.sort_unstable();
-    let mut runs: Vec<(u64, u64)> = Vec::new();
-    for k in keys {
-        match runs.last_mut() {
-            Some((last, c)) if *last == k => *c += 1,
-            _ => runs.push((k, 1)),
-        }
-    }
     if overflow {
         return Err(CountsError::Overflow("the I_S^c sum of a chunk".into()));
     }
-    Ok(ChunkResult { keys: runs, background, cont, endpoint, segments, escaped })
+    Ok(ChunkResult { keys, background, cont, endpoint, segments, escaped })
 }
 
 /// `itgfx_core::log_area_form_factor(total_area, f)` (eq. (59)) of each of
@@ -468,7 +461,7 @@ pub fn count_visibility(
         let mut merge = |results: Vec<Result<ChunkResult, CountsError>>| -> Result<(), CountsError> {
             for r in results {
                 let r = r?;
-                acc.add(&r.keys);
+                acc.add_keys(&r.keys);
                 for (i, c) in r.background {
                     let x = &mut background[i as usize];
                     *x = x.checked_add(c).ok_or_else(|| overflow("a background count"))?;

@@ -1,17 +1,19 @@
 //! Accumulating a block's pair counts `N_ij` (Part III eq. (30)) from the
-//! sorted runs of keys each chunk of lines produces.
+//! keys each chunk of lines produces, one per segment, unsorted.
 //!
 //! **Symmetric counts.** A global-line segment joining patches `i` and `j`
 //! counts once for `i → j` and once for `j → i` (Part III Fig. 8), so
 //! `N_ij = N_ji`: global lines hand in one key per segment, `(min, max)`,
 //! and [`Accumulator::take_pairs`] writes both directions out (a segment
 //! from a patch back to itself counts twice on the diagonal, as two keys
-//! did). Half the keys to sort and add, half the matrix touched.
+//! did). Half the keys to add, half the matrix touched.
 //!
 //! **Dense or sparse.** Up to [`DENSE_LIMIT`] cells the counts live in one
-//! `n × n` matrix of `u32` (chunks arrive as sorted runs, so the adds sweep
-//! it in order), with a hash map for the rare pair past `2^32`; above it, in
-//! a hash map of the pairs hit. (Transparent huge pages for the matrix were
+//! `n × n` matrix of `u32`, with a hash map for the rare pair past `2^32`;
+//! above it, in a hash map of the pairs hit. Keys are added as the chunks
+//! produced them: sorting a chunk's keys first (so the adds swept the
+//! matrix in order) cost more than it saved, since a chunk's ~10^4 keys are
+//! kilobytes apart in the matrix either way. (Transparent huge pages for the matrix were
 //! tried: its adds got ~25% cheaper, but clearing the whole matrix at first
 //! touch cost more than that at 10^7 lines.)
 
@@ -57,10 +59,11 @@ pub(super) fn sym_key(i: u32, j: u32) -> u64 {
 ///
 /// One accumulator serves every block of a run: [`Accumulator::take_pairs`]
 /// zeroes what it reads, so the matrix is allocated (and its pages faulted
-/// in) once per run, not once per block. The cells a block hit are listed
-/// while they are few, so a small shard reads its pairs without sweeping
-/// all `n²` cells (that sweep, eight times over 5400² cells, was a second of
-/// every small shard's CPU time).
+/// in) once per run, not once per block. A bitmap marks the 16-cell groups
+/// (one cache line each) a block hit, so reading a block's pairs visits
+/// only those, in order: a small shard does not sweep all `n²` cells (that
+/// sweep, eight times over 5400² cells, was a second of every small
+/// shard's CPU time), and no list of cells hit has to be sorted.
 pub(super) struct Accumulator {
     store: Store,
     /// Keys are unordered pairs ([`sym_key`]): write both directions out.
@@ -68,19 +71,28 @@ pub(super) struct Accumulator {
 }
 
 enum Store {
-    Dense { n: usize, counts: Vec<u32>, touched: Option<Vec<u32>>, overflow: KeyMap },
+    /// `hit` has bit `g % 64` of word `g / 64` set when group `g` (cells
+    /// `16g .. 16g + 16`) may hold a count.
+    Dense {
+        n: usize,
+        counts: Vec<u32>,
+        hit: Vec<u64>,
+        overflow: KeyMap,
+    },
     Sparse(KeyMap),
 }
 
 /// Largest `n²` counted densely (6000 patches: 144 MB of `u32`).
 const DENSE_LIMIT: usize = 36_000_000;
 
-/// Past `n² / TOUCHED_FRACTION` cells hit, a sweep of the matrix is cheaper
-/// than sorting the list of cells hit, which is then dropped.
-const TOUCHED_FRACTION: usize = 32;
+/// Cells per bit of the dense store's `hit` bitmap: a 64-byte cache line.
+const GROUP: usize = 16;
 
-/// How many runs ahead [`Accumulator::add`] prefetches a dense cell: about
-/// a memory latency's worth of adds.
+/// Cells per word of the `hit` bitmap.
+const WORD_CELLS: usize = GROUP * 64;
+
+/// How many keys ahead [`Accumulator::add_keys`] prefetches a dense cell:
+/// about a memory latency's worth of adds.
 const PREFETCH_AHEAD: usize = 16;
 
 impl Accumulator {
@@ -88,26 +100,33 @@ impl Accumulator {
     /// (one [`sym_key`] per segment).
     pub(super) fn new(n: usize, symmetric: bool) -> Self {
         let store = if n.saturating_mul(n) <= DENSE_LIMIT {
-            Store::Dense { n, counts: vec![0; n * n], touched: Some(Vec::new()), overflow: KeyMap::default() }
+            let cells = n * n;
+            Store::Dense {
+                n,
+                counts: vec![0; cells],
+                hit: vec![0; cells.div_ceil(WORD_CELLS)],
+                overflow: KeyMap::default(),
+            }
         } else {
             Store::Sparse(KeyMap::default())
         };
         Self { store, symmetric }
     }
 
-    /// Adds sorted runs `(key, count)`.
-    pub(super) fn add(&mut self, runs: &[(u64, u64)]) {
+    /// Counts each of `keys` once, in any order (a chunk's keys as its
+    /// lines produced them: exact integer counts, so no order shows).
+    pub(super) fn add_keys(&mut self, keys: &[u64]) {
         match &mut self.store {
-            Store::Dense { n, counts, touched, overflow } => {
-                let limit = counts.len() / TOUCHED_FRACTION;
-                let cell = |k: u64| (k >> 32) as usize * *n + (k as u32) as usize;
-                for (r, &(k, c)) in runs.iter().enumerate() {
-                    // A chunk's runs are sorted but sparse (kilobytes apart
-                    // in a matrix of 100+ MB): each add missed the cache,
-                    // and the hardware prefetcher cannot guess the next.
-                    // Ask for the cell [`PREFETCH_AHEAD`] runs on.
+            Store::Dense { n, counts, hit, overflow } => {
+                let n = *n;
+                let cell = |k: u64| (k >> 32) as usize * n + (k as u32) as usize;
+                for (r, &k) in keys.iter().enumerate() {
+                    // Consecutive keys are kilobytes apart in a matrix of
+                    // 100+ MB: each add misses the cache, and the hardware
+                    // prefetcher cannot guess the next. Ask for the cell
+                    // [`PREFETCH_AHEAD`] keys on.
                     #[cfg(target_arch = "x86_64")]
-                    if let Some(&(ahead, _)) = runs.get(r + PREFETCH_AHEAD) {
+                    if let Some(&ahead) = keys.get(r + PREFETCH_AHEAD) {
                         use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
                         let p = counts.as_ptr().wrapping_add(cell(ahead)).cast::<i8>();
                         // SAFETY: a prefetch reads nothing architecturally and never faults.
@@ -116,29 +135,17 @@ impl Accumulator {
                     #[cfg(not(target_arch = "x86_64"))]
                     let _ = r;
                     let idx = cell(k);
-                    let old = counts[idx];
-                    let (sum, carry) = old.overflowing_add(c as u32);
-                    if carry || c > u64::from(u32::MAX) {
-                        // Counts past 2^32 for one pair: keep the excess exactly.
-                        *overflow.entry(k).or_insert(0) += c;
-                    } else {
-                        counts[idx] = sum;
-                        if old == 0
-                            && sum != 0
-                            && let Some(t) = touched
-                        {
-                            // idx < n² ≤ DENSE_LIMIT < 2^32.
-                            t.push(idx as u32);
-                            if t.len() > limit {
-                                *touched = None;
-                            }
-                        }
+                    hit[idx / WORD_CELLS] |= 1 << ((idx / GROUP) % 64);
+                    match counts[idx].checked_add(1) {
+                        Some(c) => counts[idx] = c,
+                        // A pair counted 2^32 times: the excess kept exactly.
+                        None => *overflow.entry(k).or_insert(0) += 1,
                     }
                 }
             }
             Store::Sparse(map) => {
-                for &(k, c) in runs {
-                    *map.entry(k).or_insert(0) += c;
+                for &k in keys {
+                    *map.entry(k).or_insert(0) += 1;
                 }
             }
         }
@@ -148,8 +155,8 @@ impl Accumulator {
     /// the next block: the dense matrix is zeroed where it was written and
     /// kept, so its pages are touched once per run, not once per block
     /// (fresh pages cost two page faults each: 13% of a 10^7-line run).
-    /// While the cells hit are listed, only they are read; otherwise the
-    /// matrix is swept, whole runs of zeros skipped 16 entries at a time.
+    /// Only the groups of cells the bitmap marks are read, in order, on
+    /// every thread.
     ///
     /// # Errors
     /// [`CountsError::Overflow`] if a doubled diagonal count would pass 64 bits.
@@ -157,40 +164,36 @@ impl Accumulator {
         let too_big = || CountsError::Overflow("a pair count".into());
         // Sorted pieces, in order: their concatenation is the sorted list.
         let pieces: Vec<Vec<PairCount>> = match &mut self.store {
-            Store::Dense { n, counts, touched, overflow } => {
+            Store::Dense { n, counts, hit, overflow } => {
                 let n = *n;
                 let pair = |idx: usize, c: u32| PairCount {
                     from: (idx / n) as u32,
                     to: (idx % n) as u32,
                     count: u64::from(c),
                 };
-                let mut pieces: Vec<Vec<PairCount>> = if let Some(mut t) = touched.take() {
-                    // Distinct cells: any sort gives the same order; this
-                    // one runs on every thread.
-                    t.par_sort_unstable();
-                    vec![t.iter().map(|&idx| pair(idx as usize, std::mem::take(&mut counts[idx as usize]))).collect()]
-                } else {
-                    // The sweep in pieces on every thread, kept in order:
-                    // the same sorted list.
-                    let piece = (counts.len() / pieces_per_thread()).next_multiple_of(16).max(16);
-                    counts
-                        .par_chunks_mut(piece)
-                        .enumerate()
-                        .map(|(p, part)| {
-                            let mut v = Vec::new();
-                            for (c, chunk) in part.chunks_mut(16).enumerate() {
-                                if chunk.iter().fold(0, |a, &x| a | x) == 0 {
-                                    continue;
-                                }
-                                for (k, x) in chunk.iter_mut().enumerate().filter(|(_, x)| **x > 0) {
-                                    v.push(pair(p * piece + c * 16 + k, std::mem::take(x)));
+                // The bitmap in pieces of words, each with its cells, on
+                // every thread, kept in order: the sorted list.
+                let words = hit.len().div_ceil(pieces_per_thread()).max(1);
+                let mut pieces: Vec<Vec<PairCount>> = hit
+                    .par_chunks_mut(words)
+                    .zip(counts.par_chunks_mut(words * WORD_CELLS))
+                    .enumerate()
+                    .map(|(p, (bits, part))| {
+                        let (mut v, len) = (Vec::new(), part.len());
+                        for (w, word) in bits.iter_mut().enumerate() {
+                            let mut b = std::mem::take(word);
+                            while b != 0 {
+                                let at = w * WORD_CELLS + b.trailing_zeros() as usize * GROUP;
+                                b &= b - 1;
+                                let group = &mut part[at..(at + GROUP).min(len)];
+                                for (k, x) in group.iter_mut().enumerate().filter(|(_, x)| **x > 0) {
+                                    v.push(pair(p * words * WORD_CELLS + at + k, std::mem::take(x)));
                                 }
                             }
-                            v
-                        })
-                        .collect()
-                };
-                *touched = Some(Vec::new());
+                        }
+                        v
+                    })
+                    .collect();
                 if !overflow.is_empty() {
                     // Counts past 2^32 for one pair (rare): into one list.
                     let mut v = pieces.concat();
@@ -342,22 +345,9 @@ fn both_directions(upper: &[&[PairCount]]) -> Option<Vec<PairCount>> {
 mod tests {
     use super::*;
 
-    /// Runs of the keys `keys`, as a chunk hands them in.
-    fn runs(mut keys: Vec<u64>) -> Vec<(u64, u64)> {
-        keys.sort_unstable();
-        let mut r: Vec<(u64, u64)> = Vec::new();
-        for k in keys {
-            match r.last_mut() {
-                Some((last, c)) if *last == k => *c += 1,
-                _ => r.push((k, 1)),
-            }
-        }
-        r
-    }
-
     /// One key per segment in symmetric mode gives exactly the pairs two
     /// keys per segment (both directions) give, diagonal included, dense and
-    /// sparse, with the list of cells hit and with the full sweep, and the
+    /// sparse, and both are the counts of a plain map of the keys; the
     /// accumulator is empty again for the next block.
     #[test]
     fn symmetric_keys_give_the_pairs_of_both_directions() {
@@ -366,24 +356,55 @@ mod tests {
             state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
             (state >> 33) % m
         };
-        for (n, segments) in [(7usize, 40usize), (60, 3_000), (2_000, 500), (9_000, 500)] {
+        for (n, segments) in [(7usize, 40usize), (60, 3_000), (2_000, 500), (9_000, 500), (33, 20_000)] {
             let segs: Vec<(u32, u32)> = (0..segments).map(|_| (next(n as u64) as u32, next(n as u64) as u32)).collect();
             let both: Vec<u64> = segs.iter().flat_map(|&(i, j)| [key(i, j), key(j, i)]).collect();
             let once: Vec<u64> = segs.iter().map(|&(i, j)| sym_key(i, j)).collect();
+            let mut reference = std::collections::BTreeMap::new();
+            for &k in &both {
+                *reference.entry(k).or_insert(0u64) += 1;
+            }
+            let reference: Vec<PairCount> = reference
+                .into_iter()
+                .map(|(k, count)| PairCount { from: (k >> 32) as u32, to: k as u32, count })
+                .collect();
             let (mut plain, mut sym) = (Accumulator::new(n, false), Accumulator::new(n, true));
             for _block in 0..2 {
                 for half in [&both[..both.len() / 2], &both[both.len() / 2..]] {
-                    plain.add(&runs(half.to_vec()));
+                    plain.add_keys(half);
                 }
                 for half in [&once[..once.len() / 2], &once[once.len() / 2..]] {
-                    sym.add(&runs(half.to_vec()));
+                    sym.add_keys(half);
                 }
                 let want = plain.take_pairs().unwrap();
+                assert_eq!(want, reference, "n = {n}");
                 assert_eq!(sym.take_pairs().unwrap(), want, "n = {n}");
-                assert_eq!(want.iter().map(|p| p.count).sum::<u64>(), 2 * segments as u64);
             }
             assert!(plain.take_pairs().unwrap().is_empty() && sym.take_pairs().unwrap().is_empty());
         }
+    }
+
+    /// A dense cell that reaches `2^32` keeps the excess exactly, and the
+    /// cells hit in the last, partial bitmap group are read.
+    #[test]
+    fn dense_counts_past_32_bits_and_the_last_group() {
+        let n = 5; // 25 cells: one full group of 16 and a partial one.
+        let mut acc = Accumulator::new(n, false);
+        let Store::Dense { counts, .. } = &mut acc.store else { panic!("5 patches are dense") };
+        counts[key_cell(n, 1, 2)] = u32::MAX - 1;
+        acc.add_keys(&[key(1, 2), key(4, 4), key(1, 2), key(1, 2), key(0, 0), key(4, 4)]);
+        let want = vec![PairCount { from: 0, to: 0, count: 1 }, PairCount { from: 4, to: 4, count: 2 }];
+        let got = acc.take_pairs().unwrap();
+        assert_eq!(got[0], want[0]);
+        assert_eq!(got[1], PairCount { from: 1, to: 2, count: u64::from(u32::MAX) + 2 });
+        assert_eq!(got[2], want[1]);
+        assert_eq!(got.len(), 3);
+        assert!(acc.take_pairs().unwrap().is_empty());
+    }
+
+    /// The dense cell of pair `(i, j)`.
+    fn key_cell(n: usize, i: usize, j: usize) -> usize {
+        i * n + j
     }
 
     /// The pieces written side by side give the sorted list of both

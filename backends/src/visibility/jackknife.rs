@@ -169,6 +169,7 @@ fn merge_lists(parts: &[&[PairCount]], mut emit: impl FnMut(PairCount)) {
     let mut at = vec![0usize; parts.len()];
     let mut ends = vec![0usize; parts.len()];
     let mut dense: Vec<u64> = Vec::new();
+    let mut row_out: Vec<PairCount> = Vec::new();
     let mut segments: Vec<&[PairCount]> = Vec::with_capacity(parts.len());
     let add = |a: u64, b: u64| a.checked_add(b).expect("validated counts: totals fit in 64 bits");
     loop {
@@ -192,9 +193,19 @@ fn merge_lists(parts: &[&[PairCount]], mut emit: impl FnMut(PairCount)) {
                 }
                 *i = e;
             }
-            for (to, c) in dense[..width].iter_mut().enumerate().filter(|(_, c)| **c > 0) {
-                emit(PairCount { from: row, to: to as u32, count: std::mem::take(c) });
+            // The row's pairs gathered without a branch per column (a
+            // tenth or so of the columns hold a count: the filter's
+            // mispredictions were most of this sweep), then handed on.
+            if row_out.len() < width {
+                row_out.resize(width, PairCount::default());
             }
+            let mut m = 0;
+            for (to, c) in dense[..width].iter_mut().enumerate() {
+                let count = std::mem::take(c);
+                row_out[m] = PairCount { from: row, to: to as u32, count };
+                m += usize::from(count > 0);
+            }
+            row_out[..m].iter().for_each(|&p| emit(p));
         } else {
             segments.clear();
             for ((l, i), &e) in parts.iter().zip(&mut at).zip(&ends) {
@@ -226,8 +237,7 @@ fn row_len(rest: &[PairCount], row: u32) -> usize {
 /// # Panics
 /// If a sum passes 64 bits (validated counts never do).
 fn merge_k_ways(parts: &[&[PairCount]], mut emit: impl FnMut(PairCount)) {
-    // `(from, to)` as one integer, ordered as the pairs are.
-    let key = |p: &PairCount| (u64::from(p.from) << 32) | u64::from(p.to);
+    let key = pair_key;
     let mut at = vec![0usize; parts.len()];
     loop {
         let mut best: Option<u64> = None;
@@ -279,10 +289,17 @@ fn pieces_per_thread() -> usize {
     rayon::current_num_threads() * 8
 }
 
-/// The first index `≥ from` of `totals` whose key is `key` (present by
-/// construction), by galloping then bisection.
-fn find(totals: &[PairCount], from: usize, key: (u32, u32)) -> usize {
-    let k = |p: &PairCount| (p.from, p.to);
+/// `(from, to)` as one integer, ordered as the pairs are (one comparison
+/// where the tuple's took two, with a branch between).
+#[inline]
+fn pair_key(p: &PairCount) -> u64 {
+    (u64::from(p.from) << 32) | u64::from(p.to)
+}
+
+/// The first index `≥ from` of `totals` whose [`pair_key`] is `key`
+/// (present by construction), by galloping then bisection.
+fn find(totals: &[PairCount], from: usize, key: u64) -> usize {
+    let k = pair_key;
     let mut step = 1;
     let mut hi = from;
     while hi < totals.len() && k(&totals[hi]) < key {
@@ -354,7 +371,7 @@ fn leave_one_out_scene_entropy(
             |(r, d, touched), pairs| {
                 let mut pos = 0;
                 for p in pairs.iter() {
-                    pos = find(totals, pos, (p.from, p.to));
+                    pos = find(totals, pos, pair_key(p));
                     let total = totals[pos].count;
                     let i = p.from as usize;
                     if r[i] == 0 {

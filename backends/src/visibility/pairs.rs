@@ -78,6 +78,9 @@ enum Store {
         counts: Vec<u32>,
         hit: Vec<u64>,
         overflow: KeyMap,
+        /// The last block's pieces of upper pairs, kept for the next: their
+        /// pages are faulted in once per run, not once per block.
+        pieces: Vec<Vec<PairCount>>,
     },
     Sparse(KeyMap),
 }
@@ -106,6 +109,7 @@ impl Accumulator {
                 counts: vec![0; cells],
                 hit: vec![0; cells.div_ceil(WORD_CELLS)],
                 overflow: KeyMap::default(),
+                pieces: Vec::new(),
             }
         } else {
             Store::Sparse(KeyMap::default())
@@ -117,7 +121,7 @@ impl Accumulator {
     /// lines produced them: exact integer counts, so no order shows).
     pub(super) fn add_keys(&mut self, keys: &[u64]) {
         match &mut self.store {
-            Store::Dense { n, counts, hit, overflow } => {
+            Store::Dense { n, counts, hit, overflow, .. } => {
                 let n = *n;
                 let cell = |k: u64| (k >> 32) as usize * n + (k as u32) as usize;
                 for (r, &k) in keys.iter().enumerate() {
@@ -162,9 +166,9 @@ impl Accumulator {
     /// [`CountsError::Overflow`] if a doubled diagonal count would pass 64 bits.
     pub(super) fn take_pairs(&mut self) -> Result<Vec<PairCount>, CountsError> {
         let too_big = || CountsError::Overflow("a pair count".into());
-        // Sorted pieces, in order: their concatenation is the sorted list.
-        let pieces: Vec<Vec<PairCount>> = match &mut self.store {
-            Store::Dense { n, counts, hit, overflow } => {
+        let symmetric = self.symmetric;
+        match &mut self.store {
+            Store::Dense { n, counts, hit, overflow, pieces } => {
                 let n = *n;
                 let pair = |idx: usize, c: u32| PairCount {
                     from: (idx / n) as u32,
@@ -174,12 +178,14 @@ impl Accumulator {
                 // The bitmap in pieces of words, each with its cells, on
                 // every thread, kept in order: the sorted list.
                 let words = hit.len().div_ceil(pieces_per_thread()).max(1);
-                let mut pieces: Vec<Vec<PairCount>> = hit
-                    .par_chunks_mut(words)
+                pieces.resize_with(hit.len().div_ceil(words), Vec::new);
+                hit.par_chunks_mut(words)
                     .zip(counts.par_chunks_mut(words * WORD_CELLS))
+                    .zip(pieces.par_iter_mut())
                     .enumerate()
-                    .map(|(p, (bits, part))| {
-                        let (mut v, len) = (Vec::new(), part.len());
+                    .for_each(|(p, ((bits, part), v))| {
+                        v.clear();
+                        let len = part.len();
                         for (w, word) in bits.iter_mut().enumerate() {
                             let mut b = std::mem::take(word);
                             while b != 0 {
@@ -191,9 +197,7 @@ impl Accumulator {
                                 }
                             }
                         }
-                        v
-                    })
-                    .collect();
+                    });
                 if !overflow.is_empty() {
                     // Counts past 2^32 for one pair (rare): into one list.
                     let mut v = pieces.concat();
@@ -204,28 +208,21 @@ impl Accumulator {
                             Err(pos) => v.insert(pos, PairCount { from: i, to: j, count: c }),
                         }
                     }
-                    pieces = vec![v];
+                    *pieces = vec![v];
                 }
-                pieces
+                // Sorted pieces, in order: their concatenation is the sorted
+                // list. One piece per row set: the per-piece row counts of
+                // `both_directions` cost `rows` entries per piece.
+                let pieces: Vec<&[PairCount]> = pieces.iter().map(|p| &p[..]).collect();
+                if symmetric { both_directions(&pieces).ok_or_else(too_big) } else { Ok(pieces.concat()) }
             }
             Store::Sparse(map) => {
                 let mut v: Vec<PairCount> =
                     map.drain().map(|(k, c)| PairCount { from: (k >> 32) as u32, to: k as u32, count: c }).collect();
                 v.par_sort_unstable();
-                vec![v]
+                // One piece: a sparse store may have 10^6 rows.
+                if symmetric { both_directions(&[&v]).ok_or_else(too_big) } else { Ok(v) }
             }
-        };
-        if !self.symmetric {
-            return Ok(pieces.concat());
-        }
-        let pieces: Vec<&[PairCount]> = pieces.iter().map(|p| &p[..]).collect();
-        // One piece per row set: the per-piece row counts below cost
-        // `rows` entries per piece (a sparse store may have 10^6 rows).
-        let dense = matches!(self.store, Store::Dense { .. });
-        if dense {
-            both_directions(&pieces).ok_or_else(too_big)
-        } else {
-            both_directions(&[&pieces.concat()]).ok_or_else(too_big)
         }
     }
 }

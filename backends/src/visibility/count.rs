@@ -26,12 +26,11 @@ pub const CHUNK: u64 = 16_384;
 /// cube and Part III Table 6's rows are reproduced with every line counted.
 pub const SPHERE_SCALE: f64 = 0.9 / 0.866_025_403_784_438_6;
 
-/// Per-chunk endpoint sums: dense, each patch's sum beside its count (one
-/// 32-byte cell, so an add touches one cache line, where two arrays took
-/// two misses), for up to [`DENSE_ENDPOINTS`] patches; a list of `(patch,
-/// log)` above (a 10^6-patch mesh would make each chunk allocate 32 MB).
+/// Per-chunk endpoint sums: dense arrays for up to [`DENSE_ENDPOINTS`]
+/// patches, a list of `(patch, log)` above (a 10^6-patch mesh would make
+/// each chunk allocate 24 MB).
 enum Endpoints {
-    Dense(Vec<(FixedSum, u64)>),
+    Dense(Vec<FixedSum>, Vec<u64>),
     List(Vec<(u32, FixedSum)>),
 }
 
@@ -40,7 +39,7 @@ const DENSE_ENDPOINTS: usize = 16_384;
 impl Endpoints {
     fn new(n: usize) -> Self {
         if n <= DENSE_ENDPOINTS {
-            Endpoints::Dense(vec![(FixedSum::default(), 0); n])
+            Endpoints::Dense(vec![FixedSum::default(); n], vec![0; n])
         } else {
             Endpoints::List(Vec::new())
         }
@@ -49,10 +48,9 @@ impl Endpoints {
     #[inline]
     fn add(&mut self, i: u32, l: FixedSum) {
         match self {
-            Endpoints::Dense(s) => {
-                let cell = &mut s[i as usize];
-                cell.0.0 += l.0;
-                cell.1 += 1;
+            Endpoints::Dense(s, c) => {
+                s[i as usize].0 += l.0;
+                c[i as usize] += 1;
             }
             Endpoints::List(v) => v.push((i, l)),
         }
@@ -65,8 +63,8 @@ impl Endpoints {
             Some(())
         };
         match self {
-            Endpoints::Dense(s) => {
-                for (i, (l, c)) in s.into_iter().enumerate() {
+            Endpoints::Dense(s, c) => {
+                for (i, (l, c)) in s.into_iter().zip(c).enumerate() {
                     if c > 0 {
                         one(i, l, c)?;
                     }

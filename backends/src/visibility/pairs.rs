@@ -390,12 +390,12 @@ mod tests {
         let Store::Dense { counts, .. } = &mut acc.store else { panic!("5 patches are dense") };
         counts[key_cell(n, 1, 2)] = u32::MAX - 1;
         acc.add_keys(&[key(1, 2), key(4, 4), key(1, 2), key(1, 2), key(0, 0), key(4, 4)]);
-        let want = vec![PairCount { from: 0, to: 0, count: 1 }, PairCount { from: 4, to: 4, count: 2 }];
-        let got = acc.take_pairs().unwrap();
-        assert_eq!(got[0], want[0]);
-        assert_eq!(got[1], PairCount { from: 1, to: 2, count: u64::from(u32::MAX) + 2 });
-        assert_eq!(got[2], want[1]);
-        assert_eq!(got.len(), 3);
+        let want = [
+            PairCount { from: 0, to: 0, count: 1 },
+            PairCount { from: 1, to: 2, count: u64::from(u32::MAX) + 2 },
+            PairCount { from: 4, to: 4, count: 2 },
+        ];
+        assert_eq!(acc.take_pairs().unwrap(), want);
         assert!(acc.take_pairs().unwrap().is_empty());
     }
 

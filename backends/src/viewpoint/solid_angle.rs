@@ -395,16 +395,42 @@ impl View {
         Ok(())
     }
 
-    /// The row: patches seen (increasing) and their solid angles.
+    /// The row: patches seen (increasing) and their solid angles. The
+    /// pairs are put in `(patch, Ω)` order (`Ω` by `total_cmp` within a
+    /// patch) and each patch's angles added in that order. `whole` and the
+    /// sampled triangles are each in triangle order, so where patch numbers
+    /// grow with the triangles (a mesh file: one patch per triangle) a
+    /// merge of the two gives that order and only runs of one patch are
+    /// sorted; otherwise the pairs are sorted. Either way the same
+    /// sequence (the order is total up to identical pairs), so the same sums.
     fn row(&self, p: &Prepared) -> (Vec<u32>, Vec<f64>) {
-        let mut all: Vec<(u32, f64)> = self.whole.clone();
-        all.extend(
-            self.sampled
-                .iter()
-                .filter(|s| s.fraction > 0.0 && s.omega > 0.0)
-                .map(|s| (p.triangle_patch[s.tri as usize], s.omega * s.fraction)),
-        );
-        all.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+        let sampled: Vec<(u32, f64)> = self
+            .sampled
+            .iter()
+            .filter(|s| s.fraction > 0.0 && s.omega > 0.0)
+            .map(|s| (p.triangle_patch[s.tri as usize], s.omega * s.fraction))
+            .collect();
+        let by_pair = |a: &(u32, f64), b: &(u32, f64)| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1));
+        let mut all: Vec<(u32, f64)> = Vec::with_capacity(self.whole.len() + sampled.len());
+        let (mut i, mut j) = (0, 0);
+        while i < self.whole.len() && j < sampled.len() {
+            if sampled[j].0 < self.whole[i].0 {
+                all.push(sampled[j]);
+                j += 1;
+            } else {
+                all.push(self.whole[i]);
+                i += 1;
+            }
+        }
+        all.extend_from_slice(&self.whole[i..]);
+        all.extend_from_slice(&sampled[j..]);
+        if all.windows(2).all(|w| w[0].0 <= w[1].0) {
+            for run in all.chunk_by_mut(|a, b| a.0 == b.0).filter(|r| r.len() > 1) {
+                run.sort_unstable_by(by_pair);
+            }
+        } else {
+            all.sort_unstable_by(by_pair);
+        }
         let (mut patch, mut angle) = (Vec::new(), Vec::new());
         for run in all.chunk_by(|a, b| a.0 == b.0) {
             patch.push(run[0].0);
@@ -698,10 +724,7 @@ fn refine_views(
         // `an.p_o` is the core's `output_into` of this channel, taken when
         // `an` was made; each seen viewpoint's VMI from the core (nats);
         // unseen ones have none.
-        let mut seen_vmi = vec![0.0; an.rows()];
-        an.channel()
-            .and_then(|c| c.specific_information_into(&an.p_o, itgfx_core::Base::Nats, &mut seen_vmi))
-            .map_err(ChannelError::Measure)?;
+        let seen_vmi = an.row_information(&an.p_o, itgfx_core::Base::Nats).map_err(ChannelError::Measure)?;
         let vmi = an.expand(&seen_vmi, 0.0);
         let se = vmi_stderr(prepared, &ch, &views, &an.p_o, &vmi);
         let met: Vec<bool> = (0..views.len()).map(|v| 2.0 * se[v] <= refine.tolerance * vmi[v].abs()).collect();

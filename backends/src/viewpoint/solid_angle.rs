@@ -30,6 +30,8 @@
 //! The result is an ordinary [`ViewpointChannel`]: every measure downstream
 //! is the same code as for the ray grid.
 
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
 
@@ -688,19 +690,43 @@ fn first_pass(
 ) -> Result<Vec<View>, BackendError> {
     let shared = Shared::new(prepared);
     let n = directions.len() as u64;
-    // Each wave ends at a join where a thread may wait for the slowest
-    // view: 8 views a thread between reports, not 2, make 3 joins of a
-    // 42-view run on 2 threads instead of 11.
-    let wave = (rayon::current_num_threads() * 8).max(2);
-    let mut views: Vec<View> = Vec::with_capacity(directions.len());
-    for dirs in directions.chunks(wave) {
-        let made: Vec<Result<View, BackendError>> =
-            dirs.par_iter().map(|d| View::new(prepared, tracer, &shared, d.normalize() * distance, m)).collect();
-        for v in made {
-            views.push(v?);
+    // Every view in one parallel pass (waves of views, each ending at a
+    // join where a thread waited for the slowest view, left a core idle
+    // at each join), made on a helper thread while this one reports the
+    // views done as they finish.
+    let done = AtomicU64::new(0);
+    let make = || -> Result<Vec<View>, BackendError> {
+        directions
+            .par_iter()
+            .map(|d| {
+                let view = View::new(prepared, tracer, &shared, d.normalize() * distance, m);
+                done.fetch_add(1, Ordering::Relaxed);
+                view
+            })
+            .collect()
+    };
+    let views = std::thread::scope(|s| {
+        let me = std::thread::current();
+        let worker = s.spawn(move || {
+            let views = make();
+            me.unpark();
+            views
+        });
+        let mut reported = 0;
+        loop {
+            let finished = worker.is_finished();
+            let d = done.load(Ordering::Relaxed);
+            if d != reported {
+                progress(d, n);
+                reported = d;
+            }
+            if finished {
+                break;
+            }
+            std::thread::park_timeout(std::time::Duration::from_millis(200));
         }
-        progress(views.len() as u64, n);
-    }
+        worker.join().unwrap_or_else(|e| std::panic::resume_unwind(e))
+    })?;
     Ok(views)
 }
 

@@ -1,6 +1,10 @@
 //! A viewpoint study: every Part V result `itgfx viewpoints` reports, from a
-//! built channel, in the order that keeps memory low. The job behind the
-//! command's run; the CLI only words and writes what it holds.
+//! built channel, its independent parts side by side: the entries'
+//! logarithms (8 bytes an entry) and the reversed channel with its own
+//! (20 bytes an entry) are now held at the same time, which on the 1.1M
+//! bunny stays under the peak of the channel's build (3.75 against 3.77 GB,
+//! `/usr/bin/time`). The job behind the command's run; the CLI only words
+//! and writes what it holds.
 
 use itgfx_core::{Base, Error};
 

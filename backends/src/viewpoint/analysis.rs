@@ -75,28 +75,42 @@ impl ViewpointAnalysis {
     /// # Errors
     /// [`Error::ZeroMass`] when no viewpoint sees the object.
     pub fn new(ch: &ViewpointChannel, weights: ViewpointWeights, background: bool) -> Result<Self, Error> {
-        let mut seen = Vec::new();
-        let mut seen_angle = Vec::new();
-        let mut starts = vec![0];
-        let (mut cols, mut values) = (Vec::new(), Vec::new());
-        for v in 0..ch.viewpoints() {
-            let (p, a) = ch.row(v);
-            let object: f64 = a.iter().sum();
+        // Each row's sum, then its entries divided by its total, row by row
+        // on every thread (the same operations per row as one after another).
+        let sums: Vec<f64> = (0..ch.viewpoints()).into_par_iter().map(|v| ch.row(v).1.iter().sum()).collect();
+        let (mut seen, mut seen_angle, mut starts) = (Vec::new(), Vec::new(), vec![0]);
+        for (v, &object) in sums.iter().enumerate() {
             if object <= 0.0 {
                 continue;
             }
-            let bg = if background { ch.background[v] } else { 0.0 };
-            let total = object + bg;
-            cols.extend_from_slice(p);
-            values.extend(a.iter().map(|x| x / total));
-            if bg > 0.0 {
-                cols.push(ch.patches as u32);
-                values.push(bg / total);
-            }
-            starts.push(cols.len());
+            let bg = if background && ch.background[v] > 0.0 { 1 } else { 0 };
+            starts.push(starts[starts.len() - 1] + ch.row(v).0.len() + bg);
             seen.push(v);
             seen_angle.push(object);
         }
+        let entries = starts[starts.len() - 1];
+        let (mut cols, mut values) = (vec![0u32; entries], vec![0.0f64; entries]);
+        let mut parts = Vec::with_capacity(seen.len());
+        let (mut c_rest, mut v_rest) = (&mut cols[..], &mut values[..]);
+        for w in starts.windows(2) {
+            let (c, cr) = std::mem::take(&mut c_rest).split_at_mut(w[1] - w[0]);
+            let (x, vr) = std::mem::take(&mut v_rest).split_at_mut(w[1] - w[0]);
+            (c_rest, v_rest) = (cr, vr);
+            parts.push((c, x));
+        }
+        parts.into_par_iter().zip(seen.par_iter().zip(&seen_angle)).for_each(|((c, x), (&v, &object))| {
+            let (p, a) = ch.row(v);
+            let bg = if background { ch.background[v] } else { 0.0 };
+            let total = object + bg;
+            c[..p.len()].copy_from_slice(p);
+            for (x, a) in x.iter_mut().zip(a) {
+                *x = a / total;
+            }
+            if bg > 0.0 {
+                c[p.len()] = ch.patches as u32;
+                x[p.len()] = bg / total;
+            }
+        });
         Self::normalised(seen, seen_angle, starts, cols, values, weights, ch.viewpoints(), ch.patches, background)
     }
 
@@ -110,11 +124,25 @@ impl ViewpointAnalysis {
     pub fn from_channel(ch: ViewpointChannel, weights: ViewpointWeights) -> Result<Self, Error> {
         let viewpoints = ch.viewpoints();
         let ViewpointChannel { starts: old, patch: mut cols, solid_angle: mut values, patches, .. } = ch;
+        let sums: Vec<f64> = old.par_windows(2).map(|w| values[w[0]..w[1]].iter().sum()).collect();
+        if sums.iter().all(|&s| s > 0.0) {
+            // Every row kept: each divided in place, row by row on every thread.
+            let mut rows = Vec::with_capacity(viewpoints);
+            let mut rest = &mut values[..];
+            for w in old.windows(2) {
+                let (row, r) = std::mem::take(&mut rest).split_at_mut(w[1] - w[0]);
+                rest = r;
+                rows.push(row);
+            }
+            rows.into_par_iter().zip(&sums).for_each(|(row, &object)| row.iter_mut().for_each(|x| *x /= object));
+            let seen = (0..viewpoints).collect();
+            return Self::normalised(seen, sums, old, cols, values, weights, viewpoints, patches, false);
+        }
         let (mut seen, mut seen_angle, mut starts) = (Vec::new(), Vec::new(), vec![0]);
         let mut at = 0;
         for v in 0..viewpoints {
             let (a, b) = (old[v], old[v + 1]);
-            let object: f64 = values[a..b].iter().sum();
+            let object = sums[v];
             if object <= 0.0 {
                 continue;
             }
@@ -182,6 +210,37 @@ impl ViewpointAnalysis {
         SparseChannel::new(&self.p_v, &self.starts, &self.cols, &self.values, self.outputs())
     }
 
+    /// A per-row pass of the core over every row, on chunks of rows side
+    /// by side: each chunk is a channel of its own (the same rows and
+    /// output count, a uniform input, which the core's per-row passes do not
+    /// read), so each row's value is the one the whole channel gives.
+    fn by_rows(
+        &self,
+        pass: impl Fn(&SparseChannel<'_, f64>, &mut [f64]) -> Result<(), Error> + Sync,
+    ) -> Result<Vec<f64>, Error> {
+        let mut out = vec![0.0; self.rows()];
+        let per = self.rows().div_ceil(4 * rayon::current_num_threads()).max(1);
+        out.par_chunks_mut(per).enumerate().try_for_each(|(k, out)| {
+            let r = k * per..k * per + out.len();
+            let (a, b) = (self.starts[r.start], self.starts[r.end]);
+            let starts: Vec<usize> = self.starts[r.start..=r.end].iter().map(|s| s - a).collect();
+            let input = vec![1.0 / out.len() as f64; out.len()];
+            let ch = SparseChannel::new(&input, &starts, &self.cols[a..b], &self.values[a..b], self.outputs())?;
+            pass(&ch, out)
+        })?;
+        Ok(out)
+    }
+
+    /// `D_KL(p(O|v) ‖ target)` of every row (the VMI of Part V eq. (7)
+    /// with `target = p(O)`): the core's `specific_information_into`, on
+    /// chunks of rows side by side.
+    ///
+    /// # Errors
+    /// [`Error::LengthMismatch`] if `target` is not one per output.
+    pub fn row_information(&self, target: &[f64], base: Base) -> Result<Vec<f64>, Error> {
+        self.by_rows(|ch, out| ch.specific_information_into(target, base, out))
+    }
+
     /// Outputs: patches, plus one for the background when counted.
     #[must_use]
     pub fn outputs(&self) -> usize {
@@ -226,28 +285,24 @@ impl ViewpointAnalysis {
         }
         let ch = self.channel()?;
         let n = self.rows();
-        // Four independent passes of the core over the channel, side by
-        // side (each computed as alone: the same bits).
-        let vmi = || {
-            let mut vmi = vec![0.0; n];
-            ch.specific_information_into(&self.p_o, base, &mut vmi).map(|()| vmi)
-        };
-        let ve = || {
-            let mut ve = vec![0.0; n];
-            ch.row_entropies_into(base, &mut ve).map(|()| ve)
-        };
+        // The core's whole-channel measures on one thread while the per-row
+        // passes (VMI, VE, VKL) run on chunks of rows (each value as alone:
+        // the same bits).
         let vkl = || {
             if self.background {
                 return Ok(vec![f64::NAN; n]);
             }
             let total: f64 = areas.iter().sum();
             let rel: Vec<f64> = areas.iter().map(|a| a / total).collect();
-            let mut d = vec![0.0; n];
-            ch.specific_information_into(&rel, base, &mut d).map(|()| d)
+            self.row_information(&rel, base)
         };
-        let ((cm, vmi), (ve, vkl)) =
-            rayon::join(|| rayon::join(|| ch.measures(&self.p_o, base), vmi), || rayon::join(ve, vkl));
-        let (cm, vmi, ve, vkl) = (cm?, vmi?, ve?, vkl?);
+        let per_row = || {
+            let vmi = self.row_information(&self.p_o, base)?;
+            let ve = self.by_rows(|ch, out| ch.row_entropies_into(base, out))?;
+            Ok::<_, Error>((vmi, ve, vkl()?))
+        };
+        let (cm, rows) = rayon::join(|| ch.measures(&self.p_o, base), per_row);
+        let (cm, (vmi, ve, vkl)) = (cm?, rows?);
         let heuristic: Vec<f64> = (0..n)
             .map(|x| {
                 let visible = self.row(x).0.iter().filter(|&&o| (o as usize) < self.patches).count();

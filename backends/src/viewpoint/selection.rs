@@ -284,9 +284,7 @@ pub fn importance_information(an: &ViewpointAnalysis, importance: &[f64], base: 
     } else {
         an.p_o.clone()
     };
-    let mut d = vec![0.0; an.rows()];
-    an.channel()?.specific_information_into(&target, base, &mut d)?;
-    Ok(an.expand(&d, f64::INFINITY))
+    Ok(an.expand(&an.row_information(&target, base)?, f64::INFINITY))
 }
 
 #[cfg(test)]

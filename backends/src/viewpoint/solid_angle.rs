@@ -30,6 +30,8 @@
 //! The result is an ordinary [`ViewpointChannel`]: every measure downstream
 //! is the same code as for the ray grid.
 
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
 
@@ -395,16 +397,42 @@ impl View {
         Ok(())
     }
 
-    /// The row: patches seen (increasing) and their solid angles.
+    /// The row: patches seen (increasing) and their solid angles. The
+    /// pairs are put in `(patch, Ω)` order (`Ω` by `total_cmp` within a
+    /// patch) and each patch's angles added in that order. `whole` and the
+    /// sampled triangles are each in triangle order, so where patch numbers
+    /// grow with the triangles (a mesh file: one patch per triangle) a
+    /// merge of the two gives that order and only runs of one patch are
+    /// sorted; otherwise the pairs are sorted. Either way the same
+    /// sequence (the order is total up to identical pairs), so the same sums.
     fn row(&self, p: &Prepared) -> (Vec<u32>, Vec<f64>) {
-        let mut all: Vec<(u32, f64)> = self.whole.clone();
-        all.extend(
-            self.sampled
-                .iter()
-                .filter(|s| s.fraction > 0.0 && s.omega > 0.0)
-                .map(|s| (p.triangle_patch[s.tri as usize], s.omega * s.fraction)),
-        );
-        all.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+        let sampled: Vec<(u32, f64)> = self
+            .sampled
+            .iter()
+            .filter(|s| s.fraction > 0.0 && s.omega > 0.0)
+            .map(|s| (p.triangle_patch[s.tri as usize], s.omega * s.fraction))
+            .collect();
+        let by_pair = |a: &(u32, f64), b: &(u32, f64)| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1));
+        let mut all: Vec<(u32, f64)> = Vec::with_capacity(self.whole.len() + sampled.len());
+        let (mut i, mut j) = (0, 0);
+        while i < self.whole.len() && j < sampled.len() {
+            if sampled[j].0 < self.whole[i].0 {
+                all.push(sampled[j]);
+                j += 1;
+            } else {
+                all.push(self.whole[i]);
+                i += 1;
+            }
+        }
+        all.extend_from_slice(&self.whole[i..]);
+        all.extend_from_slice(&sampled[j..]);
+        if all.windows(2).all(|w| w[0].0 <= w[1].0) {
+            for run in all.chunk_by_mut(|a, b| a.0 == b.0).filter(|r| r.len() > 1) {
+                run.sort_unstable_by(by_pair);
+            }
+        } else {
+            all.sort_unstable_by(by_pair);
+        }
         let (mut patch, mut angle) = (Vec::new(), Vec::new());
         for run in all.chunk_by(|a, b| a.0 == b.0) {
             patch.push(run[0].0);
@@ -662,19 +690,43 @@ fn first_pass(
 ) -> Result<Vec<View>, BackendError> {
     let shared = Shared::new(prepared);
     let n = directions.len() as u64;
-    // Each wave ends at a join where a thread may wait for the slowest
-    // view: 8 views a thread between reports, not 2, make 3 joins of a
-    // 42-view run on 2 threads instead of 11.
-    let wave = (rayon::current_num_threads() * 8).max(2);
-    let mut views: Vec<View> = Vec::with_capacity(directions.len());
-    for dirs in directions.chunks(wave) {
-        let made: Vec<Result<View, BackendError>> =
-            dirs.par_iter().map(|d| View::new(prepared, tracer, &shared, d.normalize() * distance, m)).collect();
-        for v in made {
-            views.push(v?);
+    // Every view in one parallel pass (waves of views, each ending at a
+    // join where a thread waited for the slowest view, left a core idle
+    // at each join), made on a helper thread while this one reports the
+    // views done as they finish.
+    let done = AtomicU64::new(0);
+    let make = || -> Result<Vec<View>, BackendError> {
+        directions
+            .par_iter()
+            .map(|d| {
+                let view = View::new(prepared, tracer, &shared, d.normalize() * distance, m);
+                done.fetch_add(1, Ordering::Relaxed);
+                view
+            })
+            .collect()
+    };
+    let views = std::thread::scope(|s| {
+        let me = std::thread::current();
+        let worker = s.spawn(move || {
+            let views = make();
+            me.unpark();
+            views
+        });
+        let mut reported = 0;
+        loop {
+            let finished = worker.is_finished();
+            let d = done.load(Ordering::Relaxed);
+            if d != reported {
+                progress(d, n);
+                reported = d;
+            }
+            if finished {
+                break;
+            }
+            std::thread::park_timeout(std::time::Duration::from_millis(200));
         }
-        progress(views.len() as u64, n);
-    }
+        worker.join().unwrap_or_else(|e| std::panic::resume_unwind(e))
+    })?;
     Ok(views)
 }
 
@@ -698,10 +750,7 @@ fn refine_views(
         // `an.p_o` is the core's `output_into` of this channel, taken when
         // `an` was made; each seen viewpoint's VMI from the core (nats);
         // unseen ones have none.
-        let mut seen_vmi = vec![0.0; an.rows()];
-        an.channel()
-            .and_then(|c| c.specific_information_into(&an.p_o, itgfx_core::Base::Nats, &mut seen_vmi))
-            .map_err(ChannelError::Measure)?;
+        let seen_vmi = an.row_information(&an.p_o, itgfx_core::Base::Nats).map_err(ChannelError::Measure)?;
         let vmi = an.expand(&seen_vmi, 0.0);
         let se = vmi_stderr(prepared, &ch, &views, &an.p_o, &vmi);
         let met: Vec<bool> = (0..views.len()).map(|v| 2.0 * se[v] <= refine.tolerance * vmi[v].abs()).collect();

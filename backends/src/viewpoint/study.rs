@@ -1,10 +1,12 @@
 //! A viewpoint study: every Part V result `itgfx viewpoints` reports, from a
-//! built channel, its independent parts side by side: the entries'
+//! built channel. Its two independent halves run side by side when the
+//! channel is small (up to [`SIDE_BY_SIDE_ENTRIES`] entries): the entries'
 //! logarithms (8 bytes an entry) and the reversed channel with its own
-//! (20 bytes an entry) are now held at the same time, which on the 1.1M
-//! bunny stays under the peak of the channel's build (3.75 against 3.77 GB,
-//! `/usr/bin/time`). The job behind the command's run; the CLI only words
-//! and writes what it holds.
+//! (20 bytes an entry) are then held at the same time. On a larger channel
+//! they run one after the other: on the 1.1M-triangle bunny (67M entries)
+//! side by side raised the peak from 3.79 to 4.49 GB for no shorter run
+//! (53.05 against 52.92 s wall, idle, `/usr/bin/time`). The job behind the
+//! command's run; the CLI only words and writes what it holds.
 
 use itgfx_core::{Base, Error};
 
@@ -13,6 +15,10 @@ use super::analysis::{ViewpointAnalysis, ViewpointMeasures, ViewpointWeights};
 use super::saliency::{mesh_saliency, patch_adjacency, viewpoint_saliency};
 use super::selection::{BestViews, Exploration, best_views, exploration, importance_information};
 use crate::scene::Scene;
+
+/// The most channel entries whose study runs its two halves side by side
+/// (their extra tables, 28 bytes an entry, ~450 MB here).
+pub const SIDE_BY_SIDE_ENTRIES: u64 = 1 << 24;
 
 /// What a study asks for besides the channel.
 #[derive(Clone, Copy, Debug)]
@@ -75,37 +81,40 @@ impl Study {
         } else {
             ViewpointAnalysis::from_channel(ch, s.weights)
         }?;
-        // Two independent halves side by side (each value computed as
-        // alone, so the same bits whatever runs where): the measures, the
-        // instability and the best-n search on one side; the polygonal
-        // information, mesh saliency and importance on the other. Each half
-        // has steps that run on one thread (the core's passes over every
-        // entry, the reversed channel's columns, the best-n search's
-        // clustering) which the other half's parallel work now overlaps.
+        // Two independent halves (each value computed as alone, so the same
+        // bits whatever runs where): the measures, the instability and the
+        // best-n search on one side; the polygonal information, mesh
+        // saliency and importance on the other. Each half has steps that run
+        // on one thread (the core's passes over every entry, the reversed
+        // channel's columns, the best-n search's clustering), which the other
+        // half's parallel work overlaps when they run side by side.
         let areas = scene.areas();
         let an = &analysis;
-        let (selection, per_polygon) = rayon::join(
-            || -> Result<_, Error> {
-                // The logarithms of the entries do not need the measures.
-                let (measures, logs) = rayon::join(|| an.measures(&areas, s.base), || an.entry_logs());
-                let measures = measures?;
-                // One logarithm per channel entry, shared by the instability
-                // and the best-n search (each row meets many others).
-                let instability = an.instability_logs(&neighbours, &logs, s.base)?;
-                let best_n = best_views(an, &measures, s.capture, s.best_n, s.base, Some(&logs))?;
-                drop(logs);
-                let tour = exploration(an, &neighbours, measures.best, s.explore, s.base)?;
-                Ok((measures, instability, best_n, tour))
-            },
-            || -> Result<_, Error> {
-                let (polygonal_information, adjacency) =
-                    rayon::join(|| an.polygonal_information(s.base), || patch_adjacency(scene));
-                let saliency = mesh_saliency(an, &adjacency, s.base)?;
-                let view_saliency = viewpoint_saliency(an, &saliency);
-                let importance = importance_information(an, &saliency, s.base)?;
-                Ok((polygonal_information?, adjacency, saliency, view_saliency, importance))
-            },
-        );
+        let selection = || -> Result<_, Error> {
+            // The logarithms of the entries do not need the measures.
+            let (measures, logs) = rayon::join(|| an.measures(&areas, s.base), || an.entry_logs());
+            let measures = measures?;
+            // One logarithm per channel entry, shared by the instability
+            // and the best-n search (each row meets many others).
+            let instability = an.instability_logs(&neighbours, &logs, s.base)?;
+            let best_n = best_views(an, &measures, s.capture, s.best_n, s.base, Some(&logs))?;
+            drop(logs);
+            let tour = exploration(an, &neighbours, measures.best, s.explore, s.base)?;
+            Ok((measures, instability, best_n, tour))
+        };
+        let per_polygon = || -> Result<_, Error> {
+            let (polygonal_information, adjacency) =
+                rayon::join(|| an.polygonal_information(s.base), || patch_adjacency(scene));
+            let saliency = mesh_saliency(an, &adjacency, s.base)?;
+            let view_saliency = viewpoint_saliency(an, &saliency);
+            let importance = importance_information(an, &saliency, s.base)?;
+            Ok((polygonal_information?, adjacency, saliency, view_saliency, importance))
+        };
+        let (selection, per_polygon) = if channel_entries <= SIDE_BY_SIDE_ENTRIES {
+            rayon::join(selection, per_polygon)
+        } else {
+            (selection(), per_polygon())
+        };
         let (measures, instability, best_n, tour) = selection?;
         let (polygonal_information, adjacency, saliency, view_saliency, importance) = per_polygon?;
         Ok(Self {

@@ -693,18 +693,29 @@ fn first_pass(
     // Every view in one parallel pass (waves of views, each ending at a
     // join where a thread waited for the slowest view, left a core idle
     // at each join), made on a helper thread while this one reports the
-    // views done as they finish.
+    // views done as they finish. Where several views fail, the first
+    // view's error in view order is the one returned, whatever ran first.
     let done = AtomicU64::new(0);
     let make = || -> Result<Vec<View>, BackendError> {
-        directions
+        let views: Vec<Result<View, BackendError>> = directions
             .par_iter()
             .map(|d| {
                 let view = View::new(prepared, tracer, &shared, d.normalize() * distance, m);
                 done.fetch_add(1, Ordering::Relaxed);
                 view
             })
-            .collect()
+            .collect();
+        views.into_iter().collect()
     };
+    // Called on a worker of a rayon pool (a library caller's
+    // `pool.install`), a helper thread would leave that pool for the global
+    // one, and block a worker of a one-thread pool while it waits: the
+    // views are then made here and reported once, at the end.
+    if rayon::current_thread_index().is_some() {
+        let views = make()?;
+        progress(n, n);
+        return Ok(views);
+    }
     let views = std::thread::scope(|s| {
         let me = std::thread::current();
         let worker = s.spawn(move || {

@@ -60,7 +60,7 @@ pub(super) fn sym_key(i: u32, j: u32) -> u64 {
 /// One accumulator serves every block of a run: [`Accumulator::take_pairs`]
 /// zeroes what it reads, so the matrix is allocated (and its pages faulted
 /// in) once per run, not once per block. A bitmap marks the 16-cell groups
-/// (one cache line each) a block hit, so reading a block's pairs visits
+/// (64 bytes each) a block hit, so reading a block's pairs visits
 /// only those, in order: a small shard does not sweep all `n²` cells (that
 /// sweep, eight times over 5400² cells, was a second of every small
 /// shard's CPU time), and no list of cells hit has to be sorted.

@@ -367,7 +367,7 @@ unsafe fn occluded_wide(tree: &Wide8, triangles: &[[Vec3A; 3]], packet: &Packet,
             continue;
         }
         let n = &tree.nodes[index as usize];
-        let occupied = n.child.iter().enumerate().fold(0u32, |m, (c, &x)| m | u32::from(x != 0) << c);
+        let occupied = occupied_slots(n);
         // SAFETY: AVX2 (the caller's promise).
         let hit = unsafe { wide_node(packet, n, occupied, tmax, lanes) };
         let mut leaves = occupied & !n.imask;
@@ -391,16 +391,29 @@ unsafe fn occluded_wide(tree: &Wide8, triangles: &[[Vec3A; 3]], packet: &Packet,
                 return done;
             }
         }
-        // Internal children, lowest traversal priority first (slot
-        // `p ^ octant`, as [`push_children`]), so the nearest is walked next.
-        for q in 0..8 {
-            let c = q ^ oct;
-            if hit[c] != 0 && n.imask & (1 << c) != 0 {
-                stack.push((n.child[c], hit[c]));
-            }
-        }
+        push_wide_children(n, &hit, oct, stack);
     }
     done
+}
+
+/// The occupied child slots of a wide node, as a bit mask.
+#[inline(always)]
+fn occupied_slots(n: &WideNode) -> u32 {
+    n.child.iter().enumerate().fold(0u32, |m, (c, &x)| m | u32::from(x != 0) << c)
+}
+
+/// Pushes the internal children of `n` that some lane entered, lowest
+/// traversal priority first (slot `p ^ octant`, as [`push_children`]), so
+/// the nearest is walked next: the packet walks' one push over the wide
+/// nodes.
+#[inline(always)]
+fn push_wide_children(n: &WideNode, hit: &[u8; 8], oct: usize, stack: &mut Vec<(u32, u8)>) {
+    for q in 0..8 {
+        let c = q ^ oct;
+        if hit[c] != 0 && n.imask & (1 << c) != 0 {
+            stack.push((n.child[c], hit[c]));
+        }
+    }
 }
 
 /// Which lanes of `packet` are occluded by `triangles` (in BVH order):
@@ -595,7 +608,7 @@ unsafe fn closest_wide(
     let (mut ts, mut numerators) = ([0.0; LANES], [[0.0; LANES]; 3]);
     while let Some((index, lanes)) = stack.pop() {
         let n = &tree.nodes[index as usize];
-        let occupied = n.child.iter().enumerate().fold(0u32, |m, (c, &x)| m | u32::from(x != 0) << c);
+        let occupied = occupied_slots(n);
         // SAFETY: AVX2 (the caller's promise); reads one [f32; 8].
         let hit = unsafe { wide_node(packet, n, occupied, _mm256_loadu_ps(tmax.as_ptr()), lanes) };
         let mut leaves = occupied & !n.imask;
@@ -615,14 +628,7 @@ unsafe fn closest_wide(
                 best.keep(fast, exact, &ts, &numerators, original[k], &mut tmax);
             }
         }
-        // Internal children, lowest traversal priority first, as in
-        // [`occluded_wide`].
-        for q in 0..8 {
-            let c = q ^ oct;
-            if hit[c] != 0 && n.imask & (1 << c) != 0 {
-                stack.push((n.child[c], hit[c]));
-            }
-        }
+        push_wide_children(n, &hit, oct, stack);
     }
     best
 }

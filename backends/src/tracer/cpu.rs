@@ -6,7 +6,7 @@ use obvhs::aabb::Aabb;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::Ray;
 
-use super::interleave;
+use super::stream;
 use super::node8::{self, Tally};
 use super::packet::{self, LANES};
 use super::tree8::{self, Tree8};
@@ -101,7 +101,7 @@ pub struct CpuTracer {
     /// triangle not held otherwise).
     lanes: std::sync::OnceLock<TriangleLanes>,
     /// `bvh` uncompressed (`wide8.rs`): the tree the occlusion packets and
-    /// `trace_all`'s interleaved walk read (and the single-ray walks where
+    /// `trace_all`'s ray-stream walk read (and the single-ray walks where
     /// `tree` is `None`), built at the first call that needs it; `None`
     /// inside where [`Wide8::new`] declines, and the CWBVH walks serve.
     wide: std::sync::OnceLock<Option<Wide8>>,
@@ -110,14 +110,14 @@ pub struct CpuTracer {
     /// as `bvh`, when the tracer is built; `None` where [`Tree8::new`]
     /// declines, and `wide`'s walk serves (or the CWBVH's).
     tree: Option<Tree8>,
-    /// What `trace_all`'s interleaved walk records of each crossing, in
+    /// What `trace_all`'s ray-stream walk records of each crossing, in
     /// BVH order ([`Recorded`]), built at its first call.
     recorded: std::sync::OnceLock<Vec<Recorded>>,
     /// Whether the 8-lane AVX2 node test is used (`node8`).
     avx2: bool,
-    /// Whether `trace_all` interleaves walks (`interleave.rs`): AVX2 and
-    /// a triangle scene.
-    interleave: bool,
+    /// Whether `trace_all` walks the batch as a ray stream (`stream.rs`):
+    /// AVX2 and a triangle scene.
+    stream: bool,
     /// Centre and half-extents of the box around every triangle, padded.
     bounds: (Vec3A, Vec3A),
 }
@@ -161,8 +161,11 @@ impl Recorded {
 /// the scene's scale of 1), so a line the test puts outside crosses nothing.
 const BOUNDS_PAD: f32 = 1e-4;
 
-/// [`Tracer::batch_lines`] of the CPU backend: 32 KB of lines.
-const BATCH_LINES: usize = 1024;
+/// [`Tracer::batch_lines`] of the CPU backend: the ray-stream walk's
+/// vectors fill better the more lines share a node (1,024 lines a batch
+/// left half of each eight-line vector empty on `cube-enclosure:30`;
+/// 16,384, ~4%).
+const BATCH_LINES: usize = 16_384;
 
 /// Whether the infinite line through `o` along `d` misses the box of
 /// centre `c` and half-extents `h`: the box and the line project apart on
@@ -202,10 +205,10 @@ impl CpuTracer {
             .fold((Vec3A::INFINITY, Vec3A::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
         let bounds = ((lo + hi) * 0.5, (hi - lo) * 0.5 + BOUNDS_PAD);
         let avx2 = node8::has_avx2();
-        let interleave = avx2 && scene.sphere.is_none();
+        let stream = avx2 && scene.sphere.is_none();
         let lanes = std::sync::OnceLock::new();
         let (wide, recorded) = (std::sync::OnceLock::new(), std::sync::OnceLock::new());
-        Self { scene: scene.clone(), bvh, ordered, lanes, wide, tree, recorded, avx2, interleave, bounds }
+        Self { scene: scene.clone(), bvh, ordered, lanes, wide, tree, recorded, avx2, stream, bounds }
     }
 
     /// The uncompressed tree, built at the first call.
@@ -537,20 +540,12 @@ impl CpuTracer {
             finish(&mut hits, out);
         }
     }
+}
 
-    /// [`Tracer::trace_all`] by interleaved walks over the wide nodes
-    /// (`interleave.rs`): each line's crossings are sorted and merged as
-    /// the single walk's are when its walk ends, into a buffer of lines in
-    /// that order, then copied in line order. Without AVX2 and FMA, or
-    /// where [`Wide8::new`] declines the tree, the single walk finds the
-    /// same crossings.
-    #[cfg(target_arch = "x86_64")]
-    fn trace_interleaved(&self, bvh: &CwBvh, lines: &[Line], out: &mut CrossingBuffer) {
-        let tree = match self.wide() {
-            Some(tree) if self.avx2 && std::is_x86_feature_detected!("fma") => tree,
-            _ => return self.trace_single(lines, out),
-        };
-        let recorded = self.recorded.get_or_init(|| {
+impl CpuTracer {
+    /// What `trace_all` records of each crossing, in BVH order.
+    fn recorded(&self, bvh: &CwBvh) -> &[Recorded] {
+        self.recorded.get_or_init(|| {
             let s = &self.scene;
             let of = |i: usize| Recorded {
                 normal: s.normals[i].to_array(),
@@ -558,28 +553,45 @@ impl CpuTracer {
                 primitive: i as u32,
             };
             bvh.primitive_indices.iter().map(|&i| of(i as usize)).collect()
-        });
-        let take = |l: &Line| !line_misses_box(Vec3A::from(l.origin), Vec3A::from(l.direction), self.bounds);
-        // `ended.line(at[i])`: line `i`'s crossings, where its walk found any.
-        let mut at = vec![u32::MAX; lines.len()];
-        let mut ended = CrossingBuffer::default();
-        ended.clear();
-        let mut hits = Vec::with_capacity(16);
-        let done = |li: u32, found: &[(u32, f32)]| {
-            let dir = walk_direction(&lines[li as usize]);
-            hits.extend(found.iter().map(|&(k, t)| recorded[k as usize].crossing(dir, t)));
-            at[li as usize] = (ended.offsets.len() - 1) as u32;
-            finish(&mut hits, &mut ended);
-        };
-        // SAFETY: `self.avx2` came from `has_avx2()`, FMA was detected just above.
-        unsafe { interleave::trace(tree, &self.ordered, recorded, lines, take, done) };
-        for &e in &at {
-            if e != u32::MAX {
-                out.crossings.extend_from_slice(ended.line(e as usize));
-            }
-            out.offsets.push(out.crossings.len() as u32);
-        }
+        })
     }
+
+    /// [`Tracer::trace_all`] by the ray-stream walk over the wide nodes
+    /// (`stream.rs`; node tests of sixteen lines with `sixteen`, which
+    /// needs AVX-512F): each line's crossings sorted and merged as the
+    /// single walk's are ([`finish`]). Without AVX2 and FMA, or where
+    /// [`Wide8::new`] declines the tree, the single walk finds the same
+    /// crossings.
+    #[cfg(target_arch = "x86_64")]
+    fn trace_stream(&self, bvh: &CwBvh, lines: &[Line], out: &mut CrossingBuffer, sixteen: bool) {
+        let tree = match self.wide() {
+            Some(tree) if self.avx2 && std::is_x86_feature_detected!("fma") => tree,
+            _ => return self.trace_single(lines, out),
+        };
+        let recorded = self.recorded(bvh);
+        let take = |l: &Line| !line_misses_box(Vec3A::from(l.origin), Vec3A::from(l.direction), self.bounds);
+        STREAM.with_borrow_mut(|s| {
+            let sixteen = sixteen && stream::has_avx512();
+            // SAFETY: `self.avx2` came from `has_avx2()`, FMA was detected
+            // just above, AVX-512F where `sixteen`.
+            unsafe { stream::trace(tree, &self.ordered, lines, take, sixteen, s) };
+            let mut hits = Vec::with_capacity(16);
+            let mut walked = s.ids.iter().zip(s.first.windows(2)).peekable();
+            for (i, l) in lines.iter().enumerate() {
+                if let Some((_, w)) = walked.next_if(|(id, _)| **id as usize == i) {
+                    let dir = walk_direction(l);
+                    let found = &s.found[w[0] as usize..w[1] as usize];
+                    hits.extend(found.iter().map(|&(k, t)| recorded[k as usize].crossing(dir, t)));
+                }
+                finish(&mut hits, out);
+            }
+        });
+    }
+}
+
+thread_local! {
+    /// The ray-stream walk's buffers, kept between batches on each thread.
+    static STREAM: std::cell::RefCell<stream::Scratch> = std::cell::RefCell::default();
 }
 
 impl Tracer for CpuTracer {
@@ -594,10 +606,10 @@ impl Tracer for CpuTracer {
     fn trace_all(&self, lines: &[Line], out: &mut CrossingBuffer) -> Result<(), BackendError> {
         out.clear();
         #[cfg(target_arch = "x86_64")]
-        if self.interleave
+        if self.stream
             && let Some(bvh) = &self.bvh
         {
-            self.trace_interleaved(bvh, lines, out);
+            self.trace_stream(bvh, lines, out, true);
             return Ok(());
         }
         self.trace_single(lines, out);
@@ -636,13 +648,13 @@ mod tests {
     use crate::scene::built_in;
     use crate::tracer::ReferenceTracer;
 
-    /// The interleaved walks find exactly the single walk's crossings (and
-    /// the reference's), bit for bit, on scenes with shared edges,
-    /// occluders, open edges and thin parts, for global lines and lines
-    /// grazing the box.
+    /// The ray-stream walk, eight and sixteen lines a node test, finds
+    /// exactly the single walk's crossings (and the reference's), bit for
+    /// bit, on scenes with shared edges, occluders, open edges and thin
+    /// parts, for global lines and lines grazing the box.
     #[cfg(target_arch = "x86_64")]
     #[test]
-    fn interleaved_walks_find_the_single_walks_crossings() {
+    fn stream_walk_finds_the_single_walks_crossings() {
         if !node8::has_avx2() {
             return;
         }
@@ -660,15 +672,19 @@ mod tests {
             let bvh = cpu.bvh.as_ref().unwrap();
             let (mut a, mut b, mut c) =
                 (CrossingBuffer::default(), CrossingBuffer::default(), CrossingBuffer::default());
-            // Batches of odd sizes: lanes refill across lines of any length.
+            // Batches of odd sizes: partial vectors at every node.
             for batch in lines.chunks(777) {
-                let (mut x, mut y) = (CrossingBuffer::default(), CrossingBuffer::default());
+                let (mut x, mut y, mut z) =
+                    (CrossingBuffer::default(), CrossingBuffer::default(), CrossingBuffer::default());
                 x.clear();
-                cpu.trace_interleaved(bvh, batch, &mut x);
+                cpu.trace_stream(bvh, batch, &mut x, false);
                 y.clear();
                 cpu.trace_single(batch, &mut y);
+                z.clear();
+                cpu.trace_stream(bvh, batch, &mut z, true);
                 assert_eq!(x.offsets, y.offsets, "{spec}");
                 assert_eq!(x.crossings, y.crossings, "{spec}");
+                assert_eq!((&z.offsets, &z.crossings), (&x.offsets, &x.crossings), "{spec}");
                 a.crossings.extend(x.crossings);
                 b.crossings.extend(y.crossings);
             }
@@ -678,13 +694,14 @@ mod tests {
         }
     }
 
-    /// Time per global line of the single and the interleaved walk (best
-    /// of 8), which must find the same crossings: a timing for
+    /// Time per global line of the single walk and the ray-stream walk
+    /// (eight and, where the CPU has AVX-512F, sixteen lines a node test;
+    /// best of 8), which must find the same crossings: a timing for
     /// `docs/TRACING.md`, run with `--release --ignored --nocapture`.
     #[cfg(target_arch = "x86_64")]
     #[test]
     #[ignore = "timing"]
-    fn interleaved_timing() {
+    fn stream_timing() {
         if !node8::has_avx2() {
             return;
         }
@@ -693,25 +710,32 @@ mod tests {
             let bvh = t.bvh.as_ref().unwrap();
             let n = 200_000;
             let lines: Vec<Line> = (0..n).map(|i| global_line(1, i, crate::visibility::SPHERE_SCALE)).collect();
-            let (mut single, mut interleaved) = (f64::MAX, f64::MAX);
+            let mut best = [f64::MAX; 3];
             for _ in 0..8 {
-                let (mut a, mut b) = (CrossingBuffer::default(), CrossingBuffer::default());
-                let clock = std::time::Instant::now();
-                for c in lines.chunks(1024) {
-                    a.clear();
-                    t.trace_single(c, &mut a);
+                let mut out: [CrossingBuffer; 3] = Default::default();
+                for (k, o) in out.iter_mut().enumerate() {
+                    let clock = std::time::Instant::now();
+                    for c in lines.chunks(BATCH_LINES) {
+                        o.clear();
+                        match k {
+                            0 => t.trace_single(c, o),
+                            _ => t.trace_stream(bvh, c, o, k == 2),
+                        }
+                    }
+                    best[k] = best[k].min(clock.elapsed().as_secs_f64());
                 }
-                single = single.min(clock.elapsed().as_secs_f64());
-                let clock = std::time::Instant::now();
-                for c in lines.chunks(1024) {
-                    b.clear();
-                    t.trace_interleaved(bvh, c, &mut b);
+                for o in &out[1..] {
+                    assert_eq!((&o.offsets, &o.crossings), (&out[0].offsets, &out[0].crossings), "{spec}");
                 }
-                interleaved = interleaved.min(clock.elapsed().as_secs_f64());
-                assert_eq!((a.offsets, a.crossings), (b.offsets, b.crossings), "{spec}");
             }
             let ns = |s: f64| s / n as f64 * 1e9;
-            eprintln!("{spec}: single walk {:.1} ns/line, interleaved {:.1} ns/line", ns(single), ns(interleaved));
+            eprintln!(
+                "{spec}: single walk {:.1} ns/line, stream of 8 {:.1} ns/line, stream of 16 {:.1} ns/line{}",
+                ns(best[0]),
+                ns(best[1]),
+                ns(best[2]),
+                if stream::has_avx512() { "" } else { " (no AVX-512F: 8)" },
+            );
         }
     }
 

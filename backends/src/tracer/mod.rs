@@ -33,10 +33,10 @@
 
 mod cpu;
 mod error;
-mod interleave;
 mod node8;
 mod packet;
 mod reference;
+mod stream;
 mod tree8;
 pub(crate) mod watertight;
 mod wide8;

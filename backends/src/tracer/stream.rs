@@ -1,0 +1,593 @@
+//! Every crossing of a batch of lines by one walk of the whole batch: a
+//! ray stream (for [`super::Tracer::trace_all`] on the CPU).
+//!
+//! The interleaved walk (`interleave.rs`) takes one line at a time through
+//! the tree and tests a node's eight children in one vector: each visit is
+//! a chain of dependent loads and data-dependent branches (which children,
+//! leaf or not, stack empty or not), different for every line. Here the
+//! batch walks the tree together: a node is visited once with the list of
+//! lines that entered it, and each of its children is tested against eight
+//! of those lines per vector (the lines' slab constants gathered by
+//! index), the lines that enter it packed into the child's list by the
+//! mask. The branches are per node and child, not per line and step.
+//!
+//! The crossings are the same as the interleaved walk's, bit for bit: a
+//! walk visits every node whose box the line enters, with no child order
+//! and no culling by hits, so the crossings are a property of the triangle
+//! test alone ([`Shear::hit_within`], per line and triangle, as there); the
+//! node test is the same fused `plane · inverse − origin · inverse` of each
+//! plane, its near and far distances taken by `min`/`max` of the two planes
+//! of an axis (the same values as choosing them by the direction's sign:
+//! `inverse` is never zero, and the fused products keep the planes' order).
+//! Each line's crossings are handed over in line order and sorted by the
+//! caller ([`super::watertight::finish`]).
+#![cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+
+use glam::Vec3A;
+use obvhs::ray::Ray;
+
+use super::node8::NODE_EPSILON;
+use super::watertight::Shear;
+use super::wide8::{LEAF, Node, Wide8};
+use crate::lines::Line;
+
+/// Lines per vector.
+const W: usize = 8;
+
+/// What one batch's walk keeps, reused from batch to batch on a thread.
+#[derive(Default)]
+pub(super) struct Scratch {
+    /// Index in the batch of each line walked (those `take` accepted), in
+    /// increasing order.
+    pub(super) ids: Vec<u32>,
+    /// Per line walked, its slab constants: the inverse direction (x, y,
+    /// z), `origin · inverse` (x, y, z) and `tmax`; one more entry, a line
+    /// that enters no box, fills the vectors' spare lanes.
+    rays: Vec<Rec>,
+    shears: Vec<Shear>,
+    /// Per line walked, the watertight test's constants ([`Shear`]): the
+    /// axes `k` (x, y, z, their bits), `s` (x, y, z), the origin along `k`
+    /// (x, y; then z), `tmin` and `tmax`; the spare lanes' line (`tmin =
+    /// +∞`, `tmax = −∞`) crosses nothing.
+    tri: Vec<[Rec; 2]>,
+    /// The lists of lines of the nodes still to visit, end to end.
+    arena: Vec<u32>,
+    /// `(node, start, length)` of each list in `arena` still to visit.
+    stack: Vec<(u32, u32, u32)>,
+    /// The lines entering each child of the node being visited.
+    slots: [Vec<u32>; 8],
+    /// `(line walked, k, t)` of each crossing found, `k` in BVH order.
+    hits: Vec<(u32, u32, f32)>,
+    /// Per line walked, the start of its crossings in `found` (one more
+    /// entry: the end).
+    pub(super) first: Vec<u32>,
+    /// `(k, t)` of each crossing, line by line.
+    pub(super) found: Vec<(u32, f32)>,
+}
+
+/// Whether the CPU has AVX-512F (sixteen lines per node test).
+#[cfg(target_arch = "x86_64")]
+pub(super) fn has_avx512() -> bool {
+    static HAS: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *HAS.get_or_init(|| std::is_x86_feature_detected!("avx512f"))
+}
+
+/// Walks `lines` that `take` accepts through `tree` together: the `r`-th
+/// line walked is line `s.ids[r]`, and its crossings within `[tmin,
+/// tmax]` are left as `(k, t)` (`k` the triangle in BVH order, `ordered`'s
+/// index) in `s.found[s.first[r]..s.first[r + 1]]`, in no particular order.
+///
+/// Node tests take sixteen lines per vector with `sixteen`, eight without.
+///
+/// # Safety
+/// The CPU must support AVX2 and FMA, and AVX-512F with `sixteen`
+/// ([`has_avx512`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+pub(super) unsafe fn trace(
+    tree: &Wide8,
+    ordered: &[[Vec3A; 3]],
+    lines: &[Line],
+    take: impl Fn(&Line) -> bool,
+    sixteen: bool,
+    s: &mut Scratch,
+) {
+    s.ids.clear();
+    s.shears.clear();
+    s.rays.clear();
+    s.tri.clear();
+    for (i, l) in lines.iter().enumerate() {
+        if !take(l) {
+            continue;
+        }
+        let (shear, dir) = Shear::of(l);
+        // obvhs's ray constants, as the interleaved walk takes them.
+        let ray = Ray::new(Vec3A::from(l.origin), dir, l.tmin, l.tmax);
+        let inv = ray.inv_direction.to_array();
+        let org = ray.origin.to_array();
+        let oi = [0, 1, 2].map(|a| org[a] * inv[a]);
+        s.rays.push(Rec([inv[0], inv[1], inv[2], oi[0], oi[1], oi[2], l.tmax, 0.0]));
+        let [kx, ky, kz] = shear.k.map(|k| f32::from_bits(k as u32));
+        let [sx, sy, sz] = shear.s;
+        let [ox, oy, oz] = shear.k.map(|k| shear.org[k]);
+        s.tri.push([Rec([kx, ky, kz, sx, sy, sz, ox, oy]), Rec([oz, l.tmin, l.tmax, 0.0, 0.0, 0.0, 0.0, 0.0])]);
+        s.shears.push(shear);
+        s.ids.push(i as u32);
+    }
+    let walked = s.ids.len();
+    // The spare lanes' line: `tmax = −∞` closes every box to it.
+    s.rays.push(Rec([1.0, 1.0, 1.0, 1.0, 1.0, 1.0, f32::NEG_INFINITY, 0.0]));
+    let zero = f32::from_bits(0);
+    s.tri.push([
+        Rec([zero, zero, zero, 1.0, 1.0, 1.0, 1.0, 1.0]),
+        Rec([1.0, f32::INFINITY, f32::NEG_INFINITY, 0.0, 0.0, 0.0, 0.0, 0.0]),
+    ]);
+    s.hits.clear();
+    if walked > 0 && !tree.nodes.is_empty() {
+        s.arena.clear();
+        s.arena.extend(0..walked as u32);
+        s.stack.clear();
+        s.stack.push((0, 0, walked as u32));
+        while let Some((node, start, len)) = s.stack.pop() {
+            let n = &tree.nodes[node as usize];
+            let (start, len) = (start as usize, len as usize);
+            if sixteen {
+                // SAFETY: AVX2 and FMA, and AVX-512F with `sixteen` (this function's contract).
+                unsafe { partition16(n, s, start, len) };
+            } else {
+                // SAFETY: AVX2 and FMA (this function's contract).
+                unsafe { partition8(n, s, start, len) };
+            }
+            // SAFETY: AVX2 and FMA (this function's contract).
+            unsafe { descend(n, ordered, s, start) };
+        }
+    }
+    // The crossings by line walked: counted, then placed (a counting sort).
+    s.first.clear();
+    s.first.resize(walked + 1, 0);
+    for &(r, _, _) in &s.hits {
+        s.first[r as usize + 1] += 1;
+    }
+    let mut sum = 0;
+    for f in &mut s.first {
+        sum += *f;
+        *f = sum;
+    }
+    s.found.clear();
+    s.found.resize(s.hits.len(), (0, 0.0));
+    // `first[r]` moves to the end of line `r`'s crossings as they are
+    // placed, then back by one line.
+    for &(r, k, t) in &s.hits {
+        let at = &mut s.first[r as usize];
+        s.found[*at as usize] = (k, t);
+        *at += 1;
+    }
+    s.first.copy_within(0..walked, 1);
+    s.first[0] = 0;
+}
+
+/// For each 8-bit mask, the indices of its set bits in increasing order,
+/// one per byte (the rest zero): the permutation that packs a node's hit
+/// children to the front of a vector.
+static PACK: [u64; 256] = {
+    let mut table = [0u64; 256];
+    let mut mask = 0;
+    while mask < 256 {
+        let (mut slot, mut packed) = (0, 0);
+        while slot < 8 {
+            if mask >> slot & 1 == 1 {
+                table[mask] |= (slot as u64) << (8 * packed);
+                packed += 1;
+            }
+            slot += 1;
+        }
+        mask += 1;
+    }
+    table
+};
+
+/// The occupied slots of node `n`.
+fn occupied(n: &Node) -> u32 {
+    n.child.iter().enumerate().fold(0u32, |m, (i, &c)| m | (u32::from(c != 0) << i))
+}
+
+/// Sorts the lines `s.arena[start..start + len]` that enter node `n` into
+/// the lists of the children they enter (`s.slots`), each child's box
+/// tested against eight lines per vector.
+///
+/// # Safety
+/// The CPU must support AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn partition8(n: &Node, s: &mut Scratch, start: usize, len: usize) {
+    use std::arch::x86_64::{
+        __m128i, __m256, __m256i, _CMP_LE_OQ, _mm_loadl_epi64, _mm256_cmp_ps, _mm256_cvtepu8_epi32,
+        _mm256_fmsub_ps, _mm256_loadu_si256, _mm256_max_ps, _mm256_min_ps, _mm256_movemask_ps,
+        _mm256_permutevar8x32_epi32, _mm256_set1_ps, _mm256_storeu_si256,
+    };
+    let occupied = occupied(n);
+    for slot in 0..8 {
+        s.slots[slot].clear();
+        s.slots[slot].reserve(len + W);
+    }
+    let spare = (s.rays.len() - 1) as u32;
+    let eps = _mm256_set1_ps(NODE_EPSILON);
+    let mut ends = [0usize; 8];
+    let outs: [*mut u32; 8] = std::array::from_fn(|i| s.slots[i].as_mut_ptr());
+    for chunk in s.arena[start..start + len].chunks(W) {
+        let mut idx = [spare; W];
+        idx[..chunk.len()].copy_from_slice(chunk);
+        // SAFETY: AVX2 and FMA (this function's contract). The index
+        // vector reads the 32 bytes of `idx`; every index is a line walked
+        // or `spare`, each an entry of `rays`. A child's list has `len + W` entries reserved and
+        // holds at most `len` before this chunk's store of eight. Empty
+        // slots (lower planes `+∞`, upper `−∞`) are entered by no line.
+        unsafe {
+            let vi = _mm256_loadu_si256(idx.as_ptr().cast::<__m256i>());
+            let [ix, iy, iz, ox, oy, oz, tmax, _] = columns(idx.map(|r| s.rays.as_ptr().add(r as usize)));
+            for slot in 0..8 {
+                // The same for every chunk of the node: predicted.
+                if occupied >> slot & 1 == 0 {
+                    continue;
+                }
+                let t = |row: usize, inv: __m256, oi: __m256| {
+                    _mm256_fmsub_ps(_mm256_set1_ps(n.bounds[row][slot]), inv, oi)
+                };
+                let (x0, x1) = (t(0, ix, ox), t(1, ix, ox));
+                let (y0, y1) = (t(2, iy, oy), t(3, iy, oy));
+                let (z0, z1) = (t(4, iz, oz), t(5, iz, oz));
+                let near = _mm256_max_ps(
+                    _mm256_max_ps(_mm256_min_ps(x0, x1), _mm256_min_ps(y0, y1)),
+                    _mm256_max_ps(_mm256_min_ps(z0, z1), eps),
+                );
+                let far = _mm256_min_ps(
+                    _mm256_min_ps(_mm256_max_ps(x0, x1), _mm256_max_ps(y0, y1)),
+                    _mm256_min_ps(_mm256_max_ps(z0, z1), tmax),
+                );
+                let hit = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(near, far)) as usize;
+                let order = _mm256_cvtepu8_epi32(_mm_loadl_epi64((&raw const PACK[hit]).cast::<__m128i>()));
+                _mm256_storeu_si256(outs[slot].add(ends[slot]).cast::<__m256i>(), _mm256_permutevar8x32_epi32(vi, order));
+                ends[slot] += hit.count_ones() as usize;
+            }
+        }
+    }
+    for (v, &e) in s.slots.iter_mut().zip(&ends) {
+        // SAFETY: the stores above wrote the first `e` entries (`e <= len`).
+        unsafe { v.set_len(e) };
+    }
+}
+
+/// [`partition8`] with sixteen lines per vector.
+///
+/// # Safety
+/// The CPU must support AVX-512F, AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+unsafe fn partition16(n: &Node, s: &mut Scratch, start: usize, len: usize) {
+    use std::arch::x86_64::{
+        __m512, __m512i, _CMP_LE_OQ, _mm256_castps_pd, _mm512_castpd_ps, _mm512_castps_pd, _mm512_castps256_ps512,
+        _mm512_cmp_ps_mask, _mm512_fmsub_ps, _mm512_insertf64x4, _mm512_loadu_si512, _mm512_max_ps,
+        _mm512_maskz_compress_epi32, _mm512_min_ps, _mm512_set1_ps, _mm512_storeu_si512,
+    };
+    const W16: usize = 16;
+    let occupied = occupied(n);
+    for slot in 0..8 {
+        s.slots[slot].clear();
+        s.slots[slot].reserve(len + W16);
+    }
+    let spare = (s.rays.len() - 1) as u32;
+    let eps = _mm512_set1_ps(NODE_EPSILON);
+    let mut ends = [0usize; 8];
+    let outs: [*mut u32; 8] = std::array::from_fn(|i| s.slots[i].as_mut_ptr());
+    for chunk in s.arena[start..start + len].chunks(W16) {
+        let mut idx = [spare; W16];
+        idx[..chunk.len()].copy_from_slice(chunk);
+        // SAFETY: AVX-512F, AVX2 and FMA (this function's contract). The
+        // index vector reads the 64 bytes of `idx`; every index is a line
+        // walked or `spare`, each an entry of `rays`. A child's list has
+        // `len + 16` entries reserved and holds at most `len` before this
+        // chunk's store of sixteen. Empty slots are skipped.
+        unsafe {
+            let vi = _mm512_loadu_si512(idx.as_ptr().cast::<__m512i>());
+            let lo = columns(std::array::from_fn(|j| s.rays.as_ptr().add(idx[j] as usize)));
+            let hi = columns(std::array::from_fn(|j| s.rays.as_ptr().add(idx[8 + j] as usize)));
+            let join = |a: usize| {
+                _mm512_castpd_ps(_mm512_insertf64x4::<1>(
+                    _mm512_castps_pd(_mm512_castps256_ps512(lo[a])),
+                    _mm256_castps_pd(hi[a]),
+                ))
+            };
+            let [ix, iy, iz, ox, oy, oz, tmax] = [0, 1, 2, 3, 4, 5, 6].map(join);
+            for slot in 0..8 {
+                if occupied >> slot & 1 == 0 {
+                    continue;
+                }
+                let t = |row: usize, inv: __m512, oi: __m512| {
+                    _mm512_fmsub_ps(_mm512_set1_ps(n.bounds[row][slot]), inv, oi)
+                };
+                let (x0, x1) = (t(0, ix, ox), t(1, ix, ox));
+                let (y0, y1) = (t(2, iy, oy), t(3, iy, oy));
+                let (z0, z1) = (t(4, iz, oz), t(5, iz, oz));
+                let near = _mm512_max_ps(
+                    _mm512_max_ps(_mm512_min_ps(x0, x1), _mm512_min_ps(y0, y1)),
+                    _mm512_max_ps(_mm512_min_ps(z0, z1), eps),
+                );
+                let far = _mm512_min_ps(
+                    _mm512_min_ps(_mm512_max_ps(x0, x1), _mm512_max_ps(y0, y1)),
+                    _mm512_min_ps(_mm512_max_ps(z0, z1), tmax),
+                );
+                let hit = _mm512_cmp_ps_mask::<_CMP_LE_OQ>(near, far);
+                _mm512_storeu_si512(outs[slot].add(ends[slot]).cast::<__m512i>(), _mm512_maskz_compress_epi32(hit, vi));
+                ends[slot] += hit.count_ones() as usize;
+            }
+        }
+    }
+    for (v, &e) in s.slots.iter_mut().zip(&ends) {
+        // SAFETY: the stores above wrote the first `e` entries (`e <= len`).
+        unsafe { v.set_len(e) };
+    }
+}
+
+/// After [`partition8`] or [`partition16`] at node `n` (whose list began
+/// at `start`): the lines entering each internal child pushed as its
+/// list, those entering each leaf child tested against its triangles.
+///
+/// # Safety
+/// The CPU must support AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn descend(n: &Node, ordered: &[[Vec3A; 3]], s: &mut Scratch, start: usize) {
+    // This node's list is spent; its children's lists take its place.
+    s.arena.truncate(start);
+    for slot in Bits(occupied(n)) {
+        let c = n.child[slot];
+        let v = &s.slots[slot];
+        if v.is_empty() {
+            continue;
+        } else if n.imask >> slot & 1 == 1 {
+            s.stack.push((c, s.arena.len() as u32, v.len() as u32));
+            s.arena.extend_from_slice(v);
+        } else if c & LEAF != 0 {
+            // SAFETY: AVX2 and FMA (this function's contract).
+            unsafe { leaf(ordered, n.prim_base, c & !LEAF, v, &s.tri, &s.shears, &mut s.hits) };
+        }
+    }
+}
+
+/// Tests the triangles of `mask` (bit `j`: `ordered[base + j]`) against
+/// the lines walked `list`, eight per vector, each lane
+/// [`Shear::hit_within`]'s arithmetic operation for operation (so the same
+/// `t` and answer to the bit): the vertex coordinates along the lane's
+/// axes `k` picked by a permute, then the same subtractions, products and
+/// sums in the same order, never fused. A lane whose edge function is
+/// exactly zero takes the scalar test (its double-precision branch).
+///
+/// # Safety
+/// The CPU must support AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn leaf(
+    ordered: &[[Vec3A; 3]],
+    base: u32,
+    mask: u32,
+    list: &[u32],
+    tri: &[[Rec; 2]],
+    shears: &[Shear],
+    hits: &mut Vec<(u32, u32, f32)>,
+) {
+    use std::arch::x86_64::{
+        __m128, __m256, _CMP_EQ_OQ, _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_NEQ_UQ, _mm256_add_ps,
+        _mm256_and_ps, _mm256_andnot_ps, _mm256_broadcast_ps, _mm256_castps_si256, _mm256_cmp_ps, _mm256_div_ps,
+        _mm256_movemask_ps, _mm256_mul_ps, _mm256_or_ps, _mm256_permutevar_ps, _mm256_setzero_ps, _mm256_storeu_ps,
+        _mm256_sub_ps,
+    };
+    let spare = (tri.len() - 1) as u32;
+    for chunk in list.chunks(W) {
+        let mut idx = [spare; W];
+        idx[..chunk.len()].copy_from_slice(chunk);
+        let valid = (1u32 << chunk.len()) - 1;
+        // SAFETY: AVX2 and FMA (this function's contract); every index is
+        // a line walked or `spare`, an entry of `tri`.
+        let ([kx, ky, kz, sx, sy, sz, ox, oy], [oz, tmin, tmax, ..]) = unsafe {
+            (columns(idx.map(|r| &raw const tri[r as usize][0])), columns(idx.map(|r| &raw const tri[r as usize][1])))
+        };
+        let (kx, ky, kz) = (_mm256_castps_si256(kx), _mm256_castps_si256(ky), _mm256_castps_si256(kz));
+        for bit in Bits(mask) {
+            let k = base + bit as u32;
+            let v = &ordered[k as usize];
+            // SAFETY: AVX2 and FMA (this function's contract); each vertex
+            // load reads the 16 bytes of a `Vec3A`.
+            let (t, crossed, zero) = unsafe {
+                // `(p − org)[k]` component by component, as `raw_always`'s.
+                let rel = |p: &Vec3A| {
+                    let p = _mm256_broadcast_ps(&*(p as *const Vec3A).cast::<__m128>());
+                    (
+                        _mm256_sub_ps(_mm256_permutevar_ps(p, kx), ox),
+                        _mm256_sub_ps(_mm256_permutevar_ps(p, ky), oy),
+                        _mm256_sub_ps(_mm256_permutevar_ps(p, kz), oz),
+                    )
+                };
+                let (a, b, c) = (rel(&v[0]), rel(&v[1]), rel(&v[2]));
+                let sh = |q: (__m256, __m256, __m256)| {
+                    (_mm256_sub_ps(q.0, _mm256_mul_ps(sx, q.2)), _mm256_sub_ps(q.1, _mm256_mul_ps(sy, q.2)))
+                };
+                let ((ax, ay), (bx, by), (cx, cy)) = (sh(a), sh(b), sh(c));
+                let (az, bz, cz) = (a.2, b.2, c.2);
+                let cross =
+                    |p: __m256, q: __m256, r: __m256, s: __m256| _mm256_sub_ps(_mm256_mul_ps(p, q), _mm256_mul_ps(r, s));
+                let u = cross(cx, by, cy, bx);
+                let w = cross(bx, ay, by, ax);
+                let vv = cross(ax, cy, ay, cx);
+                let zero = _mm256_setzero_ps();
+                let eq = |x: __m256| _mm256_cmp_ps::<_CMP_EQ_OQ>(x, zero);
+                let exact = _mm256_movemask_ps(_mm256_or_ps(_mm256_or_ps(eq(u), eq(vv)), eq(w))) as u32;
+                let det = _mm256_add_ps(_mm256_add_ps(u, vv), w);
+                let lt = |x: __m256| _mm256_cmp_ps::<_CMP_LT_OQ>(x, zero);
+                let gt = |x: __m256| _mm256_cmp_ps::<_CMP_GT_OQ>(x, zero);
+                let outside =
+                    _mm256_and_ps(_mm256_or_ps(_mm256_or_ps(lt(u), lt(vv)), lt(w)), _mm256_or_ps(_mm256_or_ps(gt(u), gt(vv)), gt(w)));
+                let term = |e: __m256, z: __m256| _mm256_mul_ps(_mm256_mul_ps(e, sz), z);
+                let num = _mm256_add_ps(_mm256_add_ps(term(u, az), term(vv, bz)), term(w, cz));
+                let t = _mm256_div_ps(num, det);
+                let ok = _mm256_andnot_ps(outside, _mm256_cmp_ps::<_CMP_NEQ_UQ>(det, zero));
+                let ok = _mm256_and_ps(ok, _mm256_cmp_ps::<_CMP_GE_OQ>(t, tmin));
+                let ok = _mm256_and_ps(ok, _mm256_cmp_ps::<_CMP_LE_OQ>(t, tmax));
+                let mut ts = [0f32; W];
+                _mm256_storeu_ps(ts.as_mut_ptr(), t);
+                (ts, _mm256_movemask_ps(ok) as u32, exact)
+            };
+            for lane in Bits(crossed & !zero & valid) {
+                hits.push((chunk[lane], k, t[lane]));
+            }
+            for lane in Bits(zero & valid) {
+                let r = chunk[lane] as usize;
+                let (t, crossed) = shears[r].hit_within(v, tri[r][1].0[1], tri[r][1].0[2]);
+                if crossed {
+                    hits.push((r as u32, k, t));
+                }
+            }
+        }
+    }
+}
+
+/// Eight records of eight `f32` as eight columns: column `a` holds entry
+/// `a` of each record (an 8×8 transpose in registers: eight loads and 24
+/// shuffles, where eight-lane gathers were a quarter of the walk).
+///
+/// # Safety
+/// The CPU must support AVX2; each pointer must point at a [`Rec`].
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn columns(recs: [*const Rec; 8]) -> [std::arch::x86_64::__m256; 8] {
+    use std::arch::x86_64::{
+        _mm256_load_ps, _mm256_permute2f128_ps, _mm256_shuffle_ps, _mm256_unpackhi_ps, _mm256_unpacklo_ps,
+    };
+    // SAFETY: the caller's contract; a `Rec` is 32 bytes, 32-aligned.
+    unsafe {
+        let r = recs.map(|p| _mm256_load_ps(p.cast::<f32>()));
+        let t = [
+            _mm256_unpacklo_ps(r[0], r[1]),
+            _mm256_unpackhi_ps(r[0], r[1]),
+            _mm256_unpacklo_ps(r[2], r[3]),
+            _mm256_unpackhi_ps(r[2], r[3]),
+            _mm256_unpacklo_ps(r[4], r[5]),
+            _mm256_unpackhi_ps(r[4], r[5]),
+            _mm256_unpacklo_ps(r[6], r[7]),
+            _mm256_unpackhi_ps(r[6], r[7]),
+        ];
+        let u = [
+            _mm256_shuffle_ps::<0x44>(t[0], t[2]),
+            _mm256_shuffle_ps::<0xEE>(t[0], t[2]),
+            _mm256_shuffle_ps::<0x44>(t[1], t[3]),
+            _mm256_shuffle_ps::<0xEE>(t[1], t[3]),
+            _mm256_shuffle_ps::<0x44>(t[4], t[6]),
+            _mm256_shuffle_ps::<0xEE>(t[4], t[6]),
+            _mm256_shuffle_ps::<0x44>(t[5], t[7]),
+            _mm256_shuffle_ps::<0xEE>(t[5], t[7]),
+        ];
+        [
+            _mm256_permute2f128_ps::<0x20>(u[0], u[4]),
+            _mm256_permute2f128_ps::<0x20>(u[1], u[5]),
+            _mm256_permute2f128_ps::<0x20>(u[2], u[6]),
+            _mm256_permute2f128_ps::<0x20>(u[3], u[7]),
+            _mm256_permute2f128_ps::<0x31>(u[0], u[4]),
+            _mm256_permute2f128_ps::<0x31>(u[1], u[5]),
+            _mm256_permute2f128_ps::<0x31>(u[2], u[6]),
+            _mm256_permute2f128_ps::<0x31>(u[3], u[7]),
+        ]
+    }
+}
+
+/// Eight `f32` of one line, 32-byte aligned (one load each).
+#[derive(Clone, Copy)]
+#[repr(C, align(32))]
+struct Rec([f32; 8]);
+
+/// The indices of the set bits of a mask, lowest first.
+struct Bits(u32);
+
+impl Iterator for Bits {
+    type Item = usize;
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<usize> {
+        (self.0 != 0).then(|| {
+            let i = self.0.trailing_zeros() as usize;
+            self.0 &= self.0 - 1;
+            i
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use obvhs::ray::Ray;
+
+    use super::*;
+    use crate::lines::global_line;
+    use crate::scene::built_in;
+    use crate::tracer::{CpuTracer, CrossingBuffer, Prepared, Tracer};
+
+    /// What the walk does per global line on `cube-enclosure:30` and
+    /// `cubes-room:512`: nodes visited, triangles tested, crossings kept,
+    /// and the nodes a walk that stopped after the line's last crossing
+    /// could skip (those the line enters only past it, beyond the 1e-5
+    /// padding). The scalar slab test here is the one [`partition8`] vectorises;
+    /// a figure for `docs/TRACING.md`, run with `--release --ignored
+    /// --nocapture`.
+    #[test]
+    #[ignore = "statistics"]
+    fn walk_statistics() {
+        for spec in ["cube-enclosure:30", "cubes-room:512"] {
+            let p = Prepared::new(&built_in(spec).unwrap());
+            let t = CpuTracer::new(&p);
+            let tree = t.wide().unwrap();
+            let n = 100_000u64;
+            let lines: Vec<Line> = (0..n).map(|i| global_line(1, i, crate::visibility::SPHERE_SCALE)).collect();
+            let mut buf = CrossingBuffer::default();
+            t.trace_all(&lines, &mut buf).unwrap();
+            let (mut nodes, mut tris, mut past, mut crossed) = (0u64, 0u64, 0u64, 0u64);
+            for (i, l) in lines.iter().enumerate() {
+                let Some(last) = buf.line(i).last().map(|c| c.t) else { continue };
+                crossed += 1;
+                let ray = Ray::new(Vec3A::from(l.origin), Shear::of(l).1, l.tmin, l.tmax);
+                let (inv, org) = (ray.inv_direction.to_array(), ray.origin.to_array());
+                let mut stack = vec![(0u32, 0.0f32)];
+                while let Some((k, entry)) = stack.pop() {
+                    nodes += 1;
+                    past += u64::from(entry > last + 1e-5);
+                    let node = &tree.nodes[k as usize];
+                    for slot in 0..8 {
+                        let mut lo = NODE_EPSILON;
+                        let mut hi = l.tmax;
+                        for (a, (&i, &o)) in inv.iter().zip(&org).enumerate() {
+                            // `plane · inverse − origin · inverse`, fused, as `visit`'s.
+                            let d = |row: usize| node.bounds[row][slot].mul_add(i, -(o * i));
+                            let (near, far) = if i < 0.0 { (2 * a + 1, 2 * a) } else { (2 * a, 2 * a + 1) };
+                            lo = lo.max(d(near));
+                            hi = hi.min(d(far));
+                        }
+                        if lo > hi {
+                            continue;
+                        }
+                        let c = node.child[slot];
+                        if node.imask >> slot & 1 == 1 {
+                            stack.push((c, lo));
+                        } else if c & LEAF != 0 {
+                            tris += u64::from((c & !LEAF).count_ones());
+                        }
+                    }
+                }
+            }
+            let per = |x: u64| x as f64 / crossed as f64;
+            eprintln!(
+                "{spec}: {crossed} of {n} lines cross; per crossing line: {:.2} nodes, {:.2} triangles tested, {:.2} crossings kept, {:.3} nodes entered only past the last crossing",
+                per(nodes),
+                per(tris),
+                per(buf.crossings.len() as u64),
+                per(past),
+            );
+        }
+    }
+}

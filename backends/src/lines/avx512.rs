@@ -16,10 +16,11 @@ use std::arch::x86_64::{
     _mm512_add_epi64, _mm512_add_pd, _mm512_and_si512, _mm512_castpd_si512, _mm512_castsi256_si512,
     _mm512_castsi512_pd, _mm512_castsi512_si256, _mm512_cmp_pd_mask, _mm512_cmpeq_epi32_mask, _mm512_cmple_epu64_mask,
     _mm512_cvtepi64_epi32, _mm512_cvtepu32_pd, _mm512_cvtpd_ps, _mm512_div_pd, _mm512_extracti64x4_epi64,
-    _mm512_inserti64x4, _mm512_loadu_pd, _mm512_loadu_si512, _mm512_mask_blend_pd, _mm512_mask_i32scatter_pd,
-    _mm512_maskz_compress_epi32, _mm512_mul_pd, _mm512_mullo_epi32, _mm512_set1_epi32, _mm512_set1_epi64,
-    _mm512_set1_pd, _mm512_setr_epi32, _mm512_sqrt_pd, _mm512_srli_epi32, _mm512_srli_epi64, _mm512_srlv_epi32,
-    _mm512_storeu_pd, _mm512_storeu_si512, _mm512_sub_epi64, _mm512_sub_pd, _mm512_xor_si512,
+    _mm512_fmadd_pd, _mm512_fnmadd_pd, _mm512_inserti64x4, _mm512_loadu_pd, _mm512_loadu_si512, _mm512_mask_blend_pd,
+    _mm512_mask_i32scatter_pd, _mm512_maskz_compress_epi32, _mm512_mul_pd, _mm512_mullo_epi32, _mm512_rsqrt14_pd,
+    _mm512_set1_epi32, _mm512_set1_epi64, _mm512_set1_pd, _mm512_setr_epi32, _mm512_sqrt_pd, _mm512_srli_epi32,
+    _mm512_srli_epi64, _mm512_srlv_epi32, _mm512_storeu_pd, _mm512_storeu_si512, _mm512_sub_epi64, _mm512_sub_pd,
+    _mm512_xor_si512,
 };
 
 /// Lines per chunk (a multiple of 16): the points (12 KB) and the queue
@@ -249,56 +250,72 @@ impl Scratch {
 
 /// [`super::chord`] of 8 point pairs `p[c][l]`, `q[c][l]`: each line's
 /// columns (origin `x`, `y`, `z`, direction `x`, `y`, `z`, `tmax`) in f32.
-/// The same f64 operations except the direction's division, taken as a
-/// multiplication by `1 / len` where that rounds to the same f32 ([`unit8`]).
+/// The same f64 operations up to the squared length; its square root and
+/// the three divisions are [`approximate_chord8`]'s where that proves the
+/// same f32, else the scalar operations for all 8 lanes.
 #[target_feature(enable = "avx512f")]
 fn chord8(p: [__m512d; 3], q: [__m512d; 3]) -> [__m256; 7] {
     let d = [0, 1, 2].map(|c| _mm512_sub_pd(q[c], p[c]));
-    // `DVec3::length`: √((x·x + y·y) + z·z).
-    let len = _mm512_sqrt_pd(_mm512_add_pd(
-        _mm512_add_pd(_mm512_mul_pd(d[0], d[0]), _mm512_mul_pd(d[1], d[1])),
-        _mm512_mul_pd(d[2], d[2]),
-    ));
-    let u = unit8(d, len);
-    // `d / len` where `len > 0`, else +z.
-    let positive = _mm512_cmp_pd_mask::<_CMP_GT_OQ>(len, _mm512_set1_pd(0.0));
-    let dir = [0.0, 0.0, 1.0].map(|z| _mm512_set1_pd(z));
-    let dir = [0, 1, 2].map(|c| _mm512_mask_blend_pd(positive, dir[c], u[c]));
+    // `DVec3::length`'s square: (x·x + y·y) + z·z.
+    let l2 =
+        _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(d[0], d[0]), _mm512_mul_pd(d[1], d[1])), _mm512_mul_pd(d[2], d[2]));
+    let (len, dir) = approximate_chord8(d, l2).unwrap_or_else(|| {
+        let len = _mm512_sqrt_pd(l2);
+        // `d / len` where `len > 0`, else +z.
+        let positive = _mm512_cmp_pd_mask::<_CMP_GT_OQ>(len, _mm512_set1_pd(0.0));
+        let z = [0.0, 0.0, 1.0];
+        (len, [0, 1, 2].map(|c| _mm512_mask_blend_pd(positive, _mm512_set1_pd(z[c]), _mm512_div_pd(d[c], len))))
+    });
     [p[0], p[1], p[2], dir[0], dir[1], dir[2], len].map(|c| _mm512_cvtpd_ps(c))
 }
 
-/// `d / len` rounded to f32 the scalar way: `d · (1 / len)` (one division,
-/// not three) is within 3 f64 ulps of the f64 quotient `d / len` (three
-/// roundings of `2^-53` each), so where it is at least 16 ulps from every
-/// f32 rounding boundary, in f32's normal range and at most 2, both round
-/// to the same f32; the lanes of a vector with any other value are divided.
+/// `(len, d / len)` with `len = √l2`, each within 10 f64 ulps of the
+/// correctly rounded f64 value and, checked, at least 64 ulps from every
+/// f32 rounding boundary, so that both round to the same f32; `None` if a
+/// lane fails a check (`l2` outside `[2^-250, 2^254]`, a direction
+/// component outside `[2^-125, 2]`: f32 subnormals, zero, NaN).
+///
+/// `r ≈ 1/√l2` is AVX-512's 14-bit estimate refined by two Newton steps
+/// `r ← r + r·(1/2 − (l2/2)·r²)` (relative error `ε ← 1.5ε² + 1.5·2^-53`:
+/// `2^-14`, then below `2^-27`, then below `2·2^-53`); `len = l2·r` and
+/// `d·r` add one rounding each (below `3·2^-53` from the exact values),
+/// and the scalar `√l2` and `d / len` are within `2^-53` and `2·2^-53`:
+/// at most `5·2^-53` apart, 10 ulps.
 #[target_feature(enable = "avx512f")]
-fn unit8(d: [__m512d; 3], len: __m512d) -> [__m512d; 3] {
-    let inv = _mm512_div_pd(_mm512_set1_pd(1.0), len);
-    let y = d.map(|c| _mm512_mul_pd(c, inv));
-    if y.iter().any(|&v| unsafe_to_round(v) != 0) {
-        return d.map(|c| _mm512_div_pd(c, len));
+fn approximate_chord8(d: [__m512d; 3], l2: __m512d) -> Option<(__m512d, [__m512d; 3])> {
+    let k = _mm512_set1_pd;
+    let in_range =
+        |v, lo: f64, hi: f64| _mm512_cmp_pd_mask::<_CMP_GE_OQ>(v, k(lo)) & _mm512_cmp_pd_mask::<_CMP_LE_OQ>(v, k(hi));
+    if in_range(l2, 2f64.powi(-250), 2f64.powi(254)) != u8::MAX {
+        return None;
     }
-    y
+    let half = _mm512_mul_pd(l2, k(0.5));
+    let mut r = _mm512_rsqrt14_pd(l2);
+    for _ in 0..2 {
+        r = _mm512_fmadd_pd(r, _mm512_fnmadd_pd(half, _mm512_mul_pd(r, r), k(0.5)), r);
+    }
+    let len = _mm512_mul_pd(l2, r);
+    let dir = d.map(|c| _mm512_mul_pd(c, r));
+    let mut risky = near_boundary(len);
+    for c in dir {
+        let abs = _mm512_castsi512_pd(_mm512_and_si512(_mm512_castpd_si512(c), _mm512_set1_epi64(i64::MAX)));
+        risky |= near_boundary(c) | !in_range(abs, 2f64.powi(-125), 2.0);
+    }
+    (risky == 0).then_some((len, dir))
 }
 
-/// The lanes of `y` whose f32 rounding could differ from that of a value
-/// within 16 f64 ulps: an f32 rounding boundary (the low 29 of the 52
-/// fraction bits `1000…0`) at most 16 ulps away, or `|y|` outside
-/// `[2^-125, 2]` (f32 subnormals, zero, overflow, NaN).
+/// The lanes of `y` at most 64 f64 ulps from an f32 rounding boundary (a
+/// midpoint between two f32: the low 29 of the 52 fraction bits `1000…0`),
+/// where a value that close may round to another f32 (for `|y|` in f32's
+/// normal range, where f32 keeps the top 23 fraction bits).
 #[target_feature(enable = "avx512f")]
-fn unsafe_to_round(y: __m512d) -> u8 {
-    const MARGIN: i64 = 16;
-    let bits = _mm512_castpd_si512(y);
-    let low = _mm512_and_si512(bits, _mm512_set1_epi64(0x1FFF_FFFF));
-    let near = _mm512_cmple_epu64_mask(
+fn near_boundary(y: __m512d) -> u8 {
+    const MARGIN: i64 = 64;
+    let low = _mm512_and_si512(_mm512_castpd_si512(y), _mm512_set1_epi64(0x1FFF_FFFF));
+    _mm512_cmple_epu64_mask(
         _mm512_sub_epi64(low, _mm512_set1_epi64(0x1000_0000 - MARGIN)),
         _mm512_set1_epi64(2 * MARGIN),
-    );
-    let abs = _mm512_castsi512_pd(_mm512_and_si512(bits, _mm512_set1_epi64(i64::MAX)));
-    let normal = _mm512_cmp_pd_mask::<_CMP_GE_OQ>(abs, _mm512_set1_pd(2f64.powi(-125)))
-        & _mm512_cmp_pd_mask::<_CMP_LE_OQ>(abs, _mm512_set1_pd(2.0));
-    near | !normal
+    )
 }
 
 /// Writes the 8 lines of `cols` (origin `x`, `y`, `z`, direction `x`, `y`,
@@ -417,16 +434,18 @@ mod tests {
         out
     }
 
-    /// Differences `d` whose length computes to exactly `2^e` and whose
-    /// component `c` is `2^e` times an f32 rounding boundary (a midpoint
-    /// between two f32) moved by `j` f64 ulps: the quotient `d / len` is
-    /// that value exactly, the cases where `d · (1 / len)` must not decide.
+    /// Differences `d` whose length or direction is an f32 rounding
+    /// boundary (a midpoint between two f32) moved by `j` f64 ulps: `x`
+    /// (length `|x|`), and lengths of exactly `2^e` with a component `2^e·x`
+    /// (direction `x`), the cases where the approximate chord must not decide.
     fn near_boundaries() -> Vec<DVec3> {
         let mut out = Vec::new();
         for a in [0.6f32, 0.5, 0.75, 0.999_999_94, 0.3, 0.1, 1e-3, 1e-30] {
             let mid = f64::from(a) + f64::from(a.next_up() - a) / 2.0;
-            for j in -40i64..=40 {
+            for j in -80i64..=80 {
                 let x = f64::from_bits(mid.to_bits().wrapping_add_signed(j));
+                // The length itself `x` (`√(x²)` rounds to `|x|`).
+                out.extend([DVec3::new(x, 0.0, 0.0), DVec3::new(0.0, 0.0, -x)]);
                 let z0 = (1.0 - x * x).sqrt();
                 // A `z` (a few ulps either way) for which the length is 1.
                 let z = (-8i64..=8)

@@ -496,7 +496,7 @@ mod tests {
             let scale = [0.9, 1e-3, 1e5][i as usize % 3];
             pairs.push((r.sphere_point(0) * scale, r.sphere_point(64) * scale));
         }
-        while pairs.len() % 8 != 0 {
+        while !pairs.len().is_multiple_of(8) {
             pairs.push((DVec3::ZERO, DVec3::X));
         }
         let bits = |l: &Line| [l.origin, l.direction, [l.tmin, l.tmax, 0.0]].map(|c| c.map(f32::to_bits));

@@ -289,19 +289,25 @@ fn approximate_chord8(d: [__m512d; 3], l2: __m512d) -> Option<(__m512d, [__m512d
     if in_range(l2, 2f64.powi(-250), 2f64.powi(254)) != u8::MAX {
         return None;
     }
-    let half = _mm512_mul_pd(l2, k(0.5));
-    let mut r = _mm512_rsqrt14_pd(l2);
-    for _ in 0..2 {
-        r = _mm512_fmadd_pd(r, _mm512_fnmadd_pd(half, _mm512_mul_pd(r, r), k(0.5)), r);
-    }
-    let len = _mm512_mul_pd(l2, r);
-    let dir = d.map(|c| _mm512_mul_pd(c, r));
+    let (len, dir) = newton_chord8(d, l2);
     let mut risky = near_boundary(len);
     for c in dir {
         let abs = _mm512_castsi512_pd(_mm512_and_si512(_mm512_castpd_si512(c), _mm512_set1_epi64(i64::MAX)));
         risky |= near_boundary(c) | !in_range(abs, 2f64.powi(-125), 2.0);
     }
     (risky == 0).then_some((len, dir))
+}
+
+/// `(l2·r, d·r)` with `r` [`approximate_chord8`]'s `1/√l2`, unchecked.
+#[target_feature(enable = "avx512f")]
+fn newton_chord8(d: [__m512d; 3], l2: __m512d) -> (__m512d, [__m512d; 3]) {
+    let k = _mm512_set1_pd;
+    let half = _mm512_mul_pd(l2, k(0.5));
+    let mut r = _mm512_rsqrt14_pd(l2);
+    for _ in 0..2 {
+        r = _mm512_fmadd_pd(r, _mm512_fnmadd_pd(half, _mm512_mul_pd(r, r), k(0.5)), r);
+    }
+    (_mm512_mul_pd(l2, r), d.map(|c| _mm512_mul_pd(c, r)))
 }
 
 /// The lanes of `y` at most 64 f64 ulps from an f32 rounding boundary (a
@@ -463,6 +469,71 @@ mod tests {
         }
         assert!(out.len() > 1000, "{} cases", out.len());
         out
+    }
+
+    /// The unchecked approximations are within the 10 ulps that
+    /// [`approximate_chord8`]'s margin of 64 assumes (the largest error
+    /// seen is printed), over lengths in all of its range, next to powers
+    /// of two (where an ulp halves) and random directions.
+    #[test]
+    fn newton_chord8_is_within_10_ulps() {
+        if !std::arch::is_x86_feature_detected!("avx512f") {
+            return;
+        }
+        let ulps = |a: f64, b: f64| a.to_bits().abs_diff(b.to_bits());
+        let mut worst = [0u64; 2];
+        for i in 0..400_000u64 {
+            let r = super::super::LineRng::new(17, i);
+            let e = (r.u32(3) % 250) as i32 - 125;
+            // Lengths spread over `[2^-125, 2^127)`, every eighth a power of
+            // two moved by a few ulps.
+            let scale = if i % 8 == 0 {
+                f64::from_bits(2f64.powi(e).to_bits().wrapping_add_signed(i64::from(r.u32(4) % 9) - 4))
+            } else {
+                2f64.powi(e) * (1.0 + r.uniform(5))
+            };
+            let d = r.sphere_point(0) * scale;
+            let l2 = d.length_squared();
+            if !(2f64.powi(-250)..=2f64.powi(254)).contains(&l2) {
+                continue;
+            }
+            // SAFETY: AVX-512F was detected above.
+            let (len, dir) = unsafe {
+                let (len, dir) = newton_chord8(d.to_array().map(|c| _mm512_set1_pd(c)), _mm512_set1_pd(l2));
+                let mut out = [0f64; 32];
+                for (j, v) in [len, dir[0], dir[1], dir[2]].into_iter().enumerate() {
+                    _mm512_storeu_pd(out.as_mut_ptr().add(8 * j), v);
+                }
+                (out[0], [out[8], out[16], out[24]])
+            };
+            let want = d.length();
+            worst[0] = worst[0].max(ulps(len, want));
+            for c in 0..3 {
+                if (d[c] / want).abs() >= 2f64.powi(-125) {
+                    worst[1] = worst[1].max(ulps(dir[c], d[c] / want));
+                }
+            }
+        }
+        println!("worst errors: length {} ulps, direction {} ulps", worst[0], worst[1]);
+        assert!(worst[0] <= 10 && worst[1] <= 10, "{worst:?}");
+    }
+
+    /// [`near_boundary`] flags exactly the values within 64 ulps of an f32
+    /// rounding boundary.
+    #[test]
+    fn near_boundary_flags_64_ulps() {
+        if !std::arch::is_x86_feature_detected!("avx512f") {
+            return;
+        }
+        for a in [0.6f32, -0.5, 1e-30, 3e30, 0.999_999_94] {
+            let mid = f64::from(a) + f64::from(a.next_up() - a) / 2.0;
+            for j in -100i64..=100 {
+                let y = f64::from_bits(mid.to_bits().wrapping_add_signed(j));
+                // SAFETY: AVX-512F was detected above.
+                let flagged = unsafe { near_boundary(_mm512_set1_pd(y)) } == u8::MAX;
+                assert_eq!(flagged, j.abs() <= 64, "{a} {j}");
+            }
+        }
     }
 
     /// The chords are the scalar [`super::super::chord`]'s, bit for bit:

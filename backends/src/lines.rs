@@ -225,8 +225,8 @@ impl Simd {
     }
 }
 
-/// [`global_lines_of`] with the instructions of `simd` (at most the CPU's,
-/// [`Simd::detect`]). With AVX2 the integer hashing (each line's generator
+/// [`global_lines_of`] with the instructions of `simd` (at most: never
+/// more than the CPU's, [`Simd::detect`]). With AVX2 the integer hashing (each line's generator
 /// and its first draws, 13 of the ~15 [`pcg`] calls of a line) goes in 8
 /// lanes, the floating-point rest in two halves of 4 (`global_lines8`);
 /// only a rejected pair of draws goes through the scalar code.
@@ -239,16 +239,16 @@ fn global_lines_with(
     radius: f64,
     out: &mut Vec<Line>,
 ) {
-    debug_assert!(simd <= Simd::detect());
+    let simd = simd.min(Simd::detect());
     let mut k = 0;
     #[cfg(target_arch = "x86_64")]
     match simd {
-        // SAFETY: AVX-512F is detected (`simd <= Simd::detect()`).
+        // SAFETY: AVX-512F is detected (`simd` is at most `Simd::detect()`).
         Simd::Avx512 => k = unsafe { avx512::global_lines(seed, first, stride, count, radius, out) },
         Simd::Avx2 => {
             while k + 8 <= count {
                 let index: [u64; 8] = std::array::from_fn(|l| first.wrapping_add((k + l as u64).wrapping_mul(stride)));
-                // SAFETY: AVX2 is detected (`simd <= Simd::detect()`).
+                // SAFETY: AVX2 is detected (`simd` is at most `Simd::detect()`).
                 unsafe {
                     let (w1, w2, d) = hash8(seed, &index);
                     global_lines8(&w1, &w2, &d, radius, out);

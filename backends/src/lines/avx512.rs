@@ -6,8 +6,8 @@
 //! hashing, 8 lanes of f64); the queue's retries, 16 rejected points at a
 //! time whatever their lines, until every point is accepted (a rejected
 //! pair of draws costs a lane of a later vector, not a scalar retry and a
-//! mispredicted branch); then the chords, 8 lines at a time, transposed
-//! into [`Line`] rows.
+//! mispredicted branch); then the chords through the two points (tutorial
+//! Part III §1.4), 8 lines at a time, transposed into [`Line`] rows.
 
 use super::{Line, SeedHash, pcg};
 use std::arch::x86_64::{
@@ -122,7 +122,7 @@ impl Scratch {
                 pcg16(_mm512_xor_si512(w1, pcg16_state(state)))
             };
             for (slot, k) in [(o, 0u32), (CHUNK + o, 64)] {
-                let accepted = self.store_points(slot, draw(k), draw(k + 1), u16::MAX);
+                let accepted = self.store_points(slot, draw(k), draw(k + 1));
                 self.enqueue(!accepted, splat_index(slot), w1, w2, splat((k + 2).wrapping_mul(PHI)));
             }
         }
@@ -150,11 +150,11 @@ impl Scratch {
         (w1, w2)
     }
 
-    /// The points of the 16 draw pairs `(a[l], b[l])` into slots `slot + l`
-    /// ([`point8`]), for the lanes of `live` that accept theirs (slot
-    /// numbers in `slots` lane by lane); returns the accepted lanes.
+    /// The points of the 16 draw pairs `(a[l], b[l])` ([`point8`]) into
+    /// slots `slot + l` (a rejected lane's until its retry overwrites it);
+    /// returns the accepted lanes.
     #[target_feature(enable = "avx512f")]
-    fn store_points(&mut self, slot: usize, a: __m512i, b: __m512i, live: u16) -> u16 {
+    fn store_points(&mut self, slot: usize, a: __m512i, b: __m512i) -> u16 {
         let mut accepted = 0;
         for h in 0..2 {
             let (c, acc) = point8(half(a, h), half(b, h), self.radius);
@@ -165,7 +165,7 @@ impl Scratch {
             }
             accepted |= u16::from(acc) << (8 * h);
         }
-        accepted & live
+        accepted
     }
 
     /// Appends the lanes of `mask` to the queue.

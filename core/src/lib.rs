@@ -109,5 +109,6 @@ pub use scene::{
     ContinuousMutualInformation, PairCount, SceneMeasures, continuous_mutual_information,
     discretisation_error_area_sampling, discretisation_error_lines, log_area_form_factor,
     mutual_information_matrix_into, point_form_factor, scene_measures, scene_measures_from_counts,
+    scene_measures_from_counts_with,
 };
 pub use sparse::{SparseChannel, jensen_shannon_sparse, jensen_shannon_sparse_logs, sparse_logs};

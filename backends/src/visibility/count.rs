@@ -2,10 +2,10 @@
 //! §1.4, eqs. (30) and (59)); see the module above for what is counted.
 //!
 //! Block `b` of `B` holds the lines `i ≡ b (mod B)` of the range cast. The
-//! blocks are traced one after another, each with one pair accumulator;
-//! within a block, work is split into chunks of [`CHUNK`] lines traced by
-//! rayon. Every count and sum is exact, so the result is the same for any
-//! thread count and chunking.
+//! blocks are traced one after another into one pair accumulator, in waves
+//! of chunks of [`CHUNK`] lines traced by rayon; each wave is merged while
+//! the next one traces, across block ends too. Every count and sum is
+//! exact, so the result is the same for any thread count and chunking.
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -401,6 +401,107 @@ fn first_past_origin(
     Ok(out)
 }
 
+/// One wave of chunks, all of one block: the block's lines (`first`,
+/// stride `blocks`, `count` of them) and the chunks' starts in it.
+struct Wave {
+    first: u64,
+    count: u64,
+    /// Line offsets in the block (multiples of [`CHUNK`]) of the chunks.
+    chunks: Vec<u64>,
+    /// Whether this is the block's last wave (an empty block has one, empty).
+    last: bool,
+}
+
+/// The waves of a run, block after block, made one at a time: memory stays
+/// bounded whatever the line count (10^18 lines would list 5e14 chunks).
+struct WavePlan {
+    start: u64,
+    end: u64,
+    blocks: u64,
+    /// Most chunks per wave.
+    wave: u64,
+    /// Chunks of the run's last wave, the one whose merge nothing overlaps.
+    tail: u64,
+    block: u64,
+    /// The next chunk's line offset in `block`.
+    next: u64,
+}
+
+impl WavePlan {
+    fn next_wave(&mut self) -> Option<Wave> {
+        if self.block >= self.blocks {
+            return None;
+        }
+        let (first, count) = block_lines(self.start, self.end, self.block, self.blocks);
+        let left = (count - self.next).div_ceil(CHUNK);
+        // The run's last chunks are cut off into a short wave of their own:
+        // its merge is the only one no tracing overlaps.
+        let take = if self.block + 1 == self.blocks && left <= self.wave && left > self.tail {
+            left - self.tail
+        } else {
+            left.min(self.wave)
+        };
+        let chunks: Vec<u64> = (0..take).map(|j| self.next + j * CHUNK).collect();
+        let w = Wave { first, count, chunks, last: take == left };
+        if w.last {
+            (self.block, self.next) = (self.block + 1, 0);
+        } else {
+            self.next += take * CHUNK;
+        }
+        Some(w)
+    }
+}
+
+/// What the waves' results are merged into: the pair accumulator (one for
+/// the run), the per-patch endpoint sums, and the open block's counts.
+struct Merger {
+    acc: Accumulator,
+    endpoints: Vec<u64>,
+    endpoint_log: Vec<FixedSum>,
+    /// The open block's background counts per patch (zeroed when it closes).
+    background: Vec<u64>,
+    block: BlockCounts,
+    out: Vec<BlockCounts>,
+}
+
+impl Merger {
+    /// Merges a wave's results into its block; the block's last wave closes
+    /// it (its pairs taken, the accumulator empty for the next).
+    fn merge(&mut self, w: &Wave, results: Vec<Result<ChunkResult, CountsError>>) -> Result<(), CountsError> {
+        let overflow = |what: &str| CountsError::Overflow(what.into());
+        let block = &mut self.block;
+        block.lines = w.count;
+        for r in results {
+            let r = r?;
+            self.acc.add_keys(&r.keys);
+            for (i, c) in r.background {
+                let x = &mut self.background[i as usize];
+                *x = x.checked_add(c).ok_or_else(|| overflow("a background count"))?;
+            }
+            r.endpoint
+                .add_into(&mut self.endpoint_log, &mut self.endpoints)
+                .ok_or_else(|| overflow("an endpoint sum"))?;
+            block.continuous =
+                block.continuous.checked_add(&r.cont).ok_or_else(|| overflow("the I_S^c sum of a block"))?;
+            block.segments = block.segments.checked_add(r.segments).ok_or_else(|| overflow("segments"))?;
+            block.escaped = block.escaped.checked_add(r.escaped).ok_or_else(|| overflow("escaped"))?;
+        }
+        if w.last {
+            let mut block = std::mem::take(&mut self.block);
+            block.pairs = self.acc.take_pairs()?;
+            block.background = self
+                .background
+                .iter_mut()
+                .enumerate()
+                .filter(|(_, c)| **c > 0)
+                .map(|(i, c)| (i as u32, std::mem::take(c)))
+                .collect();
+            self.out.push(block);
+        }
+        Ok(())
+    }
+}
+
 /// Casts the lines `offset .. offset + lines` through `tracer` and counts
 /// the visibility channel. `progress(lines_done, lines_total)` is called
 /// between waves of chunks.
@@ -438,66 +539,43 @@ pub fn count_visibility(
     // own tracing), where a thread may wait up to a chunk (~7 ms). 64 chunks
     // a thread make 6 joins a block at 10^8 lines, not 24 (16 a thread); at
     // most 256 chunks (~0.3 MB of results each, two waves alive at a time).
-    let wave = (rayon::current_num_threads() as u64 * 64).clamp(16, 256);
-    let overflow = |what: &str| CountsError::Overflow(what.into());
-    let mut out = Vec::new();
-    let mut endpoints = vec![0u64; n];
-    let mut endpoint_log = vec![FixedSum::default(); n];
+    let threads = rayon::current_num_threads() as u64;
+    let wave = (threads * 64).clamp(16, 256);
+    let mut plan = WavePlan { start, end, blocks, wave, tail: (2 * threads).min(wave), block: 0, next: 0 };
+    let run_wave = |w: &Wave| -> Vec<Result<ChunkResult, CountsError>> {
+        w.chunks
+            .par_iter()
+            .map(|&k| {
+                let span = (w.first + k * blocks, blocks, CHUNK.min(w.count - k));
+                process_chunk(prepared, tracer, sampler.as_ref(), opts, total_area_norm, span, radius)
+            })
+            .collect()
+    };
+    let mut merger = Merger {
+        acc: Accumulator::new(n, !opts.local),
+        endpoints: vec![0; n],
+        endpoint_log: vec![FixedSum::default(); n],
+        background: vec![0; n],
+        block: BlockCounts::default(),
+        out: Vec::with_capacity(blocks as usize),
+    };
+    // Merge wave k while wave k+1 traces (exact sums: order-free), across
+    // blocks too: a block's last merge and the reading of its pairs overlap
+    // the next block's first wave.
+    let mut pending: Option<(Wave, Vec<Result<ChunkResult, CountsError>>)> = None;
     let mut done = 0;
-    let mut acc = Accumulator::new(n, !opts.local);
-    for b in 0..blocks {
-        let (first, count) = block_lines(start, end, b, blocks);
-        let mut background = vec![0u64; n];
-        let mut block = BlockCounts { lines: count, ..BlockCounts::default() };
-        let run_wave = |w: &[u64]| -> Vec<Result<ChunkResult, CountsError>> {
-            w.par_iter()
-                .map(|&k| {
-                    let span = (first + k * blocks, blocks, CHUNK.min(count - k));
-                    process_chunk(prepared, tracer, sampler.as_ref(), opts, total_area_norm, span, radius)
-                })
-                .collect()
+    while let Some(w) = plan.next_wave() {
+        let (merged, next) = match pending.take() {
+            Some((pw, prev)) => rayon::join(|| merger.merge(&pw, prev), || run_wave(&w)),
+            None => (Ok(()), run_wave(&w)),
         };
-        // Merge wave k while wave k+1 traces (exact sums: order-free).
-        let mut merge = |results: Vec<Result<ChunkResult, CountsError>>| -> Result<(), CountsError> {
-            for r in results {
-                let r = r?;
-                acc.add_keys(&r.keys);
-                for (i, c) in r.background {
-                    let x = &mut background[i as usize];
-                    *x = x.checked_add(c).ok_or_else(|| overflow("a background count"))?;
-                }
-                r.endpoint.add_into(&mut endpoint_log, &mut endpoints).ok_or_else(|| overflow("an endpoint sum"))?;
-                block.continuous =
-                    block.continuous.checked_add(&r.cont).ok_or_else(|| overflow("the I_S^c sum of a block"))?;
-                block.segments = block.segments.checked_add(r.segments).ok_or_else(|| overflow("segments"))?;
-                block.escaped = block.escaped.checked_add(r.escaped).ok_or_else(|| overflow("escaped"))?;
-            }
-            Ok(())
-        };
-        // Chunk starts are made one wave at a time: memory stays bounded
-        // whatever the line count (10^18 lines would list 5e14 chunks).
-        let mut pending: Option<Vec<Result<ChunkResult, CountsError>>> = None;
-        let mut next_chunk = Some(0u64).filter(|_| count > 0);
-        while let Some(w0) = next_chunk {
-            let w: Vec<u64> = (0..wave).map_while(|j| w0.checked_add(j * CHUNK).filter(|&k| k < count)).collect();
-            next_chunk = w.last().and_then(|&k| k.checked_add(CHUNK)).filter(|&k| k < count);
-            let w = w.as_slice();
-            let (merged, next) = match pending.take() {
-                Some(prev) => rayon::join(|| merge(prev), || run_wave(w)),
-                None => (Ok(()), run_wave(w)),
-            };
-            merged?;
-            pending = Some(next);
-            done += w.iter().map(|&k| CHUNK.min(count - k)).sum::<u64>();
-            progress(done, opts.lines);
-        }
-        if let Some(prev) = pending {
-            merge(prev)?;
-        }
-        block.pairs = acc.take_pairs()?;
-        block.background =
-            background.iter().enumerate().filter(|(_, c)| **c > 0).map(|(i, &c)| (i as u32, c)).collect();
-        out.push(block);
+        merged?;
+        done += w.chunks.iter().map(|&k| CHUNK.min(w.count - k)).sum::<u64>();
+        progress(done, opts.lines);
+        pending = Some((w, next));
+    }
+    if let Some((pw, prev)) = pending {
+        merger.merge(&pw, prev)?;
     }
     let areas = scene.areas();
     Ok(VisibilityCounts {
@@ -506,9 +584,9 @@ pub fn count_visibility(
         local: opts.local,
         seed: opts.seed,
         ranges: vec![(start, end)],
-        blocks: out,
-        endpoints,
-        endpoint_log,
+        blocks: merger.out,
+        endpoints: merger.endpoints,
+        endpoint_log: merger.endpoint_log,
     })
 }
 

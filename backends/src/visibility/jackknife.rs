@@ -14,7 +14,9 @@
 use std::borrow::Cow;
 
 use itgfx_core::sum::Neumaier;
-use itgfx_core::{Base, PairCount, SceneMeasures, entropy_nats_of_sums, kl_terms_into, scene_measures_from_counts};
+use itgfx_core::{
+    Base, PairCount, SceneMeasures, entropy_nats_of_sums, kl_terms_into, scene_measures_from_counts_with,
+};
 use rayon::prelude::*;
 
 use super::merge::merge_sorted;
@@ -68,10 +70,9 @@ struct XlnxTable(Vec<f64>);
 const XLNX_TABLE: u64 = 1 << 20;
 
 impl XlnxTable {
-    /// The counts up to the largest in `totals` (every block's count of a
-    /// pair is at most its total), or up to [`XLNX_TABLE`].
-    fn for_totals(totals: &[PairCount]) -> Self {
-        let max = totals.par_iter().map(|p| p.count).max().unwrap_or(0);
+    /// The counts up to `max`, the largest total count (every block's count
+    /// of a pair is at most its total), or up to [`XLNX_TABLE`].
+    fn up_to(max: u64) -> Self {
         Self((0..=max.min(XLNX_TABLE - 1)).into_par_iter().map(xlnx).collect())
     }
 
@@ -101,12 +102,14 @@ fn add_sorted(a: &[PairCount], b: &[PairCount]) -> Vec<PairCount> {
 /// merge order), in parallel over pieces of whole rows, then the pieces
 /// copied into one list. A pairwise merge tree wrote every pair once per
 /// level (three levels for 8 blocks), each level into fresh pages (the
-/// kernel zeroes each): 1 GB more peak memory at 10^8 lines.
-fn total_pairs(blocks: &[Cow<'_, [PairCount]>]) -> Vec<PairCount> {
+/// kernel zeroes each): 1 GB more peak memory at 10^8 lines. With the
+/// largest count, found while the pieces are copied (a pass of its own over
+/// the totals was 1-2% of a 10^7-line run's wall time).
+fn total_pairs(blocks: &[Cow<'_, [PairCount]>]) -> (Vec<PairCount>, u64) {
     let lists: Vec<&[PairCount]> = blocks.iter().map(|b| &b[..]).filter(|b| !b.is_empty()).collect();
-    let Some(&longest) = lists.iter().max_by_key(|l| l.len()) else { return Vec::new() };
+    let Some(&longest) = lists.iter().max_by_key(|l| l.len()) else { return (Vec::new(), 0) };
     if lists.len() == 1 {
-        return longest.to_vec();
+        return (longest.to_vec(), longest.iter().map(|p| p.count).max().unwrap_or(0));
     }
     // Rows `[lo, hi)` of each piece, cut at the row starts of the longest
     // list's pieces; the last piece runs to the end of every list.
@@ -144,16 +147,24 @@ fn total_pairs(blocks: &[Cow<'_, [PairCount]>]) -> Vec<PairCount> {
         slots.push(head);
         rest = tail;
     }
-    merged.par_iter().zip(slots).for_each(|(m, slot)| {
-        for (d, &p) in slot.iter_mut().zip(m) {
-            d.write(p);
-        }
-    });
+    let max = merged
+        .par_iter()
+        .zip(slots)
+        .map(|(m, slot)| {
+            let mut max = 0;
+            for (d, &p) in slot.iter_mut().zip(m) {
+                d.write(p);
+                max = max.max(p.count);
+            }
+            max
+        })
+        .max()
+        .unwrap_or(0);
     // SAFETY: the slots cover the first `total` entries of the spare
     // capacity, each as long as its piece's list, and every entry of each
     // was written just above.
     unsafe { out.set_len(total) };
-    out
+    (out, max)
 }
 
 /// Merges the sorted lists `parts` (counts positive), adding the counts of
@@ -296,21 +307,6 @@ fn pair_key(p: &PairCount) -> u64 {
     (u64::from(p.from) << 32) | u64::from(p.to)
 }
 
-/// The first index `≥ from` of `totals` whose [`pair_key`] is `key`
-/// (present by construction), by galloping then bisection.
-fn find(totals: &[PairCount], from: usize, key: u64) -> usize {
-    let k = pair_key;
-    let mut step = 1;
-    let mut hi = from;
-    while hi < totals.len() && k(&totals[hi]) < key {
-        hi = from + step;
-        step *= 2;
-    }
-    let lo = from + step / 4;
-    let hi = hi.min(totals.len());
-    lo.min(hi) + totals[lo.min(hi)..hi].partition_point(|p| k(p) < key)
-}
-
 /// `a_i (ln N − S / N)`, the row's part of `H_S` (0 for an empty row): the
 /// core's entropy of sums (Part II eq. (2)), which clamps rounding below 0.
 #[inline]
@@ -346,10 +342,21 @@ fn row_sums(totals: &[PairCount], rows: usize, table: &XlnxTable) -> (Vec<u64>, 
     (n, s)
 }
 
+/// Pairs of the totals per piece of [`leave_one_out_scene_entropy`] (1 MB:
+/// a piece stays in the L2 cache while every block walks it).
+const LOO_PIECE: usize = 1 << 16;
+
 /// `H_S` in nats without each block, in block order, by the running-totals
 /// identity of the module docs. `totals` are the pairs with background of
 /// all blocks, `rows` and `s` their row totals `N_i` and sums `S_i`
 /// ([`row_sums`]).
+///
+/// The totals are cut into pieces of whole rows, in parallel; row by row,
+/// the row's totals are spread into a dense row (every block's pair of the
+/// row is one of them) where each block looks its pairs' totals up (a
+/// search of the totals per block pair was most of the measures' time).
+/// A block's changed rows come out in row order, each row's change summed
+/// over its pairs in order: every sum has the bits of a walk block by block.
 fn leave_one_out_scene_entropy(
     a: &[f64],
     per_block: &[&[PairCount]],
@@ -362,39 +369,77 @@ fn leave_one_out_scene_entropy(
     let mut full = Neumaier::new();
     terms.iter().for_each(|&t| full.add(t));
     let full = full.value();
-    // Blocks are independent: each in parallel, with per-thread scratch rows
-    // (left zeroed after each block).
-    per_block
+    let pieces = row_pieces(totals, (totals.len() / LOO_PIECE).max(pieces_per_thread()));
+    // Per piece, per block: the rows it changes, `(i, R_bi, D_bi)`.
+    let changes: Vec<Vec<Vec<(u32, u64, f64)>>> = pieces
         .par_iter()
         .map_init(
-            || (vec![0u64; n], vec![Neumaier::new(); n], Vec::<u32>::new()),
-            |(r, d, touched), pairs| {
-                let mut pos = 0;
-                for p in pairs.iter() {
-                    pos = find(totals, pos, pair_key(p));
-                    let total = totals[pos].count;
-                    let i = p.from as usize;
-                    if r[i] == 0 {
-                        touched.push(p.from);
+            || vec![0u64; n],
+            |dense, piece| {
+                let lo = piece.first().map_or(0, |p| u64::from(p.from));
+                let hi = piece.last().map_or(0, |p| u64::from(p.from) + 1);
+                let mut mine: Vec<&[PairCount]> = per_block
+                    .iter()
+                    .map(|pairs| {
+                        let at = |row: u64| pairs.partition_point(|p| u64::from(p.from) < row);
+                        &pairs[at(lo)..at(hi)]
+                    })
+                    .collect();
+                let mut out: Vec<Vec<(u32, u64, f64)>> = vec![Vec::new(); per_block.len()];
+                let mut rest = *piece;
+                while let Some(first) = rest.first() {
+                    let row = first.from;
+                    let len = rest.partition_point(|p| p.from == row);
+                    for p in &rest[..len] {
+                        dense[p.to as usize] = p.count;
                     }
-                    r[i] += p.count;
-                    d[i].add(table.get(total) - table.get(total - p.count));
+                    rest = &rest[len..];
+                    for (pairs, o) in mine.iter_mut().zip(&mut out) {
+                        let len = pairs.partition_point(|p| p.from == row);
+                        let (r, d) = row_change(&pairs[..len], dense, table);
+                        *pairs = &pairs[len..];
+                        if r > 0 {
+                            o.push((row, r, d));
+                        }
+                    }
                 }
-                let mut h = Neumaier::new();
-                h.add(full);
-                for &i in touched.iter() {
-                    let i = i as usize;
-                    h.add(-terms[i]);
-                    h.add(row_term(a[i], rows[i] - r[i], s[i] - d[i].value()));
-                    r[i] = 0;
-                    d[i] = Neumaier::new();
-                }
-                touched.clear();
-                h.value().max(0.0)
+                out
             },
         )
+        .collect();
+    (0..per_block.len())
+        .into_par_iter()
+        .map(|b| {
+            let mut h = Neumaier::new();
+            h.add(full);
+            for &(i, r, d) in changes.iter().flat_map(|piece| &piece[b]) {
+                let i = i as usize;
+                h.add(-terms[i]);
+                h.add(row_term(a[i], rows[i] - r, s[i] - d));
+            }
+            h.value().max(0.0)
+        })
         .collect()
 }
+
+/// A block's change to one row: `R_bi = Σ_j c_bij` and
+/// `D_bi = Σ_j [x ln x]_{N_ij − c_bij}^{N_ij}` over its pairs `pairs` of
+/// the row, in order, `N_ij` looked up in the row's `totals` by column.
+#[inline]
+fn row_change(pairs: &[PairCount], totals: &[u64], table: &XlnxTable) -> (u64, f64) {
+    let mut r = 0;
+    let mut d = Neumaier::new();
+    for p in pairs {
+        let total = totals[p.to as usize];
+        r += p.count;
+        d.add(table.get(total) - table.get(total - p.count));
+    }
+    (r, d.value())
+}
+
+/// [`VisibilityCounts::pair_tables`]: per-block pairs with background, the
+/// total pairs, the areas with the background's zero, the `x ln x` table.
+type PairTables<'a> = (Vec<Cow<'a, [PairCount]>>, Vec<PairCount>, Vec<f64>, XlnxTable);
 
 /// Standard errors by which `I_S^c` must exceed zero before
 /// [`Complexity::discretisation_accuracy`] is reported.
@@ -413,14 +458,15 @@ fn jackknife(full: f64, leave_out: &[f64]) -> (f64, f64) {
 impl VisibilityCounts {
     /// Per-block pairs with background, the total pairs, areas with the
     /// background's zero appended (the blocks and the merge levels in
-    /// parallel: exact integer sums, the same lists).
-    fn pair_tables(&self) -> (Vec<Cow<'_, [PairCount]>>, Vec<PairCount>, Vec<f64>) {
+    /// parallel: exact integer sums, the same lists), and the table of
+    /// `x ln x` up to the largest total count.
+    fn pair_tables(&self) -> PairTables<'_> {
         let n = self.areas.len();
         let per_block: Vec<Cow<'_, [PairCount]>> = self.blocks.par_iter().map(|b| with_background(b, n)).collect();
-        let totals = total_pairs(&per_block);
+        let (totals, max) = total_pairs(&per_block);
         let mut a = self.areas.clone();
         a.push(0.0);
-        (per_block, totals, a)
+        (per_block, totals, a, XlnxTable::up_to(max))
     }
 
     /// `H_S` in nats without each block that has lines (block order), from
@@ -485,19 +531,22 @@ impl VisibilityCounts {
     #[must_use]
     pub fn complexity(&self, base: Base) -> Complexity {
         let n = self.areas.len();
-        let (per_block, totals, a) = self.pair_tables();
+        let (per_block, totals, a, table) = self.pair_tables();
         let used: Vec<&BlockCounts> = self.blocks.iter().filter(|b| b.lines > 0).collect();
         let total: f64 = self.areas.iter().sum();
         let k = base.per_nat();
-        // The core's measures (one serial pass over the totals, in nats)
-        // beside everything else, which needs only the row totals: the
+        // The core's measures (one serial pass over the totals, in nats, its
+        // `x ln x` from the table) beside everything else, which needs only
+        // the row totals: the
         // leave-one-out `H_S` and the per-patch `I_i` (eq. (65)), each row's
         // `I_i` adding its pairs in order (pieces of whole rows give the
         // serial sums' bits).
         let (nats, (hs_without, info_rows)) = rayon::join(
-            || scene_measures_from_counts(&a, &totals, &mut vec![0; n + 1], Base::Nats).expect("validated counts"),
             || {
-                let table = XlnxTable::for_totals(&totals);
+                scene_measures_from_counts_with(&a, &totals, &mut vec![0; n + 1], Base::Nats, |c| table.get(c))
+                    .expect("validated counts")
+            },
+            || {
                 let (rows, s) = row_sums(&totals, n + 1, &table);
                 rayon::join(
                     || {
@@ -590,6 +639,7 @@ mod tests {
     use crate::tracer::Prepared;
     use crate::visibility::{LineOptions, count_visibility};
     use crate::{BackendChoice, open};
+    use itgfx_core::scene_measures_from_counts;
 
     fn counts(spec: &str, lines: u64, local: bool, blocks: u32) -> VisibilityCounts {
         let scene = built_in(spec).unwrap();
@@ -653,12 +703,12 @@ mod tests {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
                 assert_eq!(
                     pool.install(|| total_pairs(&cows)),
-                    want,
+                    (want.clone(), want.iter().map(|p| p.count).max().unwrap_or(0)),
                     "{blocks} blocks, {rows} rows, {threads} threads"
                 );
             }
         }
-        assert!(total_pairs(&[]).is_empty());
+        assert_eq!(total_pairs(&[]), (Vec::new(), 0));
     }
 
     /// The running-totals jackknife equals the re-merge to 1e-12 bits per
@@ -681,8 +731,7 @@ mod tests {
     /// The table's `x ln x` is the core's, bit for bit, inside it and past it.
     #[test]
     fn the_xlnx_table_is_the_cores() {
-        let totals = [PairCount { from: 0, to: 1, count: 999 }, PairCount { from: 2, to: 0, count: 5 }];
-        let table = XlnxTable::for_totals(&totals);
+        let table = XlnxTable::up_to(999);
         assert_eq!(table.0.len(), 1_000);
         for x in (0..3_000).chain([1 << 40, u64::MAX]) {
             assert_eq!(table.get(x).to_bits(), itgfx_core::xlnx(x as f64).to_bits(), "{x}");
@@ -698,9 +747,8 @@ mod tests {
             ("tetrahedron", 30, true, 3),
         ] {
             let c = counts(spec, lines, local, blocks);
-            let (per_block, totals, a) = c.pair_tables();
+            let (per_block, totals, a, table) = c.pair_tables();
             let nats = scene_measures_from_counts(&a, &totals, &mut vec![0; a.len()], Base::Nats).unwrap();
-            let table = XlnxTable::for_totals(&totals);
             let (rows, s) = row_sums(&totals, a.len(), &table);
             let fast: Vec<f64> = c
                 .leave_one_out_scene_entropies(&per_block, &totals, (&rows, &s), &table)

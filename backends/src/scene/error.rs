@@ -112,7 +112,7 @@ const GIB: f64 = (1u64 << 30) as f64;
 /// eight lanes of a node's leaf triangles: 51 B a triangle on
 /// `mirror-room`, 40 B plus 320 B a node at most) are allocated, with a
 /// fallible reservation, at the first query that walks them (an
-/// occlusion packet or `trace_all`'s interleaved walk, or a single-ray
+/// occlusion packet or `trace_all`'s ray-stream walk, or a single-ray
 /// walk where the tree below is declined), after the build's temporaries
 /// (about 200 B a triangle) are given back. The single-ray walks' own tree
 /// (`tracer/tree8.rs`: 256 B a node, 320 B a leaf of up to eight

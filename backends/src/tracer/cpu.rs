@@ -6,9 +6,9 @@ use obvhs::aabb::Aabb;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::Ray;
 
-use super::stream;
 use super::node8::{self, Tally};
 use super::packet::{self, LANES};
+use super::stream;
 use super::tree8::{self, Tree8};
 use super::watertight::{
     BLOCK, Block, Shear, TriangleLanes, barycentric, before, finish, mask_blocks, push_crossing, sphere_crossings,
@@ -544,6 +544,7 @@ impl CpuTracer {
 
 impl CpuTracer {
     /// What `trace_all` records of each crossing, in BVH order.
+    #[cfg(target_arch = "x86_64")]
     fn recorded(&self, bvh: &CwBvh) -> &[Recorded] {
         self.recorded.get_or_init(|| {
             let s = &self.scene;
@@ -570,25 +571,31 @@ impl CpuTracer {
         };
         let recorded = self.recorded(bvh);
         let take = |l: &Line| !line_misses_box(Vec3A::from(l.origin), Vec3A::from(l.direction), self.bounds);
+        let sixteen = sixteen && stream::has_avx512();
+        // A caller's batch is walked [`BATCH_LINES`] lines at a time: the
+        // buffers (kept per thread) and their `u32` indices stay bounded
+        // whatever the batch; each line's crossings are its own.
         STREAM.with_borrow_mut(|s| {
-            let sixteen = sixteen && stream::has_avx512();
-            // SAFETY: `self.avx2` came from `has_avx2()`, FMA was detected
-            // just above, AVX-512F where `sixteen`.
-            unsafe { stream::trace(tree, &self.ordered, lines, take, sixteen, s) };
-            let mut hits = Vec::with_capacity(16);
-            let mut walked = s.ids.iter().zip(s.first.windows(2)).peekable();
-            for (i, l) in lines.iter().enumerate() {
-                if let Some((_, w)) = walked.next_if(|(id, _)| **id as usize == i) {
-                    let dir = walk_direction(l);
-                    let found = &s.found[w[0] as usize..w[1] as usize];
-                    hits.extend(found.iter().map(|&(k, t)| recorded[k as usize].crossing(dir, t)));
+            for lines in lines.chunks(BATCH_LINES) {
+                // SAFETY: `self.avx2` came from `has_avx2()`, FMA was detected
+                // just above, AVX-512F where `sixteen`.
+                unsafe { stream::trace(tree, &self.ordered, lines, take, sixteen, s) };
+                let mut hits = Vec::with_capacity(16);
+                let mut walked = s.ids.iter().zip(s.first.windows(2)).peekable();
+                for (i, l) in lines.iter().enumerate() {
+                    if let Some((_, w)) = walked.next_if(|(id, _)| **id as usize == i) {
+                        let dir = walk_direction(l);
+                        let found = &s.found[w[0] as usize..w[1] as usize];
+                        hits.extend(found.iter().map(|&(k, t)| recorded[k as usize].crossing(dir, t)));
+                    }
+                    finish(&mut hits, out);
                 }
-                finish(&mut hits, out);
             }
         });
     }
 }
 
+#[cfg(target_arch = "x86_64")]
 thread_local! {
     /// The ray-stream walk's buffers, kept between batches on each thread.
     static STREAM: std::cell::RefCell<stream::Scratch> = std::cell::RefCell::default();

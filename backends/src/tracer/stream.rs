@@ -1,24 +1,29 @@
 //! Every crossing of a batch of lines by one walk of the whole batch: a
 //! ray stream (for [`super::Tracer::trace_all`] on the CPU).
 //!
-//! The interleaved walk (`interleave.rs`) takes one line at a time through
-//! the tree and tests a node's eight children in one vector: each visit is
+//! A walk of one line at a time (the interleaved walk this module replaced)
+//! tests a node's eight children in one vector: each visit is
 //! a chain of dependent loads and data-dependent branches (which children,
 //! leaf or not, stack empty or not), different for every line. Here the
 //! batch walks the tree together: a node is visited once with the list of
 //! lines that entered it, and each of its children is tested against eight
-//! of those lines per vector (the lines' slab constants gathered by
-//! index), the lines that enter it packed into the child's list by the
-//! mask. The branches are per node and child, not per line and step.
+//! (sixteen with AVX-512F) of those lines per vector (the lines' slab
+//! constants transposed from one 32-byte record each), the lines that enter
+//! it packed into the child's list by the mask. The branches are per node
+//! and child, not per line and step.
 //!
-//! The crossings are the same as the interleaved walk's, bit for bit: a
-//! walk visits every node whose box the line enters, with no child order
-//! and no culling by hits, so the crossings are a property of the triangle
-//! test alone ([`Shear::hit_within`], per line and triangle, as there); the
-//! node test is the same fused `plane · inverse − origin · inverse` of each
-//! plane, its near and far distances taken by `min`/`max` of the two planes
-//! of an axis (the same values as choosing them by the direction's sign:
-//! `inverse` is never zero, and the fused products keep the planes' order).
+//! The crossings are the single-ray walk's, bit for bit: the walk visits
+//! every node whose box the line enters, with no child order and no culling
+//! by hits, and every crossed triangle lies in boxes padded by 1e-5, far
+//! beyond the slab test's rounding, so the crossings are a property of the
+//! triangle test alone ([`Shear::hit_within`]'s arithmetic, per line and
+//! triangle). The node test is the fused `plane · inverse − origin ·
+//! inverse` of each plane, its near and far distances taken by `min`/`max`
+//! of the two planes of an axis: for an occupied slot (lower plane below
+//! the upper) the same values as choosing them by the direction's sign
+//! (`inverse` is never zero, and the fused products keep the planes'
+//! order). Empty slots are skipped: their `±∞` planes would admit every
+//! line under `min`/`max`.
 //! Each line's crossings are handed over in line order and sorted by the
 //! caller ([`super::watertight::finish`]).
 #![cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
@@ -44,6 +49,8 @@ pub(super) struct Scratch {
     /// z), `origin · inverse` (x, y, z) and `tmax`; one more entry, a line
     /// that enters no box, fills the vectors' spare lanes.
     rays: Vec<Rec>,
+    /// Per line walked, its [`Shear`] (the scalar test of the rare lanes
+    /// with an exactly zero edge function).
     shears: Vec<Shear>,
     /// Per line walked, the watertight test's constants ([`Shear`]): the
     /// axes `k` (x, y, z, their bits), `s` (x, y, z), the origin along `k`
@@ -101,7 +108,7 @@ pub(super) unsafe fn trace(
             continue;
         }
         let (shear, dir) = Shear::of(l);
-        // obvhs's ray constants, as the interleaved walk takes them.
+        // obvhs's ray constants, as the CWBVH walk takes them.
         let ray = Ray::new(Vec3A::from(l.origin), dir, l.tmin, l.tmax);
         let inv = ray.inv_direction.to_array();
         let org = ray.origin.to_array();
@@ -201,9 +208,9 @@ fn occupied(n: &Node) -> u32 {
 #[target_feature(enable = "avx2,fma")]
 unsafe fn partition8(n: &Node, s: &mut Scratch, start: usize, len: usize) {
     use std::arch::x86_64::{
-        __m128i, __m256, __m256i, _CMP_LE_OQ, _mm_loadl_epi64, _mm256_cmp_ps, _mm256_cvtepu8_epi32,
-        _mm256_fmsub_ps, _mm256_loadu_si256, _mm256_max_ps, _mm256_min_ps, _mm256_movemask_ps,
-        _mm256_permutevar8x32_epi32, _mm256_set1_ps, _mm256_storeu_si256,
+        __m128i, __m256, __m256i, _CMP_LE_OQ, _mm_loadl_epi64, _mm256_cmp_ps, _mm256_cvtepu8_epi32, _mm256_fmsub_ps,
+        _mm256_loadu_si256, _mm256_max_ps, _mm256_min_ps, _mm256_movemask_ps, _mm256_permutevar8x32_epi32,
+        _mm256_set1_ps, _mm256_storeu_si256,
     };
     let occupied = occupied(n);
     for slot in 0..8 {
@@ -221,7 +228,7 @@ unsafe fn partition8(n: &Node, s: &mut Scratch, start: usize, len: usize) {
         // vector reads the 32 bytes of `idx`; every index is a line walked
         // or `spare`, each an entry of `rays`. A child's list has `len + W` entries reserved and
         // holds at most `len` before this chunk's store of eight. Empty
-        // slots (lower planes `+∞`, upper `−∞`) are entered by no line.
+        // slots are skipped (`occupied`).
         unsafe {
             let vi = _mm256_loadu_si256(idx.as_ptr().cast::<__m256i>());
             let [ix, iy, iz, ox, oy, oz, tmax, _] = columns(idx.map(|r| s.rays.as_ptr().add(r as usize)));
@@ -230,9 +237,8 @@ unsafe fn partition8(n: &Node, s: &mut Scratch, start: usize, len: usize) {
                 if occupied >> slot & 1 == 0 {
                     continue;
                 }
-                let t = |row: usize, inv: __m256, oi: __m256| {
-                    _mm256_fmsub_ps(_mm256_set1_ps(n.bounds[row][slot]), inv, oi)
-                };
+                let t =
+                    |row: usize, inv: __m256, oi: __m256| _mm256_fmsub_ps(_mm256_set1_ps(n.bounds[row][slot]), inv, oi);
                 let (x0, x1) = (t(0, ix, ox), t(1, ix, ox));
                 let (y0, y1) = (t(2, iy, oy), t(3, iy, oy));
                 let (z0, z1) = (t(4, iz, oz), t(5, iz, oz));
@@ -246,7 +252,10 @@ unsafe fn partition8(n: &Node, s: &mut Scratch, start: usize, len: usize) {
                 );
                 let hit = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(near, far)) as usize;
                 let order = _mm256_cvtepu8_epi32(_mm_loadl_epi64((&raw const PACK[hit]).cast::<__m128i>()));
-                _mm256_storeu_si256(outs[slot].add(ends[slot]).cast::<__m256i>(), _mm256_permutevar8x32_epi32(vi, order));
+                _mm256_storeu_si256(
+                    outs[slot].add(ends[slot]).cast::<__m256i>(),
+                    _mm256_permutevar8x32_epi32(vi, order),
+                );
                 ends[slot] += hit.count_ones() as usize;
             }
         }
@@ -266,8 +275,8 @@ unsafe fn partition8(n: &Node, s: &mut Scratch, start: usize, len: usize) {
 unsafe fn partition16(n: &Node, s: &mut Scratch, start: usize, len: usize) {
     use std::arch::x86_64::{
         __m512, __m512i, _CMP_LE_OQ, _mm256_castps_pd, _mm512_castpd_ps, _mm512_castps_pd, _mm512_castps256_ps512,
-        _mm512_cmp_ps_mask, _mm512_fmsub_ps, _mm512_insertf64x4, _mm512_loadu_si512, _mm512_max_ps,
-        _mm512_maskz_compress_epi32, _mm512_min_ps, _mm512_set1_ps, _mm512_storeu_si512,
+        _mm512_cmp_ps_mask, _mm512_fmsub_ps, _mm512_insertf64x4, _mm512_loadu_si512, _mm512_maskz_compress_epi32,
+        _mm512_max_ps, _mm512_min_ps, _mm512_set1_ps, _mm512_storeu_si512,
     };
     const W16: usize = 16;
     let occupied = occupied(n);
@@ -302,9 +311,8 @@ unsafe fn partition16(n: &Node, s: &mut Scratch, start: usize, len: usize) {
                 if occupied >> slot & 1 == 0 {
                     continue;
                 }
-                let t = |row: usize, inv: __m512, oi: __m512| {
-                    _mm512_fmsub_ps(_mm512_set1_ps(n.bounds[row][slot]), inv, oi)
-                };
+                let t =
+                    |row: usize, inv: __m512, oi: __m512| _mm512_fmsub_ps(_mm512_set1_ps(n.bounds[row][slot]), inv, oi);
                 let (x0, x1) = (t(0, ix, ox), t(1, ix, ox));
                 let (y0, y1) = (t(2, iy, oy), t(3, iy, oy));
                 let (z0, z1) = (t(4, iz, oz), t(5, iz, oz));
@@ -413,8 +421,9 @@ unsafe fn leaf(
                 };
                 let ((ax, ay), (bx, by), (cx, cy)) = (sh(a), sh(b), sh(c));
                 let (az, bz, cz) = (a.2, b.2, c.2);
-                let cross =
-                    |p: __m256, q: __m256, r: __m256, s: __m256| _mm256_sub_ps(_mm256_mul_ps(p, q), _mm256_mul_ps(r, s));
+                let cross = |p: __m256, q: __m256, r: __m256, s: __m256| {
+                    _mm256_sub_ps(_mm256_mul_ps(p, q), _mm256_mul_ps(r, s))
+                };
                 let u = cross(cx, by, cy, bx);
                 let w = cross(bx, ay, by, ax);
                 let vv = cross(ax, cy, ay, cx);
@@ -424,8 +433,10 @@ unsafe fn leaf(
                 let det = _mm256_add_ps(_mm256_add_ps(u, vv), w);
                 let lt = |x: __m256| _mm256_cmp_ps::<_CMP_LT_OQ>(x, zero);
                 let gt = |x: __m256| _mm256_cmp_ps::<_CMP_GT_OQ>(x, zero);
-                let outside =
-                    _mm256_and_ps(_mm256_or_ps(_mm256_or_ps(lt(u), lt(vv)), lt(w)), _mm256_or_ps(_mm256_or_ps(gt(u), gt(vv)), gt(w)));
+                let outside = _mm256_and_ps(
+                    _mm256_or_ps(_mm256_or_ps(lt(u), lt(vv)), lt(w)),
+                    _mm256_or_ps(_mm256_or_ps(gt(u), gt(vv)), gt(w)),
+                );
                 let term = |e: __m256, z: __m256| _mm256_mul_ps(_mm256_mul_ps(e, sz), z);
                 let num = _mm256_add_ps(_mm256_add_ps(term(u, az), term(vv, bz)), term(w, cz));
                 let t = _mm256_div_ps(num, det);
@@ -562,7 +573,7 @@ mod tests {
                         let mut lo = NODE_EPSILON;
                         let mut hi = l.tmax;
                         for (a, (&i, &o)) in inv.iter().zip(&org).enumerate() {
-                            // `plane · inverse − origin · inverse`, fused, as `visit`'s.
+                            // `plane · inverse − origin · inverse`, fused, as `partition8`'s.
                             let d = |row: usize| node.bounds[row][slot].mul_add(i, -(o * i));
                             let (near, far) = if i < 0.0 { (2 * a + 1, 2 * a) } else { (2 * a, 2 * a + 1) };
                             lo = lo.max(d(near));

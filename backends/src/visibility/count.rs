@@ -208,8 +208,8 @@ fn process_chunk(
     // A batch's global segments: form factors, their ends, and (once the
     // batch is paired) their logarithms, taken in one vectorised pass.
     let (mut factors, mut ends, mut logs) = (Vec::new(), Vec::new(), Vec::new());
-    // Batches of the tracer's size: a CPU batch's lines and crossings stay
-    // in cache beside the BVH (the chunk's lines alone were 512 KB).
+    // Batches of the tracer's size (the CPU's is a whole chunk: its
+    // ray-stream walk fills its vectors better the more lines share a node).
     for b0 in (0..count).step_by(batch as usize) {
         lines.clear();
         origins.clear();

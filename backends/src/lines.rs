@@ -193,7 +193,7 @@ fn chord(p: DVec3, q: DVec3) -> Line {
 
 /// The global lines `first`, `first + stride`, … (`count` of them),
 /// appended to `out`: [`global_line_of`] for each, bit for bit, 16 lines
-/// at a time with AVX-512 ([`avx512`]), 8 with AVX2, else one by one.
+/// at a time with AVX-512 (`lines/avx512.rs`), 8 with AVX2, else one by one.
 pub fn global_lines_of(seed: SeedHash, first: u64, stride: u64, count: u64, radius: f64, out: &mut Vec<Line>) {
     global_lines_with(Simd::detect(), seed, first, stride, count, radius, out);
 }

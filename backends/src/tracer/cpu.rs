@@ -575,12 +575,12 @@ impl CpuTracer {
         // A caller's batch is walked [`BATCH_LINES`] lines at a time: the
         // buffers (kept per thread) and their `u32` indices stay bounded
         // whatever the batch; each line's crossings are its own.
+        let mut hits = Vec::with_capacity(16);
         STREAM.with_borrow_mut(|s| {
             for lines in lines.chunks(BATCH_LINES) {
                 // SAFETY: `self.avx2` came from `has_avx2()`, FMA was detected
                 // just above, AVX-512F where `sixteen`.
                 unsafe { stream::trace(tree, &self.ordered, lines, take, sixteen, s) };
-                let mut hits = Vec::with_capacity(16);
                 let mut walked = s.ids.iter().zip(s.first.windows(2)).peekable();
                 for (i, l) in lines.iter().enumerate() {
                     if let Some((_, w)) = walked.next_if(|(id, _)| **id as usize == i) {

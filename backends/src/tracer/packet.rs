@@ -367,7 +367,7 @@ unsafe fn occluded_wide(tree: &Wide8, triangles: &[[Vec3A; 3]], packet: &Packet,
             continue;
         }
         let n = &tree.nodes[index as usize];
-        let occupied = occupied_slots(n);
+        let occupied = n.occupied();
         // SAFETY: AVX2 (the caller's promise).
         let hit = unsafe { wide_node(packet, n, occupied, tmax, lanes) };
         let mut leaves = occupied & !n.imask;
@@ -394,12 +394,6 @@ unsafe fn occluded_wide(tree: &Wide8, triangles: &[[Vec3A; 3]], packet: &Packet,
         push_wide_children(n, &hit, oct, stack);
     }
     done
-}
-
-/// The occupied child slots of a wide node, as a bit mask.
-#[inline(always)]
-fn occupied_slots(n: &WideNode) -> u32 {
-    n.child.iter().enumerate().fold(0u32, |m, (c, &x)| m | u32::from(x != 0) << c)
 }
 
 /// Pushes the internal children of `n` that some lane entered, lowest
@@ -608,7 +602,7 @@ unsafe fn closest_wide(
     let (mut ts, mut numerators) = ([0.0; LANES], [[0.0; LANES]; 3]);
     while let Some((index, lanes)) = stack.pop() {
         let n = &tree.nodes[index as usize];
-        let occupied = occupied_slots(n);
+        let occupied = n.occupied();
         // SAFETY: AVX2 (the caller's promise); reads one [f32; 8].
         let hit = unsafe { wide_node(packet, n, occupied, _mm256_loadu_ps(tmax.as_ptr()), lanes) };
         let mut leaves = occupied & !n.imask;

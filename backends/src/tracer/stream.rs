@@ -49,9 +49,6 @@ pub(super) struct Scratch {
     /// z), `origin · inverse` (x, y, z) and `tmax`; one more entry, a line
     /// that enters no box, fills the vectors' spare lanes.
     rays: Vec<Rec>,
-    /// Per line walked, its [`Shear`] (the scalar test of the rare lanes
-    /// with an exactly zero edge function).
-    shears: Vec<Shear>,
     /// Per line walked, the watertight test's constants ([`Shear`]): the
     /// axes `k` (x, y, z, their bits), `s` (x, y, z), the origin along `k`
     /// (x, y; then z), `tmin` and `tmax`; the spare lanes' line (`tmin =
@@ -100,7 +97,6 @@ pub(super) unsafe fn trace(
     s: &mut Scratch,
 ) {
     s.ids.clear();
-    s.shears.clear();
     s.rays.clear();
     s.tri.clear();
     for (i, l) in lines.iter().enumerate() {
@@ -118,7 +114,6 @@ pub(super) unsafe fn trace(
         let [sx, sy, sz] = shear.s;
         let [ox, oy, oz] = shear.k.map(|k| shear.org[k]);
         s.tri.push([Rec([kx, ky, kz, sx, sy, sz, ox, oy]), Rec([oz, l.tmin, l.tmax, 0.0, 0.0, 0.0, 0.0, 0.0])]);
-        s.shears.push(shear);
         s.ids.push(i as u32);
     }
     let walked = s.ids.len();
@@ -146,7 +141,7 @@ pub(super) unsafe fn trace(
                 unsafe { partition8(n, s, start, len) };
             }
             // SAFETY: AVX2 and FMA (this function's contract).
-            unsafe { descend(n, ordered, s, start) };
+            unsafe { descend(n, ordered, lines, s, start) };
         }
     }
     // The crossings by line walked: counted, then placed (a counting sort).
@@ -193,9 +188,27 @@ static PACK: [u64; 256] = {
     table
 };
 
-/// The occupied slots of node `n`.
-fn occupied(n: &Node) -> u32 {
-    n.child.iter().enumerate().fold(0u32, |m, (i, &c)| m | (u32::from(c != 0) << i))
+/// Empties the children's lists for a node of `len` lines, each with room
+/// for `len + width` (the last vector's store of `width` entries); their
+/// start pointers.
+fn open_slots(s: &mut Scratch, len: usize, width: usize) -> [*mut u32; 8] {
+    for v in &mut s.slots {
+        v.clear();
+        v.reserve(len + width);
+    }
+    std::array::from_fn(|i| s.slots[i].as_mut_ptr())
+}
+
+/// Sets each child's list to the `ends[slot]` entries written.
+///
+/// # Safety
+/// The first `ends[slot]` entries of list `slot` must have been written
+/// since [`open_slots`] (within its reserved capacity).
+unsafe fn close_slots(s: &mut Scratch, ends: &[usize; 8]) {
+    for (v, &e) in s.slots.iter_mut().zip(ends) {
+        // SAFETY: the caller's contract.
+        unsafe { v.set_len(e) };
+    }
 }
 
 /// Sorts the lines `s.arena[start..start + len]` that enter node `n` into
@@ -212,15 +225,11 @@ unsafe fn partition8(n: &Node, s: &mut Scratch, start: usize, len: usize) {
         _mm256_loadu_si256, _mm256_max_ps, _mm256_min_ps, _mm256_movemask_ps, _mm256_permutevar8x32_epi32,
         _mm256_set1_ps, _mm256_storeu_si256,
     };
-    let occupied = occupied(n);
-    for slot in 0..8 {
-        s.slots[slot].clear();
-        s.slots[slot].reserve(len + W);
-    }
+    let occupied = n.occupied();
+    let outs = open_slots(s, len, W);
     let spare = (s.rays.len() - 1) as u32;
     let eps = _mm256_set1_ps(NODE_EPSILON);
     let mut ends = [0usize; 8];
-    let outs: [*mut u32; 8] = std::array::from_fn(|i| s.slots[i].as_mut_ptr());
     for chunk in s.arena[start..start + len].chunks(W) {
         let mut idx = [spare; W];
         idx[..chunk.len()].copy_from_slice(chunk);
@@ -260,10 +269,8 @@ unsafe fn partition8(n: &Node, s: &mut Scratch, start: usize, len: usize) {
             }
         }
     }
-    for (v, &e) in s.slots.iter_mut().zip(&ends) {
-        // SAFETY: the stores above wrote the first `e` entries (`e <= len`).
-        unsafe { v.set_len(e) };
-    }
+    // SAFETY: the stores above wrote the first `ends[slot]` entries of each list.
+    unsafe { close_slots(s, &ends) };
 }
 
 /// [`partition8`] with sixteen lines per vector.
@@ -279,15 +286,11 @@ unsafe fn partition16(n: &Node, s: &mut Scratch, start: usize, len: usize) {
         _mm512_max_ps, _mm512_min_ps, _mm512_set1_ps, _mm512_storeu_si512,
     };
     const W16: usize = 16;
-    let occupied = occupied(n);
-    for slot in 0..8 {
-        s.slots[slot].clear();
-        s.slots[slot].reserve(len + W16);
-    }
+    let occupied = n.occupied();
+    let outs = open_slots(s, len, W16);
     let spare = (s.rays.len() - 1) as u32;
     let eps = _mm512_set1_ps(NODE_EPSILON);
     let mut ends = [0usize; 8];
-    let outs: [*mut u32; 8] = std::array::from_fn(|i| s.slots[i].as_mut_ptr());
     for chunk in s.arena[start..start + len].chunks(W16) {
         let mut idx = [spare; W16];
         idx[..chunk.len()].copy_from_slice(chunk);
@@ -330,10 +333,8 @@ unsafe fn partition16(n: &Node, s: &mut Scratch, start: usize, len: usize) {
             }
         }
     }
-    for (v, &e) in s.slots.iter_mut().zip(&ends) {
-        // SAFETY: the stores above wrote the first `e` entries (`e <= len`).
-        unsafe { v.set_len(e) };
-    }
+    // SAFETY: the stores above wrote the first `ends[slot]` entries of each list.
+    unsafe { close_slots(s, &ends) };
 }
 
 /// After [`partition8`] or [`partition16`] at node `n` (whose list began
@@ -344,10 +345,10 @@ unsafe fn partition16(n: &Node, s: &mut Scratch, start: usize, len: usize) {
 /// The CPU must support AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn descend(n: &Node, ordered: &[[Vec3A; 3]], s: &mut Scratch, start: usize) {
+unsafe fn descend(n: &Node, ordered: &[[Vec3A; 3]], lines: &[Line], s: &mut Scratch, start: usize) {
     // This node's list is spent; its children's lists take its place.
     s.arena.truncate(start);
-    for slot in Bits(occupied(n)) {
+    for slot in Bits(n.occupied()) {
         let c = n.child[slot];
         let v = &s.slots[slot];
         if v.is_empty() {
@@ -357,7 +358,7 @@ unsafe fn descend(n: &Node, ordered: &[[Vec3A; 3]], s: &mut Scratch, start: usiz
             s.arena.extend_from_slice(v);
         } else if c & LEAF != 0 {
             // SAFETY: AVX2 and FMA (this function's contract).
-            unsafe { leaf(ordered, n.prim_base, c & !LEAF, v, &s.tri, &s.shears, &mut s.hits) };
+            unsafe { leaf(ordered, n.prim_base, c & !LEAF, v, &s.tri, (lines, &s.ids), &mut s.hits) };
         }
     }
 }
@@ -368,7 +369,8 @@ unsafe fn descend(n: &Node, ordered: &[[Vec3A; 3]], s: &mut Scratch, start: usiz
 /// `t` and answer to the bit): the vertex coordinates along the lane's
 /// axes `k` picked by a permute, then the same subtractions, products and
 /// sums in the same order, never fused. A lane whose edge function is
-/// exactly zero takes the scalar test (its double-precision branch).
+/// exactly zero takes the scalar test (its double-precision branch) on its
+/// line (`lines[ids[r]]` for line walked `r`).
 ///
 /// # Safety
 /// The CPU must support AVX2 and FMA.
@@ -380,7 +382,7 @@ unsafe fn leaf(
     mask: u32,
     list: &[u32],
     tri: &[[Rec; 2]],
-    shears: &[Shear],
+    (lines, ids): (&[Line], &[u32]),
     hits: &mut Vec<(u32, u32, f32)>,
 ) {
     use std::arch::x86_64::{
@@ -451,10 +453,13 @@ unsafe fn leaf(
                 hits.push((chunk[lane], k, t[lane]));
             }
             for lane in Bits(zero & valid) {
-                let r = chunk[lane] as usize;
-                let (t, crossed) = shears[r].hit_within(v, tri[r][1].0[1], tri[r][1].0[2]);
+                // The line's shear made again: rare, and cheaper than
+                // keeping every line's.
+                let r = chunk[lane];
+                let l = &lines[ids[r as usize] as usize];
+                let (t, crossed) = Shear::of(l).0.hit_within(v, l.tmin, l.tmax);
                 if crossed {
-                    hits.push((r as u32, k, t));
+                    hits.push((r, k, t));
                 }
             }
         }

@@ -73,6 +73,14 @@ pub(crate) struct Node {
 
 const _: () = assert!(size_of::<Node>() == 256);
 
+impl Node {
+    /// The occupied child slots, as a bit mask (an empty slot's child is 0).
+    #[inline(always)]
+    pub(super) fn occupied(&self) -> u32 {
+        self.child.iter().enumerate().fold(0u32, |m, (c, &x)| m | u32::from(x != 0) << c)
+    }
+}
+
 /// The CPU backend's BVH as uncompressed 8-wide nodes, and each node's
 /// leaf triangles in aligned blocks of eight.
 #[derive(Clone, Debug)]

@@ -537,10 +537,9 @@ impl VisibilityCounts {
         let k = base.per_nat();
         // The core's measures (one serial pass over the totals, in nats, its
         // `x ln x` from the table) beside everything else, which needs only
-        // the row totals: the
-        // leave-one-out `H_S` and the per-patch `I_i` (eq. (65)), each row's
-        // `I_i` adding its pairs in order (pieces of whole rows give the
-        // serial sums' bits).
+        // the row totals: the leave-one-out `H_S` and the per-patch `I_i`
+        // (eq. (65)), each row's `I_i` adding its pairs in order (pieces of
+        // whole rows give the serial sums' bits).
         let (nats, (hs_without, info_rows)) = rayon::join(
             || {
                 scene_measures_from_counts_with(&a, &totals, &mut vec![0; n + 1], Base::Nats, |c| table.get(c))

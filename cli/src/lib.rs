@@ -5,6 +5,7 @@ pub mod clap_error;
 pub mod commands;
 pub mod devices;
 pub mod export;
+pub mod huge_pages;
 pub mod imaging;
 pub mod input;
 pub mod options;

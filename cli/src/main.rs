@@ -8,6 +8,11 @@ use itgfx_cli::commands::{phantom, register, segment};
 use itgfx_cli::options::{Cli, Command};
 use itgfx_cli::{CliError, complexity, devices, measure, simplify, viewpoints, volume};
 
+/// The system allocator, large blocks faulted in as transparent huge pages
+/// ([`itgfx_cli::huge_pages`]).
+#[global_allocator]
+static ALLOCATOR: itgfx_cli::huge_pages::HugePages = itgfx_cli::huge_pages::HugePages;
+
 /// One JSON object, or the readable table.
 fn render(report: &itgfx_cli::report::Report, json: bool) -> String {
     if json { report.to_json().to_string() } else { report.to_table().trim_end().to_string() }

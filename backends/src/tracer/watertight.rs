@@ -209,7 +209,20 @@ pub(crate) fn sphere_hit(s: &SphereCells, l: &Line) -> Option<Hit> {
 
 /// Sorts and merges coincident crossings, appending them to `out`.
 pub(crate) fn finish(hits: &mut Vec<Crossing>, out: &mut CrossingBuffer) {
-    hits.sort_unstable_by(|a, b| a.t.total_cmp(&b.t).then(a.primitive.cmp(&b.primitive)));
+    let order = |a: &Crossing, b: &Crossing| a.t.total_cmp(&b.t).then(a.primitive.cmp(&b.primitive));
+    // Most lines cross a scene twice (in and out of a closed one): two
+    // crossings are put in order by one comparison, without the sort's
+    // call (the same order: crossings equal under it are equal in every
+    // field, one triangle's crossing found twice).
+    match hits.len() {
+        0 | 1 => {}
+        2 => {
+            if order(&hits[1], &hits[0]).is_lt() {
+                hits.swap(0, 1);
+            }
+        }
+        _ => hits.sort_unstable_by(order),
+    }
     // Crossings chained less than 1e-6 apart and facing the same way are one
     // crossing of the surface (through an edge or vertex shared by several
     // triangles): keep the first. Opposite-facing ones are kept: whether they

@@ -178,11 +178,49 @@ fn process_chunk(
     (first, stride, count): (u64, u64, u64),
     radius: f64,
 ) -> Result<ChunkResult, CountsError> {
+    // The working buffers of the last chunk on this thread, taken (a
+    // nested call, were a tracer ever to run rayon work inside, gets fresh
+    // ones) and given back at the end.
+    let mut scratch = SCRATCH.with_borrow_mut(std::mem::take);
+    let result = chunk_with(p, tracer, sampler, opts, total_area_norm, (first, stride, count), radius, &mut scratch);
+    SCRATCH.with_borrow_mut(|s| *s = scratch);
+    result
+}
+
+thread_local! {
+    /// [`process_chunk`]'s working buffers, kept per thread between chunks.
+    static SCRATCH: std::cell::RefCell<ChunkScratch> = std::cell::RefCell::default();
+}
+
+/// A chunk's working buffers. Made fresh for every chunk they cost their
+/// growth (copies) and a page fault per 4 KiB page each time: over half of
+/// a 10^7-line run's page faults.
+#[derive(Default)]
+struct ChunkScratch {
+    lines: Vec<Line>,
+    origins: Vec<(u32, DVec3, DVec3)>,
+    buf: CrossingBuffer,
+    kept: Vec<Crossing>,
+    factors: Vec<f64>,
+    ends: Vec<[u32; 2]>,
+    logs: Vec<f64>,
+}
+
+/// [`process_chunk`] with the thread's buffers.
+#[allow(clippy::too_many_arguments)]
+fn chunk_with(
+    p: &Prepared,
+    tracer: &dyn Tracer,
+    sampler: Option<&Sampler>,
+    opts: &LineOptions,
+    total_area_norm: f64,
+    (first, stride, count): (u64, u64, u64),
+    radius: f64,
+    scratch: &mut ChunkScratch,
+) -> Result<ChunkResult, CountsError> {
     let seed = SeedHash::new(opts.seed);
     let batch = tracer.batch_lines().clamp(1, CHUNK as usize) as u64;
-    let mut lines = Vec::with_capacity(batch.min(count) as usize);
-    let mut origins = Vec::new();
-    let mut buf = CrossingBuffer::default();
+    let ChunkScratch { lines, origins, buf, kept, factors, ends, logs } = scratch;
     // Local lines need only the first crossing past the origin: a closest-hit
     // query from just short of that threshold (see `first_past_origin`).
     let mut nearest: Vec<Option<Crossing>> = Vec::new();
@@ -204,10 +242,10 @@ fn process_chunk(
         }
     };
     let (mut segments, mut escaped) = (0, 0);
-    let mut kept = Vec::new();
     // A batch's global segments: form factors, their ends, and (once the
     // batch is paired) their logarithms, taken in one vectorised pass.
-    let (mut factors, mut ends, mut logs) = (Vec::new(), Vec::new(), Vec::new());
+    factors.clear();
+    ends.clear();
     // Batches of the tracer's size (the CPU's is a whole chunk: its
     // ray-stream walk fills its vectors better the more lines share a node).
     for b0 in (0..count).step_by(batch as usize) {
@@ -221,12 +259,14 @@ fn process_chunk(
                 lines.push(l);
             }
         } else {
-            global_lines_of(seed, first + b0 * stride, stride, end - b0, radius, &mut lines);
+            global_lines_of(seed, first + b0 * stride, stride, end - b0, radius, lines);
         }
         if sampler.is_some() {
-            nearest = first_past_origin(tracer, &lines, &origins)?;
+            nearest = first_past_origin(tracer, lines, origins)?;
         } else {
-            tracer.trace_all(&lines, &mut buf)?;
+            tracer.trace_all(lines, buf)?;
+            // About one segment per two crossings.
+            keys.reserve(buf.crossings.len() / 2);
         }
         for (li, line) in lines.iter().enumerate() {
             if let Some(&(from, _x, n)) = origins.get(li) {
@@ -251,20 +291,25 @@ fn process_chunk(
             // Global line. Crossings less than 1e-6 apart that face both ways are
             // a touch (the line grazes an edge or clips a corner by < 1e-6):
             // whether it was in free space or not, it still is; drop the cluster.
-            kept.clear();
-            let mut a = 0;
-            while a < hits.len() {
-                let mut b = a + 1;
-                while b < hits.len() && hits[b].t - hits[b - 1].t <= 1e-6 {
-                    b += 1;
+            // (Nearly every line has no cluster: its crossings are kept as they are.)
+            let hits = if hits.windows(2).all(|w| w[1].t - w[0].t > 1e-6) {
+                hits
+            } else {
+                kept.clear();
+                let mut a = 0;
+                while a < hits.len() {
+                    let mut b = a + 1;
+                    while b < hits.len() && hits[b].t - hits[b - 1].t <= 1e-6 {
+                        b += 1;
+                    }
+                    let forward = hits[a].cos > 0.0;
+                    if hits[a..b].iter().all(|h| (h.cos > 0.0) == forward) {
+                        kept.push(hits[a]);
+                    }
+                    a = b;
                 }
-                let forward = hits[a].cos > 0.0;
-                if hits[a..b].iter().all(|h| (h.cos > 0.0) == forward) {
-                    kept.push(hits[a]);
-                }
-                a = b;
-            }
-            let hits = &kept[..];
+                &kept[..]
+            };
             // Pair forward-facing crossings with the next backward-facing one.
             let mut k = 0;
             while k < hits.len() {
@@ -294,8 +339,8 @@ fn process_chunk(
                 k += 1;
             }
         }
-        log_area_form_factors(total_area_norm, &factors, &mut logs);
-        for ((&f, &l), e) in factors.iter().zip(&logs).zip(&ends) {
+        log_area_form_factors(total_area_norm, factors, logs);
+        for ((&f, &l), e) in factors.iter().zip(logs.iter()).zip(ends.iter()) {
             sample(f, l, e, &mut endpoint);
         }
         factors.clear();

@@ -11,8 +11,8 @@ use super::packet::{self, LANES};
 use super::stream;
 use super::tree8::{self, Tree8};
 use super::watertight::{
-    BLOCK, Block, Shear, TriangleLanes, barycentric, before, finish, mask_blocks, push_crossing, sphere_crossings,
-    sphere_hit, walk_direction,
+    BLOCK, Block, Shear, TriangleLanes, barycentric, before, finish, finish_two, mask_blocks, push_crossing,
+    sphere_crossings, sphere_hit, walk_direction,
 };
 use super::wide8::{self, Wide8};
 use super::{BackendError, Crossing, CrossingBuffer, Hit, Prepared, Tracer};
@@ -586,6 +586,12 @@ impl CpuTracer {
                     if let Some((_, w)) = walked.next_if(|(id, _)| **id as usize == i) {
                         let dir = walk_direction(l);
                         let found = &s.found[w[0] as usize..w[1] as usize];
+                        if let &[(ka, ta), (kb, tb)] = found {
+                            let (a, b) =
+                                (recorded[ka as usize].crossing(dir, ta), recorded[kb as usize].crossing(dir, tb));
+                            finish_two(a, b, out);
+                            continue;
+                        }
                         hits.extend(found.iter().map(|&(k, t)| recorded[k as usize].crossing(dir, t)));
                     }
                     finish(&mut hits, out);

@@ -209,20 +209,11 @@ pub(crate) fn sphere_hit(s: &SphereCells, l: &Line) -> Option<Hit> {
 
 /// Sorts and merges coincident crossings, appending them to `out`.
 pub(crate) fn finish(hits: &mut Vec<Crossing>, out: &mut CrossingBuffer) {
-    let order = |a: &Crossing, b: &Crossing| a.t.total_cmp(&b.t).then(a.primitive.cmp(&b.primitive));
-    // Most lines cross a scene twice (in and out of a closed one): two
-    // crossings are put in order by one comparison, without the sort's
-    // call (the same order: crossings equal under it are equal in every
-    // field, one triangle's crossing found twice).
-    match hits.len() {
-        0 | 1 => {}
-        2 => {
-            if order(&hits[1], &hits[0]).is_lt() {
-                hits.swap(0, 1);
-            }
-        }
-        _ => hits.sort_unstable_by(order),
+    if let &mut [a, b] = &mut hits[..] {
+        hits.clear();
+        return finish_two(a, b, out);
     }
+    hits.sort_unstable_by(crossing_order);
     // Crossings chained less than 1e-6 apart and facing the same way are one
     // crossing of the surface (through an edge or vertex shared by several
     // triangles): keep the first. Opposite-facing ones are kept: whether they
@@ -235,6 +226,27 @@ pub(crate) fn finish(hits: &mut Vec<Crossing>, out: &mut CrossingBuffer) {
             }
         }
         out.crossings.push(h);
+    }
+    out.offsets.push(out.crossings.len() as u32);
+}
+
+/// The order [`finish`] sorts a line's crossings in: by `t`, then by
+/// triangle (crossings equal under it are equal in every field: one
+/// triangle's crossing found twice).
+#[inline]
+fn crossing_order(a: &Crossing, b: &Crossing) -> std::cmp::Ordering {
+    a.t.total_cmp(&b.t).then(a.primitive.cmp(&b.primitive))
+}
+
+/// [`finish`] of a line with exactly two crossings, most lines' count (in
+/// and out of a closed scene): put in order by one comparison and the
+/// second merged into the first as `finish` would, without a buffer.
+#[inline]
+pub(crate) fn finish_two(a: Crossing, b: Crossing, out: &mut CrossingBuffer) {
+    let (a, b) = if crossing_order(&b, &a).is_lt() { (b, a) } else { (a, b) };
+    out.crossings.push(a);
+    if !(b.t - a.t <= 1e-6 && (b.cos > 0.0) == (a.cos > 0.0)) {
+        out.crossings.push(b);
     }
     out.offsets.push(out.crossings.len() as u32);
 }

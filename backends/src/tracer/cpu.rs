@@ -174,7 +174,7 @@ const BATCH_LINES: usize = 16_384;
 /// Collision Detection*, §5.3.3). No division, no BVH state: most global
 /// lines that miss a scene are rejected here.
 #[inline]
-fn line_misses_box(o: Vec3A, d: Vec3A, (c, h): (Vec3A, Vec3A)) -> bool {
+pub(super) fn line_misses_box(o: Vec3A, d: Vec3A, (c, h): (Vec3A, Vec3A)) -> bool {
     let w = o - c;
     let m = w.cross(d).abs();
     let a = d.abs();
@@ -570,7 +570,6 @@ impl CpuTracer {
             _ => return self.trace_single(lines, out),
         };
         let recorded = self.recorded(bvh);
-        let take = |l: &Line| !line_misses_box(Vec3A::from(l.origin), Vec3A::from(l.direction), self.bounds);
         let sixteen = sixteen && stream::has_avx512();
         // A caller's batch is walked [`BATCH_LINES`] lines at a time: the
         // buffers (kept per thread) and their `u32` indices stay bounded
@@ -580,22 +579,28 @@ impl CpuTracer {
             for lines in lines.chunks(BATCH_LINES) {
                 // SAFETY: `self.avx2` came from `has_avx2()`, FMA was detected
                 // just above, AVX-512F where `sixteen`.
-                unsafe { stream::trace(tree, &self.ordered, lines, take, sixteen, s) };
-                let mut walked = s.ids.iter().zip(s.first.windows(2)).peekable();
-                for (i, l) in lines.iter().enumerate() {
-                    if let Some((_, w)) = walked.next_if(|(id, _)| **id as usize == i) {
-                        let dir = walk_direction(l);
-                        let found = &s.found[w[0] as usize..w[1] as usize];
-                        if let &[(ka, ta), (kb, tb)] = found {
-                            let (a, b) =
-                                (recorded[ka as usize].crossing(dir, ta), recorded[kb as usize].crossing(dir, tb));
-                            finish_two(a, b, out);
-                            continue;
-                        }
+                unsafe { stream::trace(tree, &self.ordered, lines, self.bounds, sixteen, s) };
+                // The lines not walked (outside the scene's box) cross
+                // nothing: their ends are the next line's start.
+                let base = out.offsets.len();
+                let skip_to = |id: usize, out: &mut CrossingBuffer| {
+                    let len = out.crossings.len() as u32;
+                    out.offsets.resize(base + id, len);
+                };
+                for (&id, w) in s.ids.iter().zip(s.first.windows(2)) {
+                    let id = id as usize;
+                    skip_to(id, out);
+                    let dir = walk_direction(&lines[id]);
+                    let found = &s.found[w[0] as usize..w[1] as usize];
+                    if let &[(ka, ta), (kb, tb)] = found {
+                        let (a, b) = (recorded[ka as usize].crossing(dir, ta), recorded[kb as usize].crossing(dir, tb));
+                        finish_two(a, b, out);
+                    } else {
                         hits.extend(found.iter().map(|&(k, t)| recorded[k as usize].crossing(dir, t)));
+                        finish(&mut hits, out);
                     }
-                    finish(&mut hits, out);
                 }
+                skip_to(lines.len(), out);
             }
         });
     }

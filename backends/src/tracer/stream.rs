@@ -31,6 +31,7 @@
 use glam::Vec3A;
 use obvhs::ray::Ray;
 
+use super::cpu::line_misses_box;
 use super::node8::NODE_EPSILON;
 use super::watertight::Shear;
 use super::wide8::{LEAF, Node, Wide8};
@@ -76,7 +77,9 @@ pub(super) fn has_avx512() -> bool {
     *HAS.get_or_init(|| std::is_x86_feature_detected!("avx512f"))
 }
 
-/// Walks `lines` that `take` accepts through `tree` together: the `r`-th
+/// Walks the `lines` that enter the scene's box `bounds` (centre,
+/// half-extents; [`line_misses_box`], eight lines a test) through `tree`
+/// together: the `r`-th
 /// line walked is line `s.ids[r]`, and its crossings within `[tmin,
 /// tmax]` are left as `(k, t)` (`k` the triangle in BVH order, `ordered`'s
 /// index) in `s.found[s.first[r]..s.first[r + 1]]`, in no particular order.
@@ -92,12 +95,22 @@ pub(super) unsafe fn trace(
     tree: &Wide8,
     ordered: &[[Vec3A; 3]],
     lines: &[Line],
-    take: impl Fn(&Line) -> bool,
+    bounds: (Vec3A, Vec3A),
     sixteen: bool,
     s: &mut Scratch,
 ) {
     s.ids.clear();
-    s.ids.extend((0..lines.len() as u32).filter(|&i| take(&lines[i as usize])));
+    let eights = lines.len() / W * W;
+    for at in (0..eights).step_by(W) {
+        // SAFETY: AVX2 and FMA (this function's contract).
+        let missed = unsafe { misses8(std::array::from_fn(|j| &lines[at + j]), bounds) };
+        s.ids.extend(Bits(!missed & 0xff).map(|j| (at + j) as u32));
+    }
+    for (i, l) in lines.iter().enumerate().skip(eights) {
+        if !line_misses_box(Vec3A::from(l.origin), Vec3A::from(l.direction), bounds) {
+            s.ids.push(i as u32);
+        }
+    }
     let walked = s.ids.len();
     // Each walked line's constants, eight lines at a time, the rest one by one.
     s.rays.clear();
@@ -164,6 +177,43 @@ pub(super) unsafe fn trace(
     }
     s.first.copy_within(0..walked, 1);
     s.first[0] = 0;
+}
+
+/// [`line_misses_box`] of eight lines at once, bit `j` set where line `j`
+/// misses the box `(centre, half-extents)`: the same IEEE operations lane
+/// by lane (glam's cross product is `a.y·b.z − b.y·a.z` and so on, its
+/// products the same numbers).
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn misses8(lines: [&Line; W], (c, h): (Vec3A, Vec3A)) -> u32 {
+    use std::arch::x86_64::{
+        __m256, _CMP_GT_OQ, _mm256_add_ps, _mm256_andnot_ps, _mm256_cmp_ps, _mm256_loadu_ps, _mm256_movemask_ps,
+        _mm256_mul_ps, _mm256_or_ps, _mm256_set1_ps, _mm256_sub_ps,
+    };
+    // SAFETY: AVX2 (this function's contract); a `Line` is eight `f32`
+    // (`repr(C)`: origin, tmin, direction, tmax), read unaligned.
+    let [ox, oy, oz, _, dx, dy, dz, _] =
+        transpose8(lines.map(|l| unsafe { _mm256_loadu_ps((l as *const Line).cast::<f32>()) }));
+    let sign = _mm256_set1_ps(-0.0);
+    let abs = |x: __m256| _mm256_andnot_ps(sign, x);
+    let (wx, wy, wz) = (
+        _mm256_sub_ps(ox, _mm256_set1_ps(c.x)),
+        _mm256_sub_ps(oy, _mm256_set1_ps(c.y)),
+        _mm256_sub_ps(oz, _mm256_set1_ps(c.z)),
+    );
+    let cross =
+        |p: __m256, q: __m256, r: __m256, s: __m256| abs(_mm256_sub_ps(_mm256_mul_ps(p, q), _mm256_mul_ps(r, s)));
+    let (mx, my, mz) = (cross(wy, dz, dy, wz), cross(wz, dx, dz, wx), cross(wx, dy, dx, wy));
+    let (ax, ay, az) = (abs(dx), abs(dy), abs(dz));
+    let h = [h.x, h.y, h.z].map(|v| _mm256_set1_ps(v));
+    let radius =
+        |i: usize, p: __m256, j: usize, q: __m256| _mm256_add_ps(_mm256_mul_ps(h[i], p), _mm256_mul_ps(h[j], q));
+    let (rx, ry, rz) = (radius(1, az, 2, ay), radius(0, az, 2, ax), radius(0, ay, 1, ax));
+    let gt = |m: __m256, r: __m256| _mm256_cmp_ps::<_CMP_GT_OQ>(m, r);
+    _mm256_movemask_ps(_mm256_or_ps(_mm256_or_ps(gt(mx, rx), gt(my, ry)), gt(mz, rz))) as u32
 }
 
 /// A line's constants for the walk: obvhs's slab constants (as the CWBVH
@@ -644,7 +694,7 @@ mod tests {
     use crate::scene::built_in;
     use crate::tracer::{CpuTracer, CrossingBuffer, Prepared, Tracer};
 
-    /// The eight-line constants are the scalar ones bit for bit, on global
+    /// The eight-line constants and box test are the scalar ones bit for bit, on global
     /// lines and on directions that take every branch of the scalar forms:
     /// zeros of both signs, components at and under `f32::EPSILON`, ties
     /// between axes, every sign.
@@ -687,7 +737,23 @@ mod tests {
             })
             .collect();
         let bits = |r: &Rec| r.0.map(f32::to_bits);
+        let boxes = [
+            (Vec3A::ZERO, Vec3A::splat(0.5)),
+            (Vec3A::new(0.3, -0.2, 0.1), Vec3A::new(0.05, 0.4, 0.0)),
+            (Vec3A::new(-1.0, 2.0, 0.5), Vec3A::new(1.5, 0.25, 3.0)),
+            (Vec3A::new(0.1, 0.2, -0.3), Vec3A::splat(4.0)),
+        ];
+        let mut missed = [0usize; 2];
         for group in lines.chunks_exact(W) {
+            for b in boxes {
+                // SAFETY: AVX2 was detected above.
+                let mask = unsafe { misses8(std::array::from_fn(|j| &group[j]), b) };
+                for (j, l) in group.iter().enumerate() {
+                    let scalar = line_misses_box(Vec3A::from(l.origin), Vec3A::from(l.direction), b);
+                    assert_eq!(mask >> j & 1 == 1, scalar, "{l:?} against {b:?}");
+                    missed[usize::from(scalar)] += 1;
+                }
+            }
             // SAFETY: AVX2 and FMA were detected above.
             let (rays, tri) = unsafe { constants8(std::array::from_fn(|j| &group[j])) };
             for (j, l) in group.iter().enumerate() {
@@ -697,6 +763,7 @@ mod tests {
                 assert_eq!(bits(&tri[j][1]), bits(&t[1]), "shear constants of {l:?}");
             }
         }
+        assert!(missed[0] > 20 && missed[1] > 20, "both answers tested: {missed:?}");
     }
 
     /// What the walk does per global line on `cube-enclosure:30` and

@@ -238,6 +238,16 @@ impl SceneEntropySum {
         pair_terms: impl IntoIterator<Item = f64>,
         base: Base,
     ) -> SceneMeasures {
+        let mut running = self.rows(areas, row_totals);
+        pair_terms.into_iter().for_each(|t| running.add(t));
+        running.measures(base)
+    }
+
+    /// The sum begun with the row terms `a_i ln N_i` of the row totals
+    /// `N_i` (one per patch of `areas`), in row order: the pair terms
+    /// follow, in pair order, through [`SceneEntropyRunning::add`].
+    #[must_use]
+    pub fn rows<T: Real>(&self, areas: &[T], row_totals: &[u64]) -> SceneEntropyRunning {
         let mut hs = Neumaier::new();
         let mut unsampled = 0;
         for (&a, &t) in areas.iter().zip(row_totals) {
@@ -248,9 +258,32 @@ impl SceneEntropySum {
                 hs.add(a * ln(t as f64));
             }
         }
-        pair_terms.into_iter().for_each(|t| hs.add(t));
-        let hs = hs.value().max(0.0);
-        SceneMeasures::from_nats(areas.len(), unsampled, self.hp, hs, base)
+        SceneEntropyRunning { hs, unsampled, patches: areas.len(), hp: self.hp }
+    }
+}
+
+/// A [`SceneEntropySum`] under way: its row terms added, the pair terms
+/// being added in pair order.
+#[derive(Clone, Copy, Debug)]
+pub struct SceneEntropyRunning {
+    hs: Neumaier,
+    unsampled: usize,
+    patches: usize,
+    hp: f64,
+}
+
+impl SceneEntropyRunning {
+    /// Adds the next pair term ([`SceneEntropySum::pair_term`]).
+    #[inline]
+    pub fn add(&mut self, pair_term: f64) {
+        self.hs.add(pair_term);
+    }
+
+    /// The measures of the terms added, in `base`.
+    #[must_use]
+    pub fn measures(&self, base: Base) -> SceneMeasures {
+        let hs = self.hs.value().max(0.0);
+        SceneMeasures::from_nats(self.patches, self.unsampled, self.hp, hs, base)
     }
 }
 

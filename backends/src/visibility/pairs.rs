@@ -314,7 +314,7 @@ fn radix_sort(v: &mut Vec<u32>, scratch: &mut Vec<u32>, bits: u32) {
     for (p, heads) in counts.chunks_mut(buckets).enumerate() {
         let shift = p as u32 * digit;
         // A digit all keys share moves nothing.
-        if heads.iter().any(|&c| c == v.len()) {
+        if heads.contains(&v.len()) {
             continue;
         }
         let mut at = 0;

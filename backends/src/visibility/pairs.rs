@@ -126,9 +126,15 @@ fn sorted_cap(n: usize) -> usize {
     n * n / 2
 }
 
-/// Bits of the widest radix digit [`radix_sort`] takes (2048 buckets: the
-/// scatter's write heads stay in the L1 and L2 caches).
-const RADIX_BITS: u32 = 11;
+/// Keys per top bucket of [`radix_sort`].
+const RADIX_BUCKET: usize = 1024;
+
+/// Bits of [`radix_sort`]'s top digit at most (2048 buckets: the scatter's
+/// write heads stay in the L1 and L2 caches).
+const RADIX_TOP_BITS: u32 = 11;
+
+/// Bits of the widest digit [`radix_sort`] sorts a bucket by.
+const RADIX_BITS: u32 = 8;
 
 impl Accumulator {
     /// An empty accumulator for `n` patches; `symmetric` for global lines
@@ -295,38 +301,59 @@ impl Dense {
     }
 }
 
-/// Sorts `v`, whose values are below `2^bits`, by least significant digit
-/// first: one pass to count every digit, then one stable scatter per digit
-/// of at most [`RADIX_BITS`] bits, `scratch` the other buffer (kept, as
-/// `v`, for the next block).
+/// Sorts `v`, whose values are below `2^bits`: one stable scatter by the
+/// top digit into `scratch`, in buckets of about [`RADIX_BUCKET`] keys
+/// (at most `2^`[`RADIX_TOP_BITS`] of them), then each bucket least
+/// significant digit first, digits of at most [`RADIX_BITS`] bits, between
+/// its places in the two buffers: a bucket stays in the L1 and L2 caches,
+/// where three passes over all of a block's keys went to memory (paired
+/// micro-benchmark, 25-bit cells: 6.6 -> 5.4 ns a key at 7.4·10^5 keys,
+/// 18.5-19.9 -> 14.7-15.3 at 7.4·10^6). The buffers are kept, as `v`, for
+/// the next block.
 fn radix_sort(v: &mut Vec<u32>, scratch: &mut Vec<u32>, bits: u32) {
-    let passes = bits.div_ceil(RADIX_BITS).max(1);
-    let digit = bits.div_ceil(passes);
-    let buckets = 1usize << digit;
-    let mask = (buckets - 1) as u32;
-    let mut counts = vec![0usize; buckets * passes as usize];
-    for &x in v.iter() {
-        for p in 0..passes {
-            counts[p as usize * buckets + ((x >> (p * digit)) & mask) as usize] += 1;
+    let buckets = (v.len() / RADIX_BUCKET).max(1);
+    let top = buckets.ilog2().min(RADIX_TOP_BITS).min(bits);
+    let low = bits - top;
+    scratch.resize(v.len(), 0);
+    let mut ends = vec![0; 1 << top];
+    scatter(v, scratch, (low, top), &mut ends);
+    let passes = low.div_ceil(RADIX_BITS);
+    if passes > 0 {
+        let digit = low.div_ceil(passes);
+        let mut heads = vec![0; 1 << digit];
+        let mut start = 0;
+        for &end in &ends {
+            let (mut from, mut to) = (&mut scratch[start..end], &mut v[start..end]);
+            for p in 0..passes {
+                scatter(from, to, (p * digit, digit), &mut heads);
+                std::mem::swap(&mut from, &mut to);
+            }
+            start = end;
         }
     }
-    scratch.resize(v.len(), 0);
-    for (p, heads) in counts.chunks_mut(buckets).enumerate() {
-        let shift = p as u32 * digit;
-        // A digit all keys share moves nothing.
-        if heads.contains(&v.len()) {
-            continue;
-        }
-        let mut at = 0;
-        for h in heads.iter_mut() {
-            (*h, at) = (at, at + *h);
-        }
-        for &x in v.iter() {
-            let h = &mut heads[((x >> shift) & mask) as usize];
-            scratch[*h] = x;
-            *h += 1;
-        }
+    // An even number of passes per bucket leaves it in `scratch`.
+    if passes % 2 == 0 {
         std::mem::swap(v, scratch);
+    }
+}
+
+/// Scatters `from` into `to` stably by the digit of `bits` bits (at most
+/// 31) at `shift`, one bucket per entry of `heads`, which ends as each
+/// bucket's end.
+fn scatter(from: &[u32], to: &mut [u32], (shift, bits): (u32, u32), heads: &mut [usize]) {
+    let mask = (1u32 << bits) - 1;
+    heads.fill(0);
+    for &x in from {
+        heads[((x >> shift) & mask) as usize] += 1;
+    }
+    let mut at = 0;
+    for h in heads.iter_mut() {
+        (*h, at) = (at, at + *h);
+    }
+    for &x in from {
+        let h = &mut heads[((x >> shift) & mask) as usize];
+        to[*h] = x;
+        *h += 1;
     }
 }
 
@@ -529,8 +556,10 @@ mod tests {
             state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
             (state >> 33) % m
         };
-        for (bits, len) in [(1u32, 10usize), (5, 1_000), (11, 3_000), (12, 3_000), (25, 20_000), (26, 5_000), (32, 100)]
-        {
+        // Top digits of 0 to 11 bits, as wide as the keys (no bucket pass)
+        // or not, an odd and an even number of bucket passes.
+        let cases = [(1u32, 10usize), (5, 1_000), (3, 50_000), (11, 3_000), (12, 3_000), (25, 20_000), (26, 5_000)];
+        for (bits, len) in cases.into_iter().chain([(32, 100), (32, 100_000), (17, 70_000), (26, 2_200_000)]) {
             let mut v: Vec<u32> = (0..len).map(|_| next(1 << bits) as u32).collect();
             let mut want = v.clone();
             want.sort_unstable();

@@ -332,7 +332,7 @@ fn radix_sort(v: &mut Vec<u32>, scratch: &mut Vec<u32>, bits: u32) {
         }
     }
     // An even number of passes per bucket leaves it in `scratch`.
-    if passes % 2 == 0 {
+    if passes.is_multiple_of(2) {
         std::mem::swap(v, scratch);
     }
 }

@@ -155,7 +155,7 @@ pub fn scene_measures_from_counts_with<T: Real>(
     count_xlnx: impl Fn(u64) -> f64,
 ) -> Result<SceneMeasures, Error> {
     let n = areas.len();
-    let (total, hp) = relative_area_entropy(areas)?;
+    let sum = SceneEntropySum::new(areas)?;
     same_len(n, row_totals.len())?;
     row_totals.iter_mut().for_each(|t| *t = 0);
     let mut prev: Option<(u32, u32)> = None;
@@ -173,32 +173,118 @@ pub fn scene_measures_from_counts_with<T: Real>(
         prev = Some((p.from, p.to));
         row_totals[p.from as usize] += p.count;
     }
-    let mut hs = Neumaier::new();
-    let mut unsampled = 0;
-    for (a, &t) in areas.iter().zip(row_totals.iter()) {
-        let a = a.to_f64() / total;
-        if t == 0 {
-            unsampled += usize::from(a > 0.0);
-        } else if a > 0.0 {
-            hs.add(a * ln(t as f64));
-        }
-    }
-    // Sum runs of equal pairs, then subtract (a_i/N_i) N_ij ln N_ij.
+    // Sum runs of equal pairs, then their terms, one at a time.
+    let totals = &*row_totals;
     let mut k = 0;
-    while k < pairs.len() {
-        let (i, j) = (pairs[k].from, pairs[k].to);
+    let terms = core::iter::from_fn(|| {
+        let (i, j) = (pairs.get(k)?.from, pairs[k].to);
         let mut c = 0u64;
         while k < pairs.len() && pairs[k].from == i && pairs[k].to == j {
             c += pairs[k].count;
             k += 1;
         }
-        let a = areas[i as usize].to_f64() / total;
-        if c > 0 && a > 0.0 {
-            hs.add(-a / row_totals[i as usize] as f64 * count_xlnx(c));
-        }
+        let a = sum.relative_area(areas[i as usize]);
+        Some(SceneEntropySum::pair_term(a, totals[i as usize], c, || count_xlnx(c)))
+    });
+    Ok(sum.measures(areas, totals, terms.flatten(), base))
+}
+
+/// `H_S` from sparse line counts (Part III eqs. (30)–(31) into (39)) as
+/// [`scene_measures_from_counts_with`] sums it, for callers that hold the
+/// row totals `N_i` and walk the pairs their own way (in pieces, on several
+/// threads): `H_S = Σ_i a_i ln N_i − Σ_(i,j) (a_i/N_i) N_ij ln N_ij`, one
+/// compensated sum of the row terms in row order, then of the pair terms
+/// ([`SceneEntropySum::pair_term`]) in pair order: the same terms in the
+/// same order give the same bits.
+#[derive(Clone, Copy, Debug)]
+pub struct SceneEntropySum {
+    total: f64,
+    hp: f64,
+}
+
+impl SceneEntropySum {
+    /// The sum for patches of `areas` (their total and `H_P`).
+    ///
+    /// # Errors
+    /// Area errors as [`crate::entropy_of_weights`].
+    pub fn new<T: Real>(areas: &[T]) -> Result<Self, Error> {
+        let (total, hp) = relative_area_entropy(areas)?;
+        Ok(Self { total, hp })
     }
-    let hs = hs.value().max(0.0);
-    Ok(SceneMeasures::from_nats(n, unsampled, hp, hs, base))
+
+    /// The relative area `a_i = A_i / A_T` the sum weights row `i` by.
+    #[inline]
+    #[must_use]
+    pub fn relative_area<T: Real>(&self, area: T) -> f64 {
+        area.to_f64() / self.total
+    }
+
+    /// The term `−(a_i/N_i) N_ij ln N_ij` of pair `(i, j)` with count
+    /// `count` in a row of relative area `a` and total `row_total`, its
+    /// `N_ij ln N_ij` from `count_xlnx` ([`xlnx`] of the count, bit for bit);
+    /// `None` where the sum adds nothing (no count, or a row of no area).
+    #[inline]
+    pub fn pair_term(a: f64, row_total: u64, count: u64, count_xlnx: impl FnOnce() -> f64) -> Option<f64> {
+        (count > 0 && a > 0.0).then(|| -a / row_total as f64 * count_xlnx())
+    }
+
+    /// The measures from the row totals `N_i` (one per patch of `areas`)
+    /// and the pair terms in pair order, in `base`.
+    #[must_use]
+    pub fn measures<T: Real>(
+        &self,
+        areas: &[T],
+        row_totals: &[u64],
+        pair_terms: impl IntoIterator<Item = f64>,
+        base: Base,
+    ) -> SceneMeasures {
+        let mut running = self.rows(areas, row_totals);
+        pair_terms.into_iter().for_each(|t| running.add(t));
+        running.measures(base)
+    }
+
+    /// The sum begun with the row terms `a_i ln N_i` of the row totals
+    /// `N_i` (one per patch of `areas`), in row order: the pair terms
+    /// follow, in pair order, through [`SceneEntropyRunning::add`].
+    #[must_use]
+    pub fn rows<T: Real>(&self, areas: &[T], row_totals: &[u64]) -> SceneEntropyRunning {
+        let mut hs = Neumaier::new();
+        let mut unsampled = 0;
+        for (&a, &t) in areas.iter().zip(row_totals) {
+            let a = self.relative_area(a);
+            if t == 0 {
+                unsampled += usize::from(a > 0.0);
+            } else if a > 0.0 {
+                hs.add(a * ln(t as f64));
+            }
+        }
+        SceneEntropyRunning { hs, unsampled, patches: areas.len(), hp: self.hp }
+    }
+}
+
+/// A [`SceneEntropySum`] under way: its row terms added, the pair terms
+/// being added in pair order.
+#[derive(Clone, Copy, Debug)]
+pub struct SceneEntropyRunning {
+    hs: Neumaier,
+    unsampled: usize,
+    patches: usize,
+    hp: f64,
+}
+
+impl SceneEntropyRunning {
+    /// Adds the next pair term ([`SceneEntropySum::pair_term`]).
+    #[inline]
+    pub fn add(&mut self, pair_term: f64) {
+        self.hs.add(pair_term);
+    }
+
+    /// The measures of the terms added, in `base`.
+    #[must_use]
+    pub fn measures(&self, base: Base) -> SceneMeasures {
+        let hs = self.hs.value().max(0.0);
+        SceneMeasures::from_nats(self.patches, self.unsampled, self.hp, hs, base)
+    }
 }
 
 /// The mutual information matrix `I_ij = a_i F_ij log(F_ij / a_j)`

@@ -13,10 +13,9 @@
 
 use std::borrow::Cow;
 
+use itgfx_core::scene::{SceneEntropyRunning, SceneEntropySum};
 use itgfx_core::sum::Neumaier;
-use itgfx_core::{
-    Base, PairCount, SceneMeasures, entropy_nats_of_sums, kl_terms_into, scene_measures_from_counts_with,
-};
+use itgfx_core::{Base, PairCount, SceneMeasures, entropy_nats_of_sums, kl_terms_into};
 use rayon::prelude::*;
 
 use super::merge::merge_sorted;
@@ -97,86 +96,16 @@ fn add_sorted(a: &[PairCount], b: &[PairCount]) -> Vec<PairCount> {
         .expect("validated counts: totals fit in 64 bits")
 }
 
-/// `N_ij` of all blocks, sorted, background as column `n`: one k-way merge
-/// of the blocks' sorted lists (exact integer sums, so the same list as any
-/// merge order), in parallel over pieces of whole rows, then the pieces
-/// copied into one list. A pairwise merge tree wrote every pair once per
-/// level (three levels for 8 blocks), each level into fresh pages (the
-/// kernel zeroes each): 1 GB more peak memory at 10^8 lines. With the
-/// largest count, found while the pieces are copied (a pass of its own over
-/// the totals was 1-2% of a 10^7-line run's wall time).
-fn total_pairs(blocks: &[Cow<'_, [PairCount]>]) -> (Vec<PairCount>, u64) {
-    let lists: Vec<&[PairCount]> = blocks.iter().map(|b| &b[..]).filter(|b| !b.is_empty()).collect();
-    let Some(&longest) = lists.iter().max_by_key(|l| l.len()) else { return (Vec::new(), 0) };
-    if lists.len() == 1 {
-        return (longest.to_vec(), longest.iter().map(|p| p.count).max().unwrap_or(0));
-    }
-    // Rows `[lo, hi)` of each piece, cut at the row starts of the longest
-    // list's pieces; the last piece runs to the end of every list.
-    let mut bounds: Vec<u64> = vec![0];
-    bounds.extend(row_pieces(longest, pieces_per_thread()).iter().skip(1).map(|p| u64::from(p[0].from)));
-    bounds.push(u64::MAX);
-    let pieces: Vec<Vec<&[PairCount]>> = bounds
-        .windows(2)
-        .map(|w| {
-            lists
-                .iter()
-                .map(|l| {
-                    let at = |r: u64| l.partition_point(|p| u64::from(p.from) < r);
-                    &l[at(w[0])..at(w[1])]
-                })
-                .collect()
-        })
-        .collect();
-    // Each piece merged into its own list (only the pages written are
-    // touched: the capacity is an upper bound), then copied into place.
-    let merged: Vec<Vec<PairCount>> = pieces
-        .par_iter()
-        .map(|parts| {
-            let mut v = Vec::with_capacity(parts.iter().map(|l| l.len()).sum());
-            merge_lists(parts, |p| v.push(p));
-            v
-        })
-        .collect();
-    let total = merged.iter().map(Vec::len).sum();
-    let mut out: Vec<PairCount> = Vec::with_capacity(total);
-    let mut slots: Vec<&mut [std::mem::MaybeUninit<PairCount>]> = Vec::with_capacity(merged.len());
-    let mut rest = &mut out.spare_capacity_mut()[..total];
-    for m in &merged {
-        let (head, tail) = rest.split_at_mut(m.len());
-        slots.push(head);
-        rest = tail;
-    }
-    let max = merged
-        .par_iter()
-        .zip(slots)
-        .map(|(m, slot)| {
-            let mut max = 0;
-            for (d, &p) in slot.iter_mut().zip(m) {
-                d.write(p);
-                max = max.max(p.count);
-            }
-            max
-        })
-        .max()
-        .unwrap_or(0);
-    // SAFETY: the slots cover the first `total` entries of the spare
-    // capacity, each as long as its piece's list, and every entry of each
-    // was written just above.
-    unsafe { out.set_len(total) };
-    (out, max)
-}
-
 /// Merges the sorted lists `parts` (counts positive), adding the counts of
-/// equal pairs, handing each merged pair to `emit` in order. Row by row: a
-/// row whose pairs fill a quarter of its columns or more is added into a
-/// dense row of counts, then swept in column order; a sparser one is merged
-/// k ways. (The k-way merge of every row, comparing each list's head per
-/// pair, was a fifth of the measures' time at 10^8 lines.)
+/// equal pairs, handing each merged row's pairs to `emit` in order. Row by
+/// row: a row whose pairs fill a quarter of its columns or more is added
+/// into a dense row of counts, then swept in column order; a sparser one is
+/// merged k ways. (The k-way merge of every row, comparing each list's head
+/// per pair, was a fifth of the measures' time at 10^8 lines.)
 ///
 /// # Panics
 /// If a sum passes 64 bits (validated counts never do).
-fn merge_lists(parts: &[&[PairCount]], mut emit: impl FnMut(PairCount)) {
+fn merge_rows(parts: &[&[PairCount]], mut emit: impl FnMut(&[PairCount])) {
     let mut at = vec![0usize; parts.len()];
     let mut ends = vec![0usize; parts.len()];
     let mut dense: Vec<u64> = Vec::new();
@@ -216,14 +145,16 @@ fn merge_lists(parts: &[&[PairCount]], mut emit: impl FnMut(PairCount)) {
                 row_out[m] = PairCount { from: row, to: to as u32, count };
                 m += usize::from(count > 0);
             }
-            row_out[..m].iter().for_each(|&p| emit(p));
+            emit(&row_out[..m]);
         } else {
             segments.clear();
             for ((l, i), &e) in parts.iter().zip(&mut at).zip(&ends) {
                 segments.push(&l[*i..e]);
                 *i = e;
             }
-            merge_k_ways(&segments, &mut emit);
+            row_out.clear();
+            merge_k_ways(&segments, |p| row_out.push(p));
+            emit(&row_out);
         }
     }
 }
@@ -274,8 +205,7 @@ fn merge_k_ways(parts: &[&[PairCount]], mut emit: impl FnMut(PairCount)) {
 }
 
 /// `totals` cut into about `parts` runs of whole rows (a row's pairs are
-/// adjacent in a sorted list): the pieces per-row sums can be computed on
-/// in parallel, each row's terms still added in their order.
+/// adjacent in a sorted list).
 fn row_pieces(totals: &[PairCount], parts: usize) -> Vec<&[PairCount]> {
     let step = totals.len().div_ceil(parts.max(1)).max(1);
     let mut pieces = Vec::with_capacity(parts + 1);
@@ -291,11 +221,64 @@ fn row_pieces(totals: &[PairCount], parts: usize) -> Vec<&[PairCount]> {
     pieces
 }
 
-/// Pairs whose `I_i` terms [`VisibilityCounts::patch_information_rows`]
-/// takes at once (three 32 KB buffers).
+/// The blocks' lists `lists` cut into pieces of whole rows, each piece
+/// every list's pairs of its rows: cut at the row starts of about `parts`
+/// pieces of the longest list, the last piece running to the end of every
+/// list.
+fn block_pieces<'a>(lists: &[&'a [PairCount]], parts: usize) -> Vec<Vec<&'a [PairCount]>> {
+    let longest = lists.iter().copied().max_by_key(|l| l.len()).unwrap_or(&[]);
+    let mut bounds: Vec<u64> = vec![0];
+    bounds.extend(row_pieces(longest, parts).iter().skip(1).map(|p| u64::from(p[0].from)));
+    bounds.push(u64::MAX);
+    bounds
+        .windows(2)
+        .map(|w| {
+            lists
+                .iter()
+                .map(|l| {
+                    let at = |r: u64| l.partition_point(|p| u64::from(p.from) < r);
+                    &l[at(w[0])..at(w[1])]
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The row totals `N_i` of all `rows` rows of the blocks' lists `lists`,
+/// and a bound on the largest total count (the sum of the blocks' largest
+/// counts), in one parallel pass over the lists, one array per thread.
+fn row_totals(lists: &[&[PairCount]], rows: usize) -> (Vec<u64>, u64) {
+    lists
+        .par_iter()
+        .fold(
+            || (vec![0u64; rows], 0u64),
+            |(mut totals, max), l| {
+                let mut top = 0;
+                for p in l.iter() {
+                    totals[p.from as usize] += p.count;
+                    top = top.max(p.count);
+                }
+                (totals, max.saturating_add(top))
+            },
+        )
+        .reduce(
+            || (vec![0u64; rows], 0u64),
+            |(mut a, m), (b, n)| {
+                a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
+                (a, m.saturating_add(n))
+            },
+        )
+}
+
+/// Pairs of the blocks' lists per piece of the study (64K: a wave of a
+/// few pieces a thread holds a few MB of pair terms).
+const STUDY_PIECE: usize = 1 << 16;
+
+/// Pairs whose `I_i` terms [`Study::information`] takes at once (three
+/// 32 KB buffers).
 const KL_BATCH: usize = 4096;
 
-/// Pieces of [`row_pieces`] per rayon thread.
+/// Pieces of [`block_pieces`] per rayon thread.
 fn pieces_per_thread() -> usize {
     rayon::current_num_threads() * 8
 }
@@ -314,105 +297,146 @@ fn row_term(a: f64, n: u64, s: f64) -> f64 {
     a * entropy_nats_of_sums(n as f64, s)
 }
 
-/// Per row of `totals` (`rows` rows): `N_i` and `S_i = Σ_j N_ij ln N_ij`,
-/// over pieces of whole rows in parallel; a row's terms are added in their
-/// order, so the sums have the serial sums' bits.
-fn row_sums(totals: &[PairCount], rows: usize, table: &XlnxTable) -> (Vec<u64>, Vec<f64>) {
-    let (mut n, mut s) = (vec![0u64; rows], vec![0.0; rows]);
-    let sums: Vec<Vec<(u32, u64, f64)>> = row_pieces(totals, pieces_per_thread())
-        .into_par_iter()
-        .map(|piece| {
-            let mut out = Vec::new();
-            let (mut count, mut acc) = (0u64, Neumaier::new());
-            for (k, p) in piece.iter().enumerate() {
-                count += p.count;
-                acc.add(table.get(p.count));
-                if piece.get(k + 1).is_none_or(|q| q.from != p.from) {
-                    out.push((p.from, count, acc.value()));
-                    (count, acc) = (0, Neumaier::new());
-                }
-            }
-            out
-        })
-        .collect();
-    for (i, c, v) in sums.into_iter().flatten() {
-        n[i as usize] = c;
-        s[i as usize] = v;
-    }
-    (n, s)
+/// What [`Study::piece`] gives for one piece of rows of the totals `N_ij`
+/// (all blocks' pairs with background, merged).
+#[derive(Default)]
+struct PieceSums {
+    /// `(i, N_i, S_i)` per row, `S_i = Σ_j N_ij ln N_ij` added in order.
+    rows: Vec<(u32, u64, f64)>,
+    /// Per block with lines, `(i, R_bi, D_bi)` of the rows it changes (the
+    /// module docs), in row order.
+    changes: Vec<Vec<(u32, u64, f64)>>,
+    /// `(i, I_i)` per row (eq. (65), times `k` per nat).
+    info: Vec<(u32, f64)>,
+    /// The core's pair terms of `H_S` ([`SceneEntropySum::pair_term`]) in
+    /// pair order.
+    terms: Vec<f64>,
 }
 
-/// Pairs of the totals per piece of [`leave_one_out_scene_entropy`] (1 MB:
-/// a piece stays in the L2 cache while every block walks it).
-const LOO_PIECE: usize = 1 << 16;
+/// Buffers of [`Study::information`]'s batches.
+#[derive(Default)]
+struct KlScratch {
+    f: Vec<f64>,
+    aj: Vec<f64>,
+    terms: Vec<f64>,
+}
+
+/// What every piece of the study reads: the totals are never listed, each
+/// row is merged from the blocks and every measure takes its part of the
+/// row at once (the list of totals, its copy into one list and the five
+/// passes over it were a sixth of a 10^7-line run, a third of it in page
+/// faults).
+struct Study<'a> {
+    /// Patch areas (scene units).
+    areas: &'a [f64],
+    /// Their sum, for the relative areas of `I_i`.
+    total: f64,
+    /// The areas with the background's zero appended, for `H_S`.
+    with_background: Vec<f64>,
+    sum: SceneEntropySum,
+    table: XlnxTable,
+    /// Per nat, in the requested base.
+    k: f64,
+    /// Blocks with lines, as indices into the pieces' lists, whose
+    /// changes the leave-one-out `H_S` needs (none below two).
+    used: Vec<usize>,
+}
+
+impl Study<'_> {
+    /// The sums of one piece, `parts` every block's pairs of its rows;
+    /// `dense` is `n + 1` columns of scratch.
+    fn piece(&self, parts: &[&[PairCount]], dense: &mut [u64], mut terms: Vec<f64>) -> PieceSums {
+        terms.clear();
+        terms.reserve(parts.iter().map(|p| p.len()).sum());
+        let mut out = PieceSums { changes: vec![Vec::new(); self.used.len()], terms, ..PieceSums::default() };
+        let mut mine: Vec<&[PairCount]> = self.used.iter().map(|&b| parts[b]).collect();
+        let mut kl = KlScratch::default();
+        merge_rows(parts, |row| self.row(row, &mut mine, dense, &mut kl, &mut out));
+        out
+    }
+
+    /// One row's part of every measure, `row` its merged pairs (none
+    /// empty), `blocks` the blocks' pairs from this row on.
+    fn row(
+        &self,
+        row: &[PairCount],
+        blocks: &mut [&[PairCount]],
+        dense: &mut [u64],
+        kl: &mut KlScratch,
+        out: &mut PieceSums,
+    ) {
+        let i = row[0].from;
+        let (mut count, mut s) = (0u64, Neumaier::new());
+        for p in row {
+            count += p.count;
+            s.add(self.table.get(p.count));
+        }
+        out.rows.push((i, count, s.value()));
+        if !self.used.is_empty() {
+            // The row's totals spread densely, where each block looks its
+            // pairs' totals up (a search of the totals per block pair was
+            // most of the measures' time).
+            for p in row {
+                dense[p.to as usize] = p.count;
+            }
+            for (pairs, o) in blocks.iter_mut().zip(&mut out.changes) {
+                let len = pairs.partition_point(|p| p.from == i);
+                let (r, d) = row_change(&pairs[..len], dense, &self.table);
+                *pairs = &pairs[len..];
+                if r > 0 {
+                    o.push((i, r, d));
+                }
+            }
+        }
+        out.info.push((i, self.information(row, count, kl)));
+        let a = self.sum.relative_area(self.with_background[i as usize]);
+        out.terms.extend(
+            row.iter().filter_map(|p| SceneEntropySum::pair_term(a, count, p.count, || self.table.get(p.count))),
+        );
+    }
+
+    /// `I_i` (eq. (65), times `k` per nat) of row `row` of total `count`:
+    /// its terms `a_i kl_term(N_ij / N_i, a_j) k` added in order, their
+    /// logarithms taken [`KL_BATCH`] pairs at a time by the core's
+    /// vectorised [`kl_terms_into`] (the bits of [`itgfx_core::kl_term`]; a
+    /// scalar call per pair was 2.5% of a one-thread 10^7-line run).
+    fn information(&self, row: &[PairCount], count: u64, kl: &mut KlScratch) -> f64 {
+        let n = self.areas.len();
+        let ai = self.areas[row[0].from as usize] / self.total;
+        let mut acc = 0.0;
+        for batch in row.chunks(KL_BATCH) {
+            kl.f.clear();
+            kl.aj.clear();
+            for p in batch.iter().filter(|p| (p.to as usize) < n) {
+                kl.f.push(p.count as f64 / count as f64);
+                kl.aj.push(self.areas[p.to as usize] / self.total);
+            }
+            kl.terms.resize(kl.f.len(), 0.0);
+            kl_terms_into(&kl.f, &kl.aj, &mut kl.terms);
+            for t in &kl.terms {
+                acc += ai * t * self.k;
+            }
+        }
+        acc
+    }
+}
 
 /// `H_S` in nats without each block, in block order, by the running-totals
-/// identity of the module docs. `totals` are the pairs with background of
-/// all blocks, `rows` and `s` their row totals `N_i` and sums `S_i`
-/// ([`row_sums`]).
-///
-/// The totals are cut into pieces of whole rows, in parallel; row by row,
-/// the row's totals are spread into a dense row (every block's pair of the
-/// row is one of them) where each block looks its pairs' totals up (a
-/// search of the totals per block pair was most of the measures' time).
-/// A block's changed rows come out in row order, each row's change summed
-/// over its pairs in order: every sum has the bits of a walk block by block.
-fn leave_one_out_scene_entropy(
-    a: &[f64],
-    per_block: &[&[PairCount]],
-    totals: &[PairCount],
-    (rows, s): (&[u64], &[f64]),
-    table: &XlnxTable,
-) -> Vec<f64> {
-    let n = a.len();
-    let terms: Vec<f64> = (0..n).map(|i| row_term(a[i], rows[i], s[i])).collect();
+/// identity of the module docs, from the pieces' changes and the row
+/// totals `N_i` and sums `S_i` (`a` the relative areas with the
+/// background's zero). Each block's changed rows are taken in row order:
+/// every sum has the bits of a walk block by block.
+fn leave_one_out_scene_entropy(a: &[f64], sums: &[PieceSums], blocks: usize, (rows, s): (&[u64], &[f64])) -> Vec<f64> {
+    let terms: Vec<f64> = (0..a.len()).map(|i| row_term(a[i], rows[i], s[i])).collect();
     let mut full = Neumaier::new();
     terms.iter().for_each(|&t| full.add(t));
     let full = full.value();
-    let pieces = row_pieces(totals, (totals.len() / LOO_PIECE).max(pieces_per_thread()));
-    // Per piece, per block: the rows it changes, `(i, R_bi, D_bi)`.
-    let changes: Vec<Vec<Vec<(u32, u64, f64)>>> = pieces
-        .par_iter()
-        .map_init(
-            || vec![0u64; n],
-            |dense, piece| {
-                let lo = piece.first().map_or(0, |p| u64::from(p.from));
-                let hi = piece.last().map_or(0, |p| u64::from(p.from) + 1);
-                let mut mine: Vec<&[PairCount]> = per_block
-                    .iter()
-                    .map(|pairs| {
-                        let at = |row: u64| pairs.partition_point(|p| u64::from(p.from) < row);
-                        &pairs[at(lo)..at(hi)]
-                    })
-                    .collect();
-                let mut out: Vec<Vec<(u32, u64, f64)>> = vec![Vec::new(); per_block.len()];
-                let mut rest = *piece;
-                while let Some(first) = rest.first() {
-                    let row = first.from;
-                    let len = rest.partition_point(|p| p.from == row);
-                    for p in &rest[..len] {
-                        dense[p.to as usize] = p.count;
-                    }
-                    rest = &rest[len..];
-                    for (pairs, o) in mine.iter_mut().zip(&mut out) {
-                        let len = pairs.partition_point(|p| p.from == row);
-                        let (r, d) = row_change(&pairs[..len], dense, table);
-                        *pairs = &pairs[len..];
-                        if r > 0 {
-                            o.push((row, r, d));
-                        }
-                    }
-                }
-                out
-            },
-        )
-        .collect();
-    (0..per_block.len())
+    (0..blocks)
         .into_par_iter()
         .map(|b| {
             let mut h = Neumaier::new();
             h.add(full);
-            for &(i, r, d) in changes.iter().flat_map(|piece| &piece[b]) {
+            for &(i, r, d) in sums.iter().flat_map(|piece| &piece.changes[b]) {
                 let i = i as usize;
                 h.add(-terms[i]);
                 h.add(row_term(a[i], rows[i] - r, s[i] - d));
@@ -437,9 +461,10 @@ fn row_change(pairs: &[PairCount], totals: &[u64], table: &XlnxTable) -> (u64, f
     (r, d.value())
 }
 
-/// [`VisibilityCounts::pair_tables`]: per-block pairs with background, the
-/// total pairs, the areas with the background's zero, the `x ln x` table.
-type PairTables<'a> = (Vec<Cow<'a, [PairCount]>>, Vec<PairCount>, Vec<f64>, XlnxTable);
+/// What [`VisibilityCounts::study`] gives: the measures in nats, the
+/// leave-one-out `H_S` in nats (two blocks with lines or more) and `I_i`
+/// per patch.
+type StudyResult = (SceneMeasures, Option<Vec<f64>>, Vec<f64>);
 
 /// Standard errors by which `I_S^c` must exceed zero before
 /// [`Complexity::discretisation_accuracy`] is reported.
@@ -456,70 +481,75 @@ fn jackknife(full: f64, leave_out: &[f64]) -> (f64, f64) {
 }
 
 impl VisibilityCounts {
-    /// Per-block pairs with background, the total pairs, areas with the
-    /// background's zero appended (the blocks and the merge levels in
-    /// parallel: exact integer sums, the same lists), and the table of
-    /// `x ln x` up to the largest total count.
-    fn pair_tables(&self) -> PairTables<'_> {
+    /// The measures in nats, the leave-one-out `H_S` and `I_i` (times `k`
+    /// per nat) in one pass over pieces of whole rows of the blocks' pairs
+    /// with background ([`Study`]), in parallel, in waves of a few pieces
+    /// per thread: the core's sum of `H_S` takes a wave's pair terms in
+    /// pair order while the next wave runs, and their buffers go to the
+    /// wave after (all pieces' terms at once were 75 MB of fresh pages at
+    /// 10^7 lines); then the jackknife's sums.
+    fn study(&self, k: f64) -> StudyResult {
         let n = self.areas.len();
         let per_block: Vec<Cow<'_, [PairCount]>> = self.blocks.par_iter().map(|b| with_background(b, n)).collect();
-        let (totals, max) = total_pairs(&per_block);
-        let mut a = self.areas.clone();
-        a.push(0.0);
-        (per_block, totals, a, XlnxTable::up_to(max))
-    }
-
-    /// `H_S` in nats without each block that has lines (block order), from
-    /// [`VisibilityCounts::pair_tables`]'s lists and [`row_sums`].
-    fn leave_one_out_scene_entropies(
-        &self,
-        per_block: &[Cow<'_, [PairCount]>],
-        totals: &[PairCount],
-        sums: (&[u64], &[f64]),
-        table: &XlnxTable,
-    ) -> Vec<f64> {
-        let total: f64 = self.areas.iter().sum();
-        let mut a: Vec<f64> = self.areas.iter().map(|x| x / total).collect();
-        a.push(0.0);
-        let used: Vec<&[PairCount]> =
-            self.blocks.iter().zip(per_block).filter(|(b, _)| b.lines > 0).map(|(_, p)| &p[..]).collect();
-        leave_one_out_scene_entropy(&a, &used, totals, sums, table)
-    }
-
-    /// `I_i` (eq. (65), times `k` per nat) of each row of `piece`, whole
-    /// rows of the total pairs with background, as `(row, I_i)`: each row's
-    /// terms `a_i kl_term(N_ij / N_i, a_j) k` added in order, their
-    /// logarithms taken [`KL_BATCH`] pairs at a time by the core's
-    /// vectorised [`kl_terms_into`] (the bits of [`itgfx_core::kl_term`]; a
-    /// scalar call per pair was 2.5% of a one-thread 10^7-line run).
-    fn patch_information_rows(&self, piece: &[PairCount], rows: &[u64], k: f64) -> Vec<(u32, f64)> {
-        let n = self.areas.len();
-        let total: f64 = self.areas.iter().sum();
-        let mut out: Vec<(u32, f64)> = Vec::new();
-        let (mut f, mut aj, mut terms) = (Vec::new(), Vec::new(), Vec::new());
-        let mut acc = 0.0;
-        for (b, batch) in piece.chunks(KL_BATCH).enumerate() {
-            f.clear();
-            aj.clear();
-            for p in batch.iter().filter(|p| (p.to as usize) < n) {
-                f.push(p.count as f64 / rows[p.from as usize] as f64);
-                aj.push(self.areas[p.to as usize] / total);
+        let lists: Vec<&[PairCount]> = per_block.iter().map(|b| &b[..]).collect();
+        let used: Vec<usize> = (0..lists.len()).filter(|&b| self.blocks[b].lines > 0).collect();
+        let (rows, max) = row_totals(&lists, n + 1);
+        let mut with_background = self.areas.clone();
+        with_background.push(0.0);
+        let study = Study {
+            areas: &self.areas,
+            total: self.areas.iter().sum(),
+            sum: SceneEntropySum::new(&with_background).expect("validated areas"),
+            with_background,
+            table: XlnxTable::up_to(max),
+            k,
+            used: if used.len() >= 2 { used } else { Vec::new() },
+        };
+        let mut running = study.sum.rows(&study.with_background, &rows);
+        let pairs: usize = lists.iter().map(|l| l.len()).sum();
+        let pieces = block_pieces(&lists, (pairs / STUDY_PIECE).max(pieces_per_thread()));
+        let mut sums: Vec<PieceSums> = Vec::with_capacity(pieces.len());
+        let mut spare: Vec<Vec<f64>> = Vec::new();
+        let add_terms = |running: &mut SceneEntropyRunning, wave: &mut [PieceSums]| -> Vec<Vec<f64>> {
+            wave.iter_mut()
+                .map(|piece| {
+                    piece.terms.iter().for_each(|&t| running.add(t));
+                    std::mem::take(&mut piece.terms)
+                })
+                .collect()
+        };
+        for wave in pieces.chunks(pieces_per_thread()) {
+            let buffers: Vec<Vec<f64>> = wave.iter().map(|_| spare.pop().unwrap_or_default()).collect();
+            let last = sums.len().saturating_sub(pieces_per_thread());
+            let (done, freed) = rayon::join(
+                || {
+                    wave.par_iter()
+                        .zip(buffers)
+                        .map_init(|| vec![0u64; n + 1], |dense, (parts, terms)| study.piece(parts, dense, terms))
+                        .collect::<Vec<_>>()
+                },
+                || add_terms(&mut running, &mut sums[last..]),
+            );
+            spare.extend(freed);
+            sums.extend(done);
+        }
+        let last = sums.len().saturating_sub(pieces_per_thread());
+        add_terms(&mut running, &mut sums[last..]);
+        let (mut s, mut info) = (vec![0.0; n + 1], vec![0.0; n]);
+        for piece in &sums {
+            for &(i, c, v) in &piece.rows {
+                debug_assert_eq!(rows[i as usize], c, "the rows' totals are the blocks'");
+                s[i as usize] = v;
             }
-            terms.resize(f.len(), 0.0);
-            kl_terms_into(&f, &aj, &mut terms);
-            let mut term = terms.iter();
-            for (e, p) in batch.iter().enumerate() {
-                if (p.to as usize) < n {
-                    let ai = self.areas[p.from as usize] / total;
-                    acc += ai * term.next().expect("one term per pair into a patch") * k;
-                }
-                if piece.get(b * KL_BATCH + e + 1).is_none_or(|q| q.from != p.from) {
-                    out.push((p.from, acc));
-                    acc = 0.0;
-                }
+            for &(i, v) in &piece.info {
+                info[i as usize] = v;
             }
         }
-        out
+        let hs_without = (!study.used.is_empty()).then(|| {
+            let a: Vec<f64> = study.with_background.iter().map(|x| x / study.total).collect();
+            leave_one_out_scene_entropy(&a, &sums, study.used.len(), (&rows, &s))
+        });
+        (running.measures(Base::Nats), hs_without, info)
     }
 
     /// Evaluates the measures in `base`.
@@ -531,36 +561,10 @@ impl VisibilityCounts {
     #[must_use]
     pub fn complexity(&self, base: Base) -> Complexity {
         let n = self.areas.len();
-        let (per_block, totals, a, table) = self.pair_tables();
         let used: Vec<&BlockCounts> = self.blocks.iter().filter(|b| b.lines > 0).collect();
         let total: f64 = self.areas.iter().sum();
         let k = base.per_nat();
-        // The core's measures (one serial pass over the totals, in nats, its
-        // `x ln x` from the table) beside everything else, which needs only
-        // the row totals: the leave-one-out `H_S` and the per-patch `I_i`
-        // (eq. (65)), each row's `I_i` adding its pairs in order (pieces of
-        // whole rows give the serial sums' bits).
-        let (nats, (hs_without, info_rows)) = rayon::join(
-            || {
-                scene_measures_from_counts_with(&a, &totals, &mut vec![0; n + 1], Base::Nats, |c| table.get(c))
-                    .expect("validated counts")
-            },
-            || {
-                let (rows, s) = row_sums(&totals, n + 1, &table);
-                rayon::join(
-                    || {
-                        (used.len() >= 2)
-                            .then(|| self.leave_one_out_scene_entropies(&per_block, &totals, (&rows, &s), &table))
-                    },
-                    || {
-                        row_pieces(&totals, pieces_per_thread())
-                            .into_par_iter()
-                            .map(|piece| self.patch_information_rows(piece, &rows, k))
-                            .collect::<Vec<_>>()
-                    },
-                )
-            },
-        );
+        let (nats, hs_without, info) = self.study(k);
         // The measures in `base` from those in nats: the bits the core's
         // pass in `base` gives (it computes in nats and converts the same way).
         let hp = nats.positional_entropy;
@@ -593,10 +597,6 @@ impl VisibilityCounts {
             if let (Some(full), true) = (continuous, ci.len() == used.len()) {
                 cse = Some(jackknife(full, &ci).0);
             }
-        }
-        let mut info = vec![0.0; n];
-        for (i, v) in info_rows.into_iter().flatten() {
-            info[i as usize] = v;
         }
         let patch_continuous = (0..n)
             .map(|i| {
@@ -670,12 +670,12 @@ mod tests {
             .collect()
     }
 
-    /// The one-pass k-way merge of the blocks' pairs is the pairwise merge
-    /// tree's list (empty blocks, one block, disjoint and shared rows, keys
-    /// only some blocks hold, rows past the longest list's last), for several
-    /// piece counts.
+    /// The blocks' pairs cut into pieces of rows and merged row by row are
+    /// the pairwise merge tree's list (empty blocks, one block, disjoint and
+    /// shared rows, keys only some blocks hold, rows past the longest list's
+    /// last), for several piece counts.
     #[test]
-    fn total_pairs_is_the_pairwise_merge() {
+    fn merged_rows_are_the_pairwise_merge() {
         let mut state = 99u64;
         let mut next = |m: u64| {
             state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
@@ -696,18 +696,25 @@ mod tests {
                 lists[1].clear();
                 lists[2].retain(|p| u64::from(p.from) > rows / 2);
             }
-            let cows: Vec<Cow<'_, [PairCount]>> = lists.iter().map(|l| Cow::Borrowed(&l[..])).collect();
+            let refs: Vec<&[PairCount]> = lists.iter().map(|l| &l[..]).collect();
             let want = lists.iter().fold(Vec::new(), |acc: Vec<PairCount>, l| add_sorted(&acc, l));
-            for threads in [1, 2, 5] {
-                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-                assert_eq!(
-                    pool.install(|| total_pairs(&cows)),
-                    (want.clone(), want.iter().map(|p| p.count).max().unwrap_or(0)),
-                    "{blocks} blocks, {rows} rows, {threads} threads"
-                );
+            for parts in [1, 2, 5, 40] {
+                let mut got = Vec::new();
+                for piece in block_pieces(&refs, parts) {
+                    assert_eq!(piece.len(), blocks);
+                    merge_rows(&piece, |row| {
+                        assert!(row.iter().all(|p| p.from == row[0].from), "one row at a time");
+                        got.extend_from_slice(row);
+                    });
+                }
+                assert_eq!(got, want, "{blocks} blocks, {rows} rows, {parts} pieces");
             }
         }
-        assert_eq!(total_pairs(&[]), (Vec::new(), 0));
+        let mut none = Vec::new();
+        for piece in block_pieces(&[], 3) {
+            merge_rows(&piece, |row| none.extend_from_slice(row));
+        }
+        assert!(none.is_empty());
     }
 
     /// The running-totals jackknife equals the re-merge to 1e-12 bits per
@@ -741,16 +748,37 @@ mod tests {
     fn running_totals_equal_the_remerge() {
         for (spec, lines, local, blocks) in [
             ("cube-enclosure:3", 200_000, false, 8),
+            // Over 10^6 pairs: the study's pieces come in several waves.
+            ("cube-enclosure:30", 1_000_000, false, 8),
             ("cornell-box", 50_000, true, 5),
             ("tetrahedron", 21, false, 8),
             ("tetrahedron", 30, true, 3),
         ] {
             let c = counts(spec, lines, local, blocks);
-            let (per_block, totals, a, table) = c.pair_tables();
-            let nats = scene_measures_from_counts(&a, &totals, &mut vec![0; a.len()], Base::Nats).unwrap();
-            let (rows, s) = row_sums(&totals, a.len(), &table);
-            let fast: Vec<f64> = c
-                .leave_one_out_scene_entropies(&per_block, &totals, (&rows, &s), &table)
+            let n = c.areas.len();
+            let totals =
+                c.blocks.iter().fold(Vec::new(), |acc: Vec<PairCount>, b| add_sorted(&acc, &with_background(b, n)));
+            let mut a = c.areas.clone();
+            a.push(0.0);
+            let core = scene_measures_from_counts(&a, &totals, &mut vec![0; a.len()], Base::Nats).unwrap();
+            let k = Base::Bits.per_nat();
+            let (nats, hs_without, info) = c.study(k);
+            // The study's measures are the core's on the listed totals, bit for bit.
+            assert_eq!(nats, core, "{spec}");
+            // And its `I_i` each row's terms added in order (eq. (65)).
+            let (total, mut rows, mut want) = (c.areas.iter().sum::<f64>(), vec![0u64; n], vec![0.0f64; n]);
+            totals.iter().for_each(|p| rows[p.from as usize] += p.count);
+            for p in totals.iter().filter(|p| (p.to as usize) < n) {
+                let (i, j) = (p.from as usize, p.to as usize);
+                let f = p.count as f64 / rows[i] as f64;
+                want[i] += c.areas[i] / total * itgfx_core::kl_term(f, c.areas[j] / total) * k;
+            }
+            assert_eq!(
+                info.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+                want.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+            );
+            let fast: Vec<f64> = hs_without
+                .unwrap()
                 .into_iter()
                 .map(|hs| (nats.positional_entropy - hs) * Base::Bits.per_nat())
                 .collect();

@@ -8,14 +8,18 @@
 //! from a patch back to itself counts twice on the diagonal, as two keys
 //! did). Half the keys to add, half the matrix touched.
 //!
-//! **Dense or sparse.** Up to [`DENSE_LIMIT`] cells the counts live in one
-//! `n × n` matrix of `u32`, with a hash map for the rare pair past `2^32`;
-//! above it, in a hash map of the pairs hit. Keys are added as the chunks
-//! produced them: sorting a chunk's keys first (so the adds swept the
-//! matrix in order) cost more than it saved, since a chunk's ~10^4 keys are
-//! kilobytes apart in the matrix either way. (Transparent huge pages for the matrix were
-//! tried: its adds got ~25% cheaper, but clearing the whole matrix at first
-//! touch cost more than that at 10^7 lines.)
+//! **Sorted, dense or sparse.** Up to [`DENSE_LIMIT`] cells a block's keys
+//! are kept as cell indices `i·n + j` and radix-sorted when the block
+//! closes, then counted run by run: a block's cost is its own keys, not the
+//! `n × n` matrix they scatter over (at 10^7 lines on cube-enclosure:30 a
+//! block's 7.4·10^5 segments hit 5% of the upper cells, and the random adds
+//! into the 117 MB matrix, the sweep of the groups they hit and the
+//! matrix's page faults were 10% of the run's CPU time). A run whose block
+//! passes [`sorted_cap`] keys turns dense for good: one `n × n` matrix of
+//! `u32`, with a hash map for the rare pair past `2^32`, its adds in the
+//! order the chunks produced them (sorting a chunk's keys first cost more
+//! than it saved). Above [`DENSE_LIMIT`] cells, a hash map of the pairs
+//! hit.
 
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
@@ -58,12 +62,8 @@ pub(super) fn sym_key(i: u32, j: u32) -> u64 {
 /// Where a block's pair counts accumulate (see the module docs).
 ///
 /// One accumulator serves every block of a run: [`Accumulator::take_pairs`]
-/// zeroes what it reads, so the matrix is allocated (and its pages faulted
-/// in) once per run, not once per block. A bitmap marks the 16-cell groups
-/// (64 bytes each) a block hit, so reading a block's pairs visits
-/// only those, in order: a small shard does not sweep all `n²` cells (that
-/// sweep, eight times over 5400² cells, was a second of every small
-/// shard's CPU time), and no list of cells hit has to be sorted.
+/// empties it for the next block, keeping its buffers, so their pages are
+/// faulted in once per run, not once per block.
 pub(super) struct Accumulator {
     store: Store,
     /// Keys are unordered pairs ([`sym_key`]): write both directions out.
@@ -71,18 +71,37 @@ pub(super) struct Accumulator {
 }
 
 enum Store {
-    /// `hit` has bit `g % 64` of word `g / 64` set when group `g` (cells
-    /// `16g .. 16g + 16`) may hold a count.
-    Dense {
+    /// The open block's keys as cells `i·n + j`, radix-sorted and counted
+    /// run by run when the block closes: a block of few segments for its
+    /// `n²` cells (5.9·10^5 segments into 1.5·10^7 upper cells at 10^7 lines
+    /// on cube-enclosure:30) costs its own keys, not a sweep of the matrix
+    /// they scatter over. Past [`sorted_cap`] keys in one block, the run
+    /// goes [`Store::Dense`].
+    Sorted {
         n: usize,
-        counts: Vec<u32>,
-        hit: Vec<u64>,
-        overflow: KeyMap,
-        /// The last block's pieces of upper pairs, kept for the next: their
-        /// pages are faulted in once per run, not once per block.
-        pieces: Vec<Vec<PairCount>>,
+        cells: Vec<u32>,
+        /// The radix sort's other buffer.
+        scratch: Vec<u32>,
+        /// The last block's counted runs (its upper pairs), kept for the next.
+        runs: Vec<PairCount>,
     },
+    Dense(Dense),
     Sparse(KeyMap),
+}
+
+/// The dense store: `n × n` counts, `hit` with bit `g % 64` of word `g / 64`
+/// set when group `g` (cells `16g .. 16g + 16`) may hold a count. A bitmap
+/// marks the 16-cell groups (64 bytes each) a block hit, so reading a
+/// block's pairs visits only those, in order, and no list of cells hit has
+/// to be sorted.
+struct Dense {
+    n: usize,
+    counts: Vec<u32>,
+    hit: Vec<u64>,
+    overflow: KeyMap,
+    /// The last block's pieces of upper pairs, kept for the next: their
+    /// pages are faulted in once per run, not once per block.
+    pieces: Vec<Vec<PairCount>>,
 }
 
 /// Largest `n²` counted densely (6000 patches: 144 MB of `u32`).
@@ -94,23 +113,35 @@ const GROUP: usize = 16;
 /// Cells per word of the `hit` bitmap.
 const WORD_CELLS: usize = GROUP * 64;
 
-/// How many keys ahead [`Accumulator::add_keys`] prefetches a dense cell:
-/// about a memory latency's worth of adds.
+/// How many keys ahead [`Dense::add`] prefetches a cell: about a memory
+/// latency's worth of adds.
 const PREFETCH_AHEAD: usize = 16;
+
+/// Most keys one block of a [`Store::Sorted`] holds: `n²/2`, 8 bytes a key
+/// with the sort's buffer, the `4n²` bytes of the dense matrix it replaces.
+/// A run past it turns dense: its keys go into the matrix, its buffers are
+/// freed, so no run holds more than the dense store did, but for the
+/// matrix and one block's capped keys at the moment it turns.
+fn sorted_cap(n: usize) -> usize {
+    n * n / 2
+}
+
+/// Keys per top bucket of [`radix_sort`].
+const RADIX_BUCKET: usize = 1024;
+
+/// Bits of [`radix_sort`]'s top digit at most (2048 buckets: the scatter's
+/// write heads stay in the L1 and L2 caches).
+const RADIX_TOP_BITS: u32 = 11;
+
+/// Bits of the widest digit [`radix_sort`] sorts a bucket by.
+const RADIX_BITS: u32 = 8;
 
 impl Accumulator {
     /// An empty accumulator for `n` patches; `symmetric` for global lines
     /// (one [`sym_key`] per segment).
     pub(super) fn new(n: usize, symmetric: bool) -> Self {
         let store = if n.saturating_mul(n) <= DENSE_LIMIT {
-            let cells = n * n;
-            Store::Dense {
-                n,
-                counts: vec![0; cells],
-                hit: vec![0; cells.div_ceil(WORD_CELLS)],
-                overflow: KeyMap::default(),
-                pieces: Vec::new(),
-            }
+            Store::Sorted { n, cells: Vec::new(), scratch: Vec::new(), runs: Vec::new() }
         } else {
             Store::Sparse(KeyMap::default())
         };
@@ -121,31 +152,18 @@ impl Accumulator {
     /// lines produced them: exact integer counts, so no order shows).
     pub(super) fn add_keys(&mut self, keys: &[u64]) {
         match &mut self.store {
-            Store::Dense { n, counts, hit, overflow, .. } => {
+            Store::Sorted { n, cells, .. } => {
                 let n = *n;
-                let cell = |k: u64| (k >> 32) as usize * n + (k as u32) as usize;
-                for (r, &k) in keys.iter().enumerate() {
-                    // Consecutive keys are kilobytes apart in a matrix of
-                    // 100+ MB: each add misses the cache, and the hardware
-                    // prefetcher cannot guess the next. Ask for the cell
-                    // [`PREFETCH_AHEAD`] keys on.
-                    #[cfg(target_arch = "x86_64")]
-                    if let Some(&ahead) = keys.get(r + PREFETCH_AHEAD) {
-                        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-                        let p = counts.as_ptr().wrapping_add(cell(ahead)).cast::<i8>();
-                        // SAFETY: a prefetch reads nothing architecturally and never faults.
-                        unsafe { _mm_prefetch::<_MM_HINT_T0>(p) };
-                    }
-                    #[cfg(not(target_arch = "x86_64"))]
-                    let _ = r;
-                    let idx = cell(k);
-                    hit[idx / WORD_CELLS] |= 1 << ((idx / GROUP) % 64);
-                    match counts[idx].checked_add(1) {
-                        Some(c) => counts[idx] = c,
-                        // A pair counted 2^32 times: the excess kept exactly.
-                        None => *overflow.entry(k).or_insert(0) += 1,
-                    }
+                cells.extend(keys.iter().map(|&k| ((k >> 32) as usize * n + (k as u32) as usize) as u32));
+                if cells.len() > sorted_cap(n) {
+                    let mut dense = Dense::new(n);
+                    dense.add(cells, |&c| c as usize);
+                    self.store = Store::Dense(dense);
                 }
+            }
+            Store::Dense(dense) => {
+                let n = dense.n;
+                dense.add(keys, |&k| (k >> 32) as usize * n + (k as u32) as usize);
             }
             Store::Sparse(map) => {
                 for &k in keys {
@@ -156,11 +174,7 @@ impl Accumulator {
     }
 
     /// The pairs counted so far, sorted, leaving the accumulator empty for
-    /// the next block: the dense matrix is zeroed where it was written and
-    /// kept, so its pages are touched once per run, not once per block
-    /// (fresh pages cost two page faults each: 13% of a 10^7-line run).
-    /// Only the groups of cells the bitmap marks are read, in order, on
-    /// every thread.
+    /// the next block.
     ///
     /// # Errors
     /// [`CountsError::Overflow`] if a doubled diagonal count would pass 64 bits.
@@ -168,52 +182,22 @@ impl Accumulator {
         let too_big = || CountsError::Overflow("a pair count".into());
         let symmetric = self.symmetric;
         match &mut self.store {
-            Store::Dense { n, counts, hit, overflow, pieces } => {
-                let n = *n;
-                let pair = |idx: usize, c: u32| PairCount {
-                    from: (idx / n) as u32,
-                    to: (idx % n) as u32,
-                    count: u64::from(c),
-                };
-                // The bitmap in pieces of words, each with its cells, on
-                // every thread, kept in order: the sorted list.
-                let words = hit.len().div_ceil(pieces_per_thread()).max(1);
-                pieces.resize_with(hit.len().div_ceil(words), Vec::new);
-                hit.par_chunks_mut(words)
-                    .zip(counts.par_chunks_mut(words * WORD_CELLS))
-                    .zip(pieces.par_iter_mut())
-                    .enumerate()
-                    .for_each(|(p, ((bits, part), v))| {
-                        v.clear();
-                        let len = part.len();
-                        for (w, word) in bits.iter_mut().enumerate() {
-                            let mut b = std::mem::take(word);
-                            while b != 0 {
-                                let at = w * WORD_CELLS + b.trailing_zeros() as usize * GROUP;
-                                b &= b - 1;
-                                let group = &mut part[at..(at + GROUP).min(len)];
-                                for (k, x) in group.iter_mut().enumerate().filter(|(_, x)| **x > 0) {
-                                    v.push(pair(p * words * WORD_CELLS + at + k, std::mem::take(x)));
-                                }
-                            }
-                        }
-                    });
-                if !overflow.is_empty() {
-                    // Counts past 2^32 for one pair (rare): into one list.
-                    let mut v = pieces.concat();
-                    for (k, c) in overflow.drain() {
-                        let (i, j) = ((k >> 32) as u32, k as u32);
-                        match v.binary_search_by_key(&(i, j), |p| (p.from, p.to)) {
-                            Ok(pos) => v[pos].count += c,
-                            Err(pos) => v.insert(pos, PairCount { from: i, to: j, count: c }),
-                        }
-                    }
-                    *pieces = vec![v];
+            Store::Sorted { n, cells, scratch, runs } => {
+                let bits = usize::BITS - (*n * *n).saturating_sub(1).leading_zeros();
+                radix_sort(cells, scratch, bits);
+                count_runs(cells, *n, runs);
+                cells.clear();
+                if symmetric {
+                    // Cut anywhere: `both_directions` takes any pieces.
+                    let step = runs.len().div_ceil(pieces_per_thread()).max(1);
+                    let pieces: Vec<&[PairCount]> = runs.chunks(step).collect();
+                    both_directions(&pieces).ok_or_else(too_big)
+                } else {
+                    Ok(runs.clone())
                 }
-                // Sorted pieces, in order: their concatenation is the sorted
-                // list. One piece per row set: the per-piece row counts of
-                // `both_directions` cost `rows` entries per piece.
-                let pieces: Vec<&[PairCount]> = pieces.iter().map(|p| &p[..]).collect();
+            }
+            Store::Dense(dense) => {
+                let pieces = dense.take_pieces();
                 if symmetric { both_directions(&pieces).ok_or_else(too_big) } else { Ok(pieces.concat()) }
             }
             Store::Sparse(map) => {
@@ -224,6 +208,170 @@ impl Accumulator {
                 if symmetric { both_directions(&[&v]).ok_or_else(too_big) } else { Ok(v) }
             }
         }
+    }
+}
+
+impl Dense {
+    /// An empty matrix for `n` patches (`n² ≤ DENSE_LIMIT`).
+    fn new(n: usize) -> Self {
+        let cells = n * n;
+        Self {
+            n,
+            counts: vec![0; cells],
+            hit: vec![0; cells.div_ceil(WORD_CELLS)],
+            overflow: KeyMap::default(),
+            pieces: Vec::new(),
+        }
+    }
+
+    /// Counts each of `items` once, at its cell `cell(item)`.
+    fn add<T>(&mut self, items: &[T], cell: impl Fn(&T) -> usize) {
+        let n = self.n;
+        for (r, item) in items.iter().enumerate() {
+            // Consecutive keys are kilobytes apart in a matrix of 100+ MB:
+            // each add misses the cache, and the hardware prefetcher cannot
+            // guess the next. Ask for the cell [`PREFETCH_AHEAD`] keys on.
+            #[cfg(target_arch = "x86_64")]
+            if let Some(ahead) = items.get(r + PREFETCH_AHEAD) {
+                use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+                let p = self.counts.as_ptr().wrapping_add(cell(ahead)).cast::<i8>();
+                // SAFETY: a prefetch reads nothing architecturally and never faults.
+                unsafe { _mm_prefetch::<_MM_HINT_T0>(p) };
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            let _ = r;
+            let idx = cell(item);
+            self.hit[idx / WORD_CELLS] |= 1 << ((idx / GROUP) % 64);
+            match self.counts[idx].checked_add(1) {
+                Some(c) => self.counts[idx] = c,
+                // A pair counted 2^32 times: the excess kept exactly.
+                None => *self.overflow.entry(key((idx / n) as u32, (idx % n) as u32)).or_insert(0) += 1,
+            }
+        }
+    }
+
+    /// The block's upper pairs as sorted pieces, in order, the matrix zeroed
+    /// where it was written and kept, so its pages are touched once per run,
+    /// not once per block (fresh pages cost two page faults each: 13% of a
+    /// 10^7-line run). Only the groups of cells the bitmap marks are read,
+    /// in order, on every thread.
+    fn take_pieces(&mut self) -> Vec<&[PairCount]> {
+        let Self { n, counts, hit, overflow, pieces } = self;
+        let n = *n;
+        let pair = |idx: usize, c: u32| PairCount { from: (idx / n) as u32, to: (idx % n) as u32, count: u64::from(c) };
+        // The bitmap in pieces of words, each with its cells, on every
+        // thread, kept in order: the sorted list.
+        let words = hit.len().div_ceil(pieces_per_thread()).max(1);
+        pieces.resize_with(hit.len().div_ceil(words), Vec::new);
+        hit.par_chunks_mut(words)
+            .zip(counts.par_chunks_mut(words * WORD_CELLS))
+            .zip(pieces.par_iter_mut())
+            .enumerate()
+            .for_each(|(p, ((bits, part), v))| {
+                v.clear();
+                let len = part.len();
+                for (w, word) in bits.iter_mut().enumerate() {
+                    let mut b = std::mem::take(word);
+                    while b != 0 {
+                        let at = w * WORD_CELLS + b.trailing_zeros() as usize * GROUP;
+                        b &= b - 1;
+                        let group = &mut part[at..(at + GROUP).min(len)];
+                        for (k, x) in group.iter_mut().enumerate().filter(|(_, x)| **x > 0) {
+                            v.push(pair(p * words * WORD_CELLS + at + k, std::mem::take(x)));
+                        }
+                    }
+                }
+            });
+        if !overflow.is_empty() {
+            // Counts past 2^32 for one pair (rare): into one list.
+            let mut v = pieces.concat();
+            for (k, c) in overflow.drain() {
+                let (i, j) = ((k >> 32) as u32, k as u32);
+                match v.binary_search_by_key(&(i, j), |p| (p.from, p.to)) {
+                    Ok(pos) => v[pos].count += c,
+                    Err(pos) => v.insert(pos, PairCount { from: i, to: j, count: c }),
+                }
+            }
+            *pieces = vec![v];
+        }
+        // Sorted pieces, in order: their concatenation is the sorted list.
+        // One piece per row set: the per-piece row counts of
+        // `both_directions` cost `rows` entries per piece.
+        pieces.iter().map(|p| &p[..]).collect()
+    }
+}
+
+/// Sorts `v`, whose values are below `2^bits`: one stable scatter by the
+/// top digit into `scratch`, in buckets of about [`RADIX_BUCKET`] keys
+/// (at most `2^`[`RADIX_TOP_BITS`] of them), then each bucket least
+/// significant digit first, digits of at most [`RADIX_BITS`] bits, between
+/// its places in the two buffers: a bucket stays in the L1 and L2 caches,
+/// where three passes over all of a block's keys went to memory (paired
+/// micro-benchmark, 25-bit cells: 6.6 -> 5.4 ns a key at 7.4·10^5 keys,
+/// 18.5-19.9 -> 14.7-15.3 at 7.4·10^6). The buffers are kept, as `v`, for
+/// the next block.
+fn radix_sort(v: &mut Vec<u32>, scratch: &mut Vec<u32>, bits: u32) {
+    let buckets = (v.len() / RADIX_BUCKET).max(1);
+    let top = buckets.ilog2().min(RADIX_TOP_BITS).min(bits);
+    let low = bits - top;
+    scratch.resize(v.len(), 0);
+    let mut ends = vec![0; 1 << top];
+    scatter(v, scratch, (low, top), &mut ends);
+    let passes = low.div_ceil(RADIX_BITS);
+    if passes > 0 {
+        let digit = low.div_ceil(passes);
+        let mut heads = vec![0; 1 << digit];
+        let mut start = 0;
+        for &end in &ends {
+            let (mut from, mut to) = (&mut scratch[start..end], &mut v[start..end]);
+            for p in 0..passes {
+                scatter(from, to, (p * digit, digit), &mut heads);
+                std::mem::swap(&mut from, &mut to);
+            }
+            start = end;
+        }
+    }
+    // An even number of passes per bucket leaves it in `scratch`.
+    if passes.is_multiple_of(2) {
+        std::mem::swap(v, scratch);
+    }
+}
+
+/// Scatters `from` into `to` stably by the digit of `bits` bits (at most
+/// 31) at `shift`, one bucket per entry of `heads`, which ends as each
+/// bucket's end.
+fn scatter(from: &[u32], to: &mut [u32], (shift, bits): (u32, u32), heads: &mut [usize]) {
+    let mask = (1u32 << bits) - 1;
+    heads.fill(0);
+    for &x in from {
+        heads[((x >> shift) & mask) as usize] += 1;
+    }
+    let mut at = 0;
+    for h in heads.iter_mut() {
+        (*h, at) = (at, at + *h);
+    }
+    for &x in from {
+        let h = &mut heads[((x >> shift) & mask) as usize];
+        to[*h] = x;
+        *h += 1;
+    }
+}
+
+/// The sorted cells `sorted` of an `n`-column matrix counted run by run
+/// into `out` (cleared first), as the sorted pairs `N_ij`.
+fn count_runs(sorted: &[u32], n: usize, out: &mut Vec<PairCount>) {
+    out.clear();
+    let (mut row, mut row_end) = (0u32, n as u32);
+    let mut k = 0;
+    while k < sorted.len() {
+        let c = sorted[k];
+        let len = sorted[k..].iter().take_while(|&&x| x == c).count();
+        while c >= row_end {
+            row += 1;
+            row_end += n as u32;
+        }
+        out.push(PairCount { from: row, to: c - (row_end - n as u32), count: len as u64 });
+        k += len;
     }
 }
 
@@ -386,9 +534,9 @@ mod tests {
     #[test]
     fn dense_counts_past_32_bits_and_the_last_group() {
         let n = 5; // 25 cells: one full group of 16 and a partial one.
-        let mut acc = Accumulator::new(n, false);
-        let Store::Dense { counts, .. } = &mut acc.store else { panic!("5 patches are dense") };
-        counts[key_cell(n, 1, 2)] = u32::MAX - 1;
+        let mut dense = Dense::new(n);
+        dense.counts[key_cell(n, 1, 2)] = u32::MAX - 1;
+        let mut acc = Accumulator { store: Store::Dense(dense), symmetric: false };
         acc.add_keys(&[key(1, 2), key(4, 4), key(1, 2), key(1, 2), key(0, 0), key(4, 4)]);
         let want = [
             PairCount { from: 0, to: 0, count: 1 },
@@ -396,6 +544,63 @@ mod tests {
             PairCount { from: 4, to: 4, count: 2 },
         ];
         assert_eq!(acc.take_pairs().unwrap(), want);
+        assert!(acc.take_pairs().unwrap().is_empty());
+    }
+
+    /// The radix sort sorts whatever the width: one digit, several, a
+    /// partial last one, digits every key shares, no keys at all.
+    #[test]
+    fn radix_sort_sorts() {
+        let mut state = 3u64;
+        let mut next = |m: u64| {
+            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            (state >> 33) % m
+        };
+        // Top digits of 0 to 11 bits, as wide as the keys (no bucket pass)
+        // or not, an odd and an even number of bucket passes.
+        let cases = [(1u32, 10usize), (5, 1_000), (3, 50_000), (11, 3_000), (12, 3_000), (25, 20_000), (26, 5_000)];
+        for (bits, len) in cases.into_iter().chain([(32, 100), (32, 100_000), (17, 70_000), (26, 2_200_000)]) {
+            let mut v: Vec<u32> = (0..len).map(|_| next(1 << bits) as u32).collect();
+            let mut want = v.clone();
+            want.sort_unstable();
+            let mut scratch = vec![7; 3];
+            radix_sort(&mut v, &mut scratch, bits);
+            assert_eq!(v, want, "{bits} bits");
+            let mut same = vec![1u32 << (bits - 1); len];
+            radix_sort(&mut same, &mut scratch, bits);
+            assert!(same.iter().all(|&x| x == 1 << (bits - 1)));
+        }
+        let mut empty: Vec<u32> = Vec::new();
+        radix_sort(&mut empty, &mut Vec::new(), 25);
+        assert!(empty.is_empty());
+    }
+
+    /// A run turns dense in the middle of a block once its keys pass the
+    /// cap, and counts the same pairs the sorted store would.
+    #[test]
+    fn the_sorted_store_turns_dense_past_its_cap() {
+        let n = 40;
+        let keys: Vec<u64> =
+            (0..3 * sorted_cap(n) as u64).map(|k| sym_key((k * 7 % 40) as u32, (k * 13 % 40) as u32)).collect();
+        let mut acc = Accumulator::new(n, true);
+        acc.add_keys(&keys[..10]);
+        assert!(matches!(acc.store, Store::Sorted { .. }));
+        let first = acc.take_pairs().unwrap();
+        acc.add_keys(&keys[..10]);
+        assert_eq!(acc.take_pairs().unwrap(), first);
+        let mut sorted = Accumulator::new(n, true);
+        sorted.store = Store::Sorted { n, cells: Vec::new(), scratch: Vec::new(), runs: Vec::new() };
+        let mut reference = Vec::new();
+        for part in keys.chunks(1_000) {
+            acc.add_keys(part);
+            // The reference stays sorted however many keys it holds.
+            if let Store::Sorted { cells, .. } = &mut sorted.store {
+                cells.extend(part.iter().map(|&k| ((k >> 32) as usize * n + (k as u32) as usize) as u32));
+            }
+        }
+        assert!(matches!(acc.store, Store::Dense(_)));
+        reference.extend(sorted.take_pairs().unwrap());
+        assert_eq!(acc.take_pairs().unwrap(), reference);
         assert!(acc.take_pairs().unwrap().is_empty());
     }
 

@@ -35,14 +35,7 @@ pub(super) struct MeshEdges {
     vertices: Vec<DVec3>,
     ends: Vec<[DVec3; 2]>,
     end_ids: Vec<[u32; 2]>,
-    /// The vertex ids of the third vertices of the edge's two triangles:
-    /// [`Contours::new`]'s fold test reads the edge from `end_ids` and
-    /// these, 20 bytes an edge and the vertices (~0.4 per edge) instead of
-    /// 104 bytes an edge of positions (~5% of the 1.1M-triangle bunny's
-    /// run streamed the edges' positions once per view). `vertices` holds
-    /// the same positions up to the sign of a zero coordinate, which
-    /// changes no magnitude of the test's sums and products, so no fold.
-    apex: Vec<Option<[u32; 2]>>,
+    apex: Vec<Option<[DVec3; 2]>>,
     /// The triangles of each edge (one repeated for a boundary edge; `None`
     /// for a non-manifold edge).
     owners: Vec<Option<[u32; 2]>>,
@@ -84,7 +77,9 @@ impl MeshEdges {
             ends.push([tris[t][(c + 1) % 3], tris[t][(c + 2) % 3]]);
             end_ids.push([vid[t][(c + 1) % 3], vid[t][(c + 2) % 3]]);
             apex.push(match run {
-                [x, y] if x.2 != y.2 => Some([vid[x.2 as usize][usize::from(x.3)], vid[y.2 as usize][usize::from(y.3)]]),
+                [x, y] if x.2 != y.2 => {
+                    Some([tris[x.2 as usize][usize::from(x.3)], tris[y.2 as usize][usize::from(y.3)]])
+                }
                 _ => None,
             });
             owners.push(match run {
@@ -170,14 +165,15 @@ impl Contours {
         };
         c.points = edges.vertices.iter().map(|&p| c.project(p)).collect();
         c.cells = c.points.iter().map(|p| [c.tile(p.0) as u16, c.tile(p.1) as u16]).collect();
-        let at = |k: u32| edges.vertices[k as usize] - eye;
-        for (k, ((ids, apex), owners)) in edges.end_ids.iter().zip(&edges.apex).zip(&edges.owners).enumerate() {
+        for (k, (((e, ids), apex), owners)) in
+            edges.ends.iter().zip(&edges.end_ids).zip(&edges.apex).zip(&edges.owners).enumerate()
+        {
             let fold = apex.is_none_or(|[p, q]| {
-                let m = at(ids[0]).cross(at(ids[1]));
-                m.dot(at(p)) * m.dot(at(q)) >= 0.0
+                let m = (e[0] - eye).cross(e[1] - eye);
+                m.dot(p - eye) * m.dot(q - eye) >= 0.0
             });
             if fold {
-                c.ends.push(edges.ends[k]);
+                c.ends.push(*e);
                 c.projected.push(ids.map(|k| c.points[k as usize]));
                 c.edge.push(k as u32);
             } else if let Some([a, b]) = owners {

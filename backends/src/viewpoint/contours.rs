@@ -115,12 +115,6 @@ pub(super) struct Contours {
     per_unit: f64,
     /// Every vertex of the mesh projected (by [`MeshEdges`] id).
     points: Vec<Px>,
-    /// The tile (column, row) of every projected vertex: a triangle's tile
-    /// range is its corners' least and greatest ([`Contours::tile`] is
-    /// monotone, so the same range as from the triangle's box), and most
-    /// triangles are rejected from it alone, a projection shared by about
-    /// six triangles being tiled once.
-    cells: Vec<[u16; 2]>,
     /// Tile `k`'s contours are `members[starts[k]..starts[k + 1]]`, each
     /// with its projected ends copied in tile order (read in sequence by
     /// [`Contours::crosses`], which takes their box and, for the few whose
@@ -143,8 +137,7 @@ impl Contours {
     pub(super) fn new(edges: &MeshEdges, eye: DVec3, tiles: usize) -> Self {
         let forward = -eye.normalize();
         let (right, up) = forward.any_orthonormal_pair();
-        // Tile indices are kept in 16 bits ([`Contours::cells`]).
-        let tiles = tiles.clamp(1, 1 << 16);
+        let tiles = tiles.max(1);
         // The image spans ±tan of the cone's half-angle around the unit sphere.
         let cone = 1.0 / (eye.length_squared() - 1.0).max(f64::MIN_POSITIVE).sqrt();
         let mut c = Self {
@@ -155,7 +148,6 @@ impl Contours {
             tiles,
             per_unit: 0.5 * tiles as f64 / cone,
             points: Vec::new(),
-            cells: Vec::new(),
             starts: Vec::new(),
             members: Vec::new(),
             ends: Vec::new(),
@@ -164,7 +156,6 @@ impl Contours {
             links: Vec::new(),
         };
         c.points = edges.vertices.iter().map(|&p| c.project(p)).collect();
-        c.cells = c.points.iter().map(|p| [c.tile(p.0) as u16, c.tile(p.1) as u16]).collect();
         for (k, (((e, ids), apex), owners)) in
             edges.ends.iter().zip(&edges.end_ids).zip(&edges.apex).zip(&edges.owners).enumerate()
         {
@@ -273,24 +264,6 @@ impl Contours {
         [self.tile(lo.0), self.tile(hi.0), self.tile(lo.1), self.tile(hi.1)]
     }
 
-    /// `[x0, x1, y0, y1]` of the tiles the projection of the triangle with
-    /// vertex ids `corners` touches: [`Contours::tile_range`] of its
-    /// projected corners, from their tiles.
-    fn corner_tiles(&self, corners: [u32; 3]) -> [usize; 4] {
-        let [a, b, c] = corners.map(|k| self.cells[k as usize]);
-        let (x0, x1) = (a[0].min(b[0]).min(c[0]), a[0].max(b[0]).max(c[0]));
-        let (y0, y1) = (a[1].min(b[1]).min(c[1]), a[1].max(b[1]).max(c[1]));
-        [x0, x1, y0, y1].map(usize::from)
-    }
-
-    /// Whether any tile of the range `r` holds a contour.
-    fn any_member(&self, r: &[usize; 4]) -> bool {
-        (r[2]..=r[3]).any(|y| {
-            let row = y * self.tiles;
-            self.starts[row + r[0]] != self.starts[row + r[1] + 1]
-        })
-    }
-
     /// Whether some contour edge not wholly behind the plane of `v` crosses
     /// the interior of `v`'s projection (see the module docs). A contour
     /// whose projection's box lies strictly outside the projected
@@ -298,10 +271,6 @@ impl Contours {
     /// the exact test; `v`'s plane is made only for a contour that crosses.
     /// `corners` are `v`'s vertex ids ([`MeshEdges::corners`]).
     pub(super) fn crosses(&self, corners: [u32; 3], v: &[DVec3; 3]) -> bool {
-        let r = self.corner_tiles(corners);
-        if !self.any_member(&r) {
-            return false;
-        }
         let proj = corners.map(|k| self.points[k as usize]);
         let sign = edge(proj[0], proj[1], proj[2]).signum();
         if sign == 0.0 {
@@ -322,6 +291,7 @@ impl Contours {
             let d = n.dot(p - v[0]);
             d.abs() > tol && d * eye_side < 0.0
         };
+        let r = self.tile_range(&proj);
         // The tiles of one row of the range are consecutive in `members`
         // (tile order): one slice, the members in the same order as tile
         // by tile.

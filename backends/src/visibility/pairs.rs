@@ -339,19 +339,21 @@ fn radix_sort(v: &mut Vec<u32>, scratch: &mut Vec<u32>, bits: u32) {
 
 /// Scatters `from` into `to` stably by the digit of `bits` bits (at most
 /// 31) at `shift`, one bucket per entry of `heads`, which ends as each
-/// bucket's end.
+/// bucket's end. A digit of 0 bits (one bucket: a copy) may sit at shift
+/// 32, past the key's top.
 fn scatter(from: &[u32], to: &mut [u32], (shift, bits): (u32, u32), heads: &mut [usize]) {
     let mask = (1u32 << bits) - 1;
+    let digit = |x: u32| (x.checked_shr(shift).unwrap_or(0) & mask) as usize;
     heads.fill(0);
     for &x in from {
-        heads[((x >> shift) & mask) as usize] += 1;
+        heads[digit(x)] += 1;
     }
     let mut at = 0;
     for h in heads.iter_mut() {
         (*h, at) = (at, at + *h);
     }
     for &x in from {
-        let h = &mut heads[((x >> shift) & mask) as usize];
+        let h = &mut heads[digit(x)];
         to[*h] = x;
         *h += 1;
     }

@@ -11,8 +11,8 @@ use super::packet::{self, LANES};
 use super::stream;
 use super::tree8::{self, Tree8};
 use super::watertight::{
-    BLOCK, Block, Shear, TriangleLanes, barycentric, before, finish, finish_two, mask_blocks, push_crossing,
-    sphere_crossings, sphere_hit, walk_direction,
+    BLOCK, Block, Shear, TriangleLanes, barycentric, before, finish, finish_two, line_misses_box, mask_blocks,
+    push_crossing, sphere_crossings, sphere_hit, walk_direction,
 };
 use super::wide8::{self, Wide8};
 use super::{BackendError, Crossing, CrossingBuffer, Hit, Prepared, Tracer};
@@ -166,21 +166,6 @@ const BOUNDS_PAD: f32 = 1e-4;
 /// left half of each eight-line vector empty on `cube-enclosure:30`;
 /// 16,384, ~4%).
 const BATCH_LINES: usize = 16_384;
-
-/// Whether the infinite line through `o` along `d` misses the box of
-/// centre `c` and half-extents `h`: the box and the line project apart on
-/// one of the axes `e_i × d` (the line projects to a point there, the box
-/// to an interval of radius `h_j |d_k| + h_k |d_j|`; Ericson, *Real-Time
-/// Collision Detection*, §5.3.3). No division, no BVH state: most global
-/// lines that miss a scene are rejected here.
-#[inline]
-pub(super) fn line_misses_box(o: Vec3A, d: Vec3A, (c, h): (Vec3A, Vec3A)) -> bool {
-    let w = o - c;
-    let m = w.cross(d).abs();
-    let a = d.abs();
-    let r = Vec3A::new(h.y * a.z + h.z * a.y, h.x * a.z + h.z * a.x, h.x * a.y + h.y * a.x);
-    m.cmpgt(r).any()
-}
 
 impl CpuTracer {
     /// Builds the BVH over the scene's triangles.

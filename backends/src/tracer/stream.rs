@@ -31,9 +31,8 @@
 use glam::Vec3A;
 use obvhs::ray::Ray;
 
-use super::cpu::line_misses_box;
 use super::node8::NODE_EPSILON;
-use super::watertight::Shear;
+use super::watertight::{Shear, line_misses_box};
 use super::wide8::{LEAF, Node, Wide8};
 use crate::lines::Line;
 

@@ -581,6 +581,21 @@ unsafe fn lanes_avx2<const ALIGNED: bool>(
     }
 }
 
+/// Whether the infinite line through `o` along `d` misses the box of
+/// centre `c` and half-extents `h`: the box and the line project apart on
+/// one of the axes `e_i × d` (the line projects to a point there, the box
+/// to an interval of radius `h_j |d_k| + h_k |d_j|`; Ericson, *Real-Time
+/// Collision Detection*, §5.3.3). No division, no BVH state: most global
+/// lines that miss a scene are rejected here.
+#[inline]
+pub(crate) fn line_misses_box(o: Vec3A, d: Vec3A, (c, h): (Vec3A, Vec3A)) -> bool {
+    let w = o - c;
+    let m = w.cross(d).abs();
+    let a = d.abs();
+    let r = Vec3A::new(h.y * a.z + h.z * a.y, h.x * a.z + h.z * a.x, h.x * a.y + h.y * a.x);
+    m.cmpgt(r).any()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -19,7 +19,7 @@ use crate::scene::Scene;
 use crate::tracer::{Crossing, CrossingBuffer, Prepared, Tracer};
 
 /// Lines per work unit.
-pub const CHUNK: u64 = 16_384;
+pub const CHUNK: u64 = 65_536;
 
 /// Radius of the line sphere relative to the scene's half-diagonal: 0.9 for
 /// the unit cube (half-diagonal √3/2), where 59.0% of global lines cross the

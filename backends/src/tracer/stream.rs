@@ -150,8 +150,8 @@ pub(super) unsafe fn trace(
                 // SAFETY: AVX2 and FMA (this function's contract).
                 unsafe { partition8(n, s, start, len) };
             }
-            // SAFETY: AVX2 and FMA (this function's contract).
-            unsafe { descend(n, ordered, lines, s, start) };
+            // SAFETY: AVX2 and FMA, and AVX-512F with `sixteen` (this function's contract).
+            unsafe { descend(n, ordered, lines, s, start, sixteen) };
         }
     }
     // The crossings by line walked: counted, then placed (a counting sort).
@@ -477,13 +477,14 @@ unsafe fn partition16(n: &Node, s: &mut Scratch, start: usize, len: usize) {
 
 /// After [`partition8`] or [`partition16`] at node `n` (whose list began
 /// at `start`): the lines entering each internal child pushed as its
-/// list, those entering each leaf child tested against its triangles.
+/// list, those entering each leaf child tested against its triangles
+/// (sixteen lines a vector with `sixteen` where more than eight enter).
 ///
 /// # Safety
-/// The CPU must support AVX2 and FMA.
+/// The CPU must support AVX2 and FMA, and AVX-512F with `sixteen`.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn descend(n: &Node, ordered: &[[Vec3A; 3]], lines: &[Line], s: &mut Scratch, start: usize) {
+unsafe fn descend(n: &Node, ordered: &[[Vec3A; 3]], lines: &[Line], s: &mut Scratch, start: usize, sixteen: bool) {
     // This node's list is spent; its children's lists take its place.
     s.arena.truncate(start);
     for slot in Bits(n.occupied()) {
@@ -495,8 +496,14 @@ unsafe fn descend(n: &Node, ordered: &[[Vec3A; 3]], lines: &[Line], s: &mut Scra
             s.stack.push((c, s.arena.len() as u32, v.len() as u32));
             s.arena.extend_from_slice(v);
         } else if c & LEAF != 0 {
-            // SAFETY: AVX2 and FMA (this function's contract).
-            unsafe { leaf(ordered, n.prim_base, c & !LEAF, v, &s.tri, (lines, &s.ids), &mut s.hits) };
+            let from = (lines, &s.ids[..]);
+            if sixteen && v.len() > W {
+                // SAFETY: AVX-512F with `sixteen` (this function's contract).
+                unsafe { leaf16(ordered, n.prim_base, c & !LEAF, v, &s.tri, from, &mut s.hits) };
+            } else {
+                // SAFETY: AVX2 and FMA (this function's contract).
+                unsafe { leaf(ordered, n.prim_base, c & !LEAF, v, &s.tri, from, &mut s.hits) };
+            }
         }
     }
 }
@@ -587,19 +594,127 @@ unsafe fn leaf(
                 _mm256_storeu_ps(ts.as_mut_ptr(), t);
                 (ts, _mm256_movemask_ps(ok) as u32, exact)
             };
-            for lane in Bits(crossed & !zero & valid) {
-                hits.push((chunk[lane], k, t[lane]));
-            }
-            for lane in Bits(zero & valid) {
-                // The line's shear made again: rare, and cheaper than
-                // keeping every line's.
-                let r = chunk[lane];
-                let l = &lines[ids[r as usize] as usize];
-                let (t, crossed) = Shear::of(l).0.hit_within(v, l.tmin, l.tmax);
-                if crossed {
-                    hits.push((r, k, t));
-                }
-            }
+            record(chunk, k, &t, (crossed & valid, zero & valid), v, (lines, ids), hits);
+        }
+    }
+}
+
+/// The crossings of triangle `k` (vertices `v`) by the lanes of `chunk`
+/// (lines walked) a leaf test found: `t[lane]` of each lane of `crossed`
+/// not in `zero`, and the scalar test's answer for each lane of `zero`
+/// (an edge function exactly zero: the line's shear made again, rare and
+/// cheaper than keeping every line's).
+#[inline(always)]
+fn record(
+    chunk: &[u32],
+    k: u32,
+    t: &[f32],
+    (crossed, zero): (u32, u32),
+    v: &[Vec3A; 3],
+    (lines, ids): (&[Line], &[u32]),
+    hits: &mut Vec<(u32, u32, f32)>,
+) {
+    for lane in Bits(crossed & !zero) {
+        hits.push((chunk[lane], k, t[lane]));
+    }
+    for lane in Bits(zero) {
+        let r = chunk[lane];
+        let l = &lines[ids[r as usize] as usize];
+        let (t, crossed) = Shear::of(l).0.hit_within(v, l.tmin, l.tmax);
+        if crossed {
+            hits.push((r, k, t));
+        }
+    }
+}
+
+/// [`leaf`] with sixteen lines per vector: the same operations lane by
+/// lane, the lines' constants read through four 8×8 transposes.
+///
+/// # Safety
+/// The CPU must support AVX-512F, AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+unsafe fn leaf16(
+    ordered: &[[Vec3A; 3]],
+    base: u32,
+    mask: u32,
+    list: &[u32],
+    tri: &[[Rec; 2]],
+    from: (&[Line], &[u32]),
+    hits: &mut Vec<(u32, u32, f32)>,
+) {
+    use std::arch::x86_64::{
+        __m128, __m256, __m512, _CMP_EQ_OQ, _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_NEQ_UQ,
+        _mm256_castps_pd, _mm512_add_ps, _mm512_broadcast_f32x4, _mm512_castpd_ps, _mm512_castps_pd,
+        _mm512_castps_si512, _mm512_castps256_ps512, _mm512_cmp_ps_mask, _mm512_div_ps, _mm512_insertf64x4,
+        _mm512_mul_ps, _mm512_permutevar_ps, _mm512_setzero_ps, _mm512_storeu_ps, _mm512_sub_ps,
+    };
+    const W16: usize = 16;
+    let spare = (tri.len() - 1) as u32;
+    for chunk in list.chunks(W16) {
+        let mut idx = [spare; W16];
+        idx[..chunk.len()].copy_from_slice(chunk);
+        let valid = ((1u64 << chunk.len()) - 1) as u32;
+        // SAFETY: AVX-512F, AVX2 and FMA (this function's contract); every
+        // index is a line walked or `spare`, an entry of `tri`.
+        let [kx, ky, kz, sx, sy, sz, ox, oy, oz, tmin, tmax] = unsafe {
+            let half =
+                |h: usize, rec: usize| columns(std::array::from_fn(|j| &raw const tri[idx[8 * h + j] as usize][rec]));
+            let (lo0, hi0, lo1, hi1) = (half(0, 0), half(1, 0), half(0, 1), half(1, 1));
+            let join = |lo: __m256, hi: __m256| {
+                _mm512_castpd_ps(_mm512_insertf64x4::<1>(
+                    _mm512_castps_pd(_mm512_castps256_ps512(lo)),
+                    _mm256_castps_pd(hi),
+                ))
+            };
+            let a: [__m512; 8] = std::array::from_fn(|c| join(lo0[c], hi0[c]));
+            let b: [__m512; 3] = std::array::from_fn(|c| join(lo1[c], hi1[c]));
+            [a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], b[0], b[1], b[2]]
+        };
+        let (kx, ky, kz) = (_mm512_castps_si512(kx), _mm512_castps_si512(ky), _mm512_castps_si512(kz));
+        for bit in Bits(mask) {
+            let k = base + bit as u32;
+            let v = &ordered[k as usize];
+            // SAFETY: AVX-512F (this function's contract); each vertex load
+            // reads the 16 bytes of a `Vec3A`.
+            let rel = |p: &Vec3A| unsafe {
+                let p = _mm512_broadcast_f32x4(*(p as *const Vec3A).cast::<__m128>());
+                (
+                    _mm512_sub_ps(_mm512_permutevar_ps(p, kx), ox),
+                    _mm512_sub_ps(_mm512_permutevar_ps(p, ky), oy),
+                    _mm512_sub_ps(_mm512_permutevar_ps(p, kz), oz),
+                )
+            };
+            let (a, b, c) = (rel(&v[0]), rel(&v[1]), rel(&v[2]));
+            let sh = |q: (__m512, __m512, __m512)| {
+                (_mm512_sub_ps(q.0, _mm512_mul_ps(sx, q.2)), _mm512_sub_ps(q.1, _mm512_mul_ps(sy, q.2)))
+            };
+            let ((ax, ay), (bx, by), (cx, cy)) = (sh(a), sh(b), sh(c));
+            let (az, bz, cz) = (a.2, b.2, c.2);
+            let cross =
+                |p: __m512, q: __m512, r: __m512, s: __m512| _mm512_sub_ps(_mm512_mul_ps(p, q), _mm512_mul_ps(r, s));
+            let u = cross(cx, by, cy, bx);
+            let w = cross(bx, ay, by, ax);
+            let vv = cross(ax, cy, ay, cx);
+            let zero = _mm512_setzero_ps();
+            let eq = |x: __m512| _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(x, zero);
+            let exact = u32::from(eq(u) | eq(vv) | eq(w));
+            let det = _mm512_add_ps(_mm512_add_ps(u, vv), w);
+            let lt = |x: __m512| _mm512_cmp_ps_mask::<_CMP_LT_OQ>(x, zero);
+            let gt = |x: __m512| _mm512_cmp_ps_mask::<_CMP_GT_OQ>(x, zero);
+            let outside = (lt(u) | lt(vv) | lt(w)) & (gt(u) | gt(vv) | gt(w));
+            let term = |e: __m512, z: __m512| _mm512_mul_ps(_mm512_mul_ps(e, sz), z);
+            let num = _mm512_add_ps(_mm512_add_ps(term(u, az), term(vv, bz)), term(w, cz));
+            let t = _mm512_div_ps(num, det);
+            let ok = !outside
+                & _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(det, zero)
+                & _mm512_cmp_ps_mask::<_CMP_GE_OQ>(t, tmin)
+                & _mm512_cmp_ps_mask::<_CMP_LE_OQ>(t, tmax);
+            let mut ts = [0f32; W16];
+            // SAFETY: AVX-512F (this function's contract); the store writes
+            // the 64 bytes of `ts`.
+            unsafe { _mm512_storeu_ps(ts.as_mut_ptr(), t) };
+            record(chunk, k, &ts, (u32::from(ok) & valid, exact & valid), v, from, hits);
         }
     }
 }

@@ -559,7 +559,7 @@ impl CpuTracer {
     #[cfg(target_arch = "x86_64")]
     fn trace_stream(&self, bvh: &CwBvh, lines: &[Line], out: &mut CrossingBuffer, sixteen: bool) {
         let tree = match self.wide() {
-            Some(tree) if self.avx2 && std::is_x86_feature_detected!("fma") => tree,
+            Some(tree) if self.avx2 && is_x86_feature_detected!("fma") && is_x86_feature_detected!("popcnt") => tree,
             _ => return self.trace_single(lines, out),
         };
         let recorded = self.recorded(bvh);
@@ -570,8 +570,8 @@ impl CpuTracer {
         let mut hits = Vec::with_capacity(16);
         STREAM.with_borrow_mut(|s| {
             for lines in lines.chunks(BATCH_LINES) {
-                // SAFETY: `self.avx2` came from `has_avx2()`, FMA was detected
-                // just above, AVX-512F where `sixteen`.
+                // SAFETY: `self.avx2` came from `has_avx2()`, FMA and POPCNT
+                // were detected just above, AVX-512F where `sixteen`.
                 unsafe { stream::trace(tree, &self.ordered, lines, self.bounds, sixteen, s) };
                 // The lines not walked (outside the scene's box) cross
                 // nothing: their ends are the next line's start.

@@ -494,6 +494,18 @@ unsafe fn partition16(n: &Node, s: &mut Scratch, start: usize, len: usize) {
 unsafe fn descend(n: &Node, ordered: &[[Vec3A; 3]], lines: &[Line], s: &mut Scratch, start: usize, sixteen: bool) {
     // This node's list is spent; its children's lists take its place.
     s.arena.truncate(start);
+    // The leaves' lines' triangle constants asked for before the first
+    // leaf is tested: each record is a miss, and the later leaves' arrive
+    // while the first are tested.
+    for slot in Bits(n.occupied() & !n.imask) {
+        if n.child[slot] & LEAF != 0 {
+            for &r in &s.slots[slot] {
+                let p = s.tri.as_ptr().wrapping_add(r as usize).cast::<u8>();
+                prefetch(p);
+                prefetch(p.wrapping_add(size_of::<[Rec; 2]>() - 1));
+            }
+        }
+    }
     for slot in Bits(n.occupied()) {
         let c = n.child[slot];
         let v = &s.slots[slot];
@@ -783,6 +795,15 @@ fn transpose8(r: [std::arch::x86_64::__m256; 8]) -> [std::arch::x86_64::__m256; 
             _mm256_permute2f128_ps::<0x31>(u[3], u[7]),
         ]
     }
+}
+
+/// Asks for the cache line at `p` (a hint: never faults, reads nothing).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn prefetch(p: *const u8) {
+    use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+    // SAFETY: a prefetch reads nothing architecturally and never faults.
+    unsafe { _mm_prefetch::<_MM_HINT_T0>(p.cast::<i8>()) };
 }
 
 /// Eight `f32` of one line, 32-byte aligned (one load each).

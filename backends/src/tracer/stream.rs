@@ -112,20 +112,23 @@ pub(super) unsafe fn trace(
     }
     let walked = s.ids.len();
     // Each walked line's constants, eight lines at a time, the rest one by one.
+    // (Appended, not zeroed first: a batch's records are megabytes.)
     s.rays.clear();
     s.tri.clear();
-    s.rays.resize(walked, Rec([0.0; 8]));
-    s.tri.resize(walked, [Rec([0.0; 8]); 2]);
+    s.rays.reserve(walked + 1);
+    s.tri.reserve(walked + 1);
     let eights = walked / W * W;
     for at in (0..eights).step_by(W) {
         let group: [&Line; W] = std::array::from_fn(|j| &lines[s.ids[at + j] as usize]);
         // SAFETY: AVX2 and FMA (this function's contract).
         let (rays, tri) = unsafe { constants8(group) };
-        s.rays[at..at + W].copy_from_slice(&rays);
-        s.tri[at..at + W].copy_from_slice(&tri);
+        s.rays.extend_from_slice(&rays);
+        s.tri.extend_from_slice(&tri);
     }
     for at in eights..walked {
-        (s.rays[at], s.tri[at]) = constants(&lines[s.ids[at] as usize]);
+        let (ray, tri) = constants(&lines[s.ids[at] as usize]);
+        s.rays.push(ray);
+        s.tri.push(tri);
     }
     // The spare lanes' line: `tmax = −∞` closes every box to it.
     s.rays.push(Rec([1.0, 1.0, 1.0, 1.0, 1.0, 1.0, f32::NEG_INFINITY, 0.0]));
@@ -166,14 +169,19 @@ pub(super) unsafe fn trace(
         *f = sum;
     }
     s.found.clear();
-    s.found.resize(s.hits.len(), (0, 0.0));
+    s.found.reserve(s.hits.len());
     // `first[r]` moves to the end of line `r`'s crossings as they are
-    // placed, then back by one line.
+    // placed, then back by one line. (Written in place, not zeroed first.)
+    let found = s.found.spare_capacity_mut();
     for &(r, k, t) in &s.hits {
         let at = &mut s.first[r as usize];
-        s.found[*at as usize] = (k, t);
+        found[*at as usize].write((k, t));
         *at += 1;
     }
+    // SAFETY: the slots of line `r` are `first[r]..first[r + 1]` (prefix
+    // sums of the counts), so the loop wrote each of the first
+    // `hits.len()` entries exactly once.
+    unsafe { s.found.set_len(s.hits.len()) };
     s.first.copy_within(0..walked, 1);
     s.first[0] = 0;
 }

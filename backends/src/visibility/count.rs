@@ -168,21 +168,27 @@ pub fn local_line(prepared: &Prepared, seed: u64, index: u64) -> (u32, Line) {
     (p, l)
 }
 
-#[allow(clippy::too_many_arguments)]
-fn process_chunk(
-    p: &Prepared,
-    tracer: &dyn Tracer,
-    sampler: Option<&Sampler>,
-    opts: &LineOptions,
+/// What every chunk of a run shares: the scene, the tracer, the lines'
+/// kind and options, and eq. (59)'s normalisation.
+struct RunSetup<'a> {
+    p: &'a Prepared,
+    tracer: &'a dyn Tracer,
+    /// The local lines' origins; `None` for global lines.
+    sampler: Option<&'a Sampler>,
+    opts: &'a LineOptions,
+    /// `A_T` in the prepared scene's units.
     total_area_norm: f64,
-    (first, stride, count): (u64, u64, u64),
+    /// The global lines' sphere radius.
     radius: f64,
-) -> Result<ChunkResult, CountsError> {
+}
+
+/// Counts the chunk of lines `first + k · stride` (`k < count`) of `run`.
+fn process_chunk(run: &RunSetup, span: (u64, u64, u64)) -> Result<ChunkResult, CountsError> {
     // The working buffers of the last chunk on this thread, taken (a
     // nested call, were a tracer ever to run rayon work inside, gets fresh
     // ones) and given back at the end.
     let mut scratch = SCRATCH.with_borrow_mut(std::mem::take);
-    let result = chunk_with(p, tracer, sampler, opts, total_area_norm, (first, stride, count), radius, &mut scratch);
+    let result = chunk_with(run, span, &mut scratch);
     SCRATCH.with_borrow_mut(|s| *s = scratch);
     result
 }
@@ -207,17 +213,12 @@ struct ChunkScratch {
 }
 
 /// [`process_chunk`] with the thread's buffers.
-#[allow(clippy::too_many_arguments)]
 fn chunk_with(
-    p: &Prepared,
-    tracer: &dyn Tracer,
-    sampler: Option<&Sampler>,
-    opts: &LineOptions,
-    total_area_norm: f64,
+    run: &RunSetup,
     (first, stride, count): (u64, u64, u64),
-    radius: f64,
     scratch: &mut ChunkScratch,
 ) -> Result<ChunkResult, CountsError> {
+    let &RunSetup { p, tracer, sampler, opts, total_area_norm, radius } = run;
     let seed = SeedHash::new(opts.seed);
     let batch = tracer.batch_lines().clamp(1, CHUNK as usize) as u64;
     let ChunkScratch { lines, origins, buf, kept, factors, ends, logs } = scratch;
@@ -587,13 +588,11 @@ pub fn count_visibility(
     let threads = rayon::current_num_threads() as u64;
     let wave = (threads * 64).clamp(16, 256);
     let mut plan = WavePlan { start, end, blocks, wave, tail: (2 * threads).min(wave), block: 0, next: 0 };
+    let run = RunSetup { p: prepared, tracer, sampler: sampler.as_ref(), opts, total_area_norm, radius };
     let run_wave = |w: &Wave| -> Vec<Result<ChunkResult, CountsError>> {
         w.chunks
             .par_iter()
-            .map(|&k| {
-                let span = (w.first + k * blocks, blocks, CHUNK.min(w.count - k));
-                process_chunk(prepared, tracer, sampler.as_ref(), opts, total_area_norm, span, radius)
-            })
+            .map(|&k| process_chunk(&run, (w.first + k * blocks, blocks, CHUNK.min(w.count - k))))
             .collect()
     };
     let mut merger = Merger {

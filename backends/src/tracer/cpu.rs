@@ -559,7 +559,7 @@ impl CpuTracer {
     #[cfg(target_arch = "x86_64")]
     fn trace_stream(&self, bvh: &CwBvh, lines: &[Line], out: &mut CrossingBuffer, sixteen: bool) {
         let tree = match self.wide() {
-            Some(tree) if self.avx2 && is_x86_feature_detected!("fma") && is_x86_feature_detected!("popcnt") => tree,
+            Some(tree) if stream::has_walk_features() => tree,
             _ => return self.trace_single(lines, out),
         };
         let recorded = self.recorded(bvh);
@@ -570,8 +570,8 @@ impl CpuTracer {
         let mut hits = Vec::with_capacity(16);
         STREAM.with_borrow_mut(|s| {
             for lines in lines.chunks(BATCH_LINES) {
-                // SAFETY: `self.avx2` came from `has_avx2()`, FMA and POPCNT
-                // were detected just above, AVX-512F where `sixteen`.
+                // SAFETY: AVX2, FMA and POPCNT were detected
+                // (`has_walk_features`), AVX-512F where `sixteen`.
                 unsafe { stream::trace(tree, &self.ordered, lines, self.bounds, sixteen, s) };
                 // The lines not walked (outside the scene's box) cross
                 // nothing: their ends are the next line's start.
@@ -588,7 +588,7 @@ impl CpuTracer {
                     // Each crossing's record asked for eight crossings
                     // ahead (in a walk's megabytes, a miss in L1 and L2).
                     for &(k, _) in s.found.iter().skip(w[0] as usize + AHEAD).take(found.len()) {
-                        prefetch(recorded.as_ptr().wrapping_add(k as usize));
+                        stream::prefetch(recorded.as_ptr().wrapping_add(k as usize));
                     }
                     if let &[(ka, ta), (kb, tb)] = found {
                         let (a, b) = (recorded[ka as usize].crossing(dir, ta), recorded[kb as usize].crossing(dir, tb));
@@ -607,15 +607,6 @@ impl CpuTracer {
 /// Crossings ahead of the one recorded whose [`Recorded`] is prefetched.
 #[cfg(target_arch = "x86_64")]
 const AHEAD: usize = 8;
-
-/// Asks for the cache line at `p` (a hint: never faults, reads nothing).
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn prefetch<T>(p: *const T) {
-    use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-    // SAFETY: a prefetch reads nothing architecturally and never faults.
-    unsafe { _mm_prefetch::<_MM_HINT_T0>(p.cast::<i8>()) };
-}
 
 #[cfg(target_arch = "x86_64")]
 thread_local! {

@@ -582,9 +582,10 @@ pub fn count_visibility(
     let sampler = opts.local.then(|| Sampler::new(prepared));
     let radius = SPHERE_SCALE;
     // Chunks per wave: a wave ends at a join (the merge of the last one, its
-    // own tracing), where a thread may wait up to a chunk (~7 ms). 64 chunks
-    // a thread make 6 joins a block at 10^8 lines, not 24 (16 a thread); at
-    // most 256 chunks (~0.3 MB of results each, two waves alive at a time).
+    // own tracing), where a thread may wait up to a chunk (~7 ms of
+    // cube-enclosure:30). 64 chunks a thread make 2 joins a block at 10^8
+    // lines and 8 blocks; at most 256 chunks (~0.45 MB of results each on
+    // cube-enclosure:30, two waves alive at a time).
     let threads = rayon::current_num_threads() as u64;
     let wave = (threads * 64).clamp(16, 256);
     let mut plan = WavePlan { start, end, blocks, wave, tail: (2 * threads).min(wave), block: 0, next: 0 };

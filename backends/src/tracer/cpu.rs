@@ -464,22 +464,48 @@ fn keep_best(
     }
 }
 
+/// The walk stacks of [`CpuTracer::occluded_group`]: one packet's lanes
+/// (8 bits a node) and a pair's (16 bits).
+struct Stacks {
+    narrow: Vec<(u32, u8)>,
+    wide: Vec<(u32, u16)>,
+}
+
 impl CpuTracer {
-    /// Occlusion of up to [`packet::LANES`] coherent lines walked as one
-    /// packet (`packet.rs`), appended to `out`; `false` (nothing appended)
-    /// where a packet does not apply: no AVX2, a sphere scene, a single
-    /// line, or directions in different octants. Each answer is
-    /// [`CpuTracer::any`]'s.
-    fn occluded_packet(&self, lines: &[Line], stack: &mut Vec<(u32, u8)>, out: &mut Vec<bool>) -> bool {
+    /// Occlusion of up to `2 ·` [`LANES`] lines, appended to `out`: two
+    /// packets walked together ([`packet::occluded_pair`]) where both
+    /// halves make packets (`packet.rs`) in one octant, the CPU has
+    /// AVX-512F and the wide tree is built; else each half as one packet
+    /// ([`packet::occluded`]) where it makes one (AVX2, a triangle scene,
+    /// at least two lines in one octant); else line by line. Each answer
+    /// is [`CpuTracer::any`]'s.
+    fn occluded_group(&self, group: &[Line], stacks: &mut Stacks, out: &mut Vec<bool>) {
         #[cfg(target_arch = "x86_64")]
-        if let Some((bvh, p)) = self.packet(lines) {
-            // SAFETY: `packet` checked `self.avx2`, which came from `has_avx2()`.
-            let done = unsafe { packet::occluded(bvh, self.wide(), &self.ordered, &p, stack) };
-            out.extend((0..p.len()).map(|i| done >> i & 1 == 1));
-            return true;
+        {
+            let (first, rest) = group.split_at(group.len().min(LANES));
+            let packets = [self.packet(first), if rest.is_empty() { None } else { self.packet(rest) }];
+            if let ([Some((_, a)), Some((_, b))], true, Some(wide)) = (&packets, stream::has_avx512(), self.wide())
+                // SAFETY: `packet` checked `self.avx2` (from `has_avx2()`), `has_avx512` AVX-512F.
+                && let Some(done) = unsafe { packet::occluded_pair(wide, &self.ordered, a, b, &mut stacks.wide) }
+            {
+                out.extend((0..group.len()).map(|i| done >> i & 1 == 1));
+                return;
+            }
+            for (half, packet) in [first, rest].into_iter().zip(packets) {
+                if let Some((bvh, p)) = packet {
+                    // SAFETY: `packet` checked `self.avx2`, which came from `has_avx2()`.
+                    let done = unsafe { packet::occluded(bvh, self.wide(), &self.ordered, &p, &mut stacks.narrow) };
+                    out.extend((0..p.len()).map(|i| done >> i & 1 == 1));
+                } else {
+                    out.extend(half.iter().map(|l| self.any(l)));
+                }
+            }
         }
-        let _ = (lines, stack, out);
-        false
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let _ = stacks;
+            out.extend(group.iter().map(|l| self.any(l)));
+        }
     }
 
     /// Closest hits of up to [`LANES`] coherent lines as one packet, as
@@ -649,11 +675,9 @@ impl Tracer for CpuTracer {
 
     fn occluded(&self, lines: &[Line], out: &mut Vec<bool>) -> Result<(), BackendError> {
         out.clear();
-        let mut stack = Vec::with_capacity(256);
-        for chunk in lines.chunks(LANES) {
-            if !self.occluded_packet(chunk, &mut stack, out) {
-                out.extend(chunk.iter().map(|l| self.any(l)));
-            }
+        let mut stacks = Stacks { narrow: Vec::with_capacity(256), wide: Vec::with_capacity(256) };
+        for group in lines.chunks(2 * LANES) {
+            self.occluded_group(group, &mut stacks, out);
         }
         Ok(())
     }

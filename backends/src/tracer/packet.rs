@@ -33,9 +33,11 @@
 
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::{
-    __m256, _CMP_EQ_OQ, _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_NEQ_OQ, _mm256_add_ps, _mm256_and_ps,
-    _mm256_andnot_ps, _mm256_cmp_ps, _mm256_div_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_min_ps, _mm256_movemask_ps,
-    _mm256_mul_ps, _mm256_or_ps, _mm256_set1_ps, _mm256_setzero_ps, _mm256_storeu_ps, _mm256_sub_ps,
+    __m256, __m512, _CMP_EQ_OQ, _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_NEQ_OQ, _mm256_add_ps,
+    _mm256_and_ps, _mm256_andnot_ps, _mm256_cmp_ps, _mm256_div_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_min_ps,
+    _mm256_movemask_ps, _mm256_mul_ps, _mm256_or_ps, _mm256_set1_ps, _mm256_setzero_ps, _mm256_storeu_ps,
+    _mm256_sub_ps, _mm512_add_ps, _mm512_cmp_ps_mask, _mm512_div_ps, _mm512_loadu_ps, _mm512_max_ps, _mm512_min_ps,
+    _mm512_mul_ps, _mm512_set1_ps, _mm512_setzero_ps, _mm512_sub_ps,
 };
 
 use glam::Vec3A;
@@ -435,6 +437,224 @@ pub(crate) unsafe fn occluded(
     }
 }
 
+/// Two packets of one octant as one walk of up to 16 rays: the lanes of
+/// the first are bits 0-7 of each mask, the second's bits 8-15.
+#[cfg(target_arch = "x86_64")]
+struct Pair<'p, 'a> {
+    halves: [&'p Packet<'a>; 2],
+    origin: [[f32; 2 * LANES]; 3],
+    inv: [[f32; 2 * LANES]; 3],
+    tmin: [f32; 2 * LANES],
+    tmax: [f32; 2 * LANES],
+    /// The shear axes both halves share, if they do, with the sheared
+    /// origins and shear constants of all 16 lanes.
+    axes: Option<[usize; 3]>,
+    sheared_origin: [[f32; 2 * LANES]; 3],
+    shear: [[f32; 2 * LANES]; 3],
+}
+
+#[cfg(target_arch = "x86_64")]
+impl<'p, 'a> Pair<'p, 'a> {
+    /// The pair of `a` and `b`, or `None` when their octants differ.
+    fn new(a: &'p Packet<'a>, b: &'p Packet<'a>) -> Option<Self> {
+        if a.neg != b.neg {
+            return None;
+        }
+        let join = |x: &Lanes, y: &Lanes| {
+            let mut out = [0.0; 2 * LANES];
+            out[..LANES].copy_from_slice(x);
+            out[LANES..].copy_from_slice(y);
+            out
+        };
+        Some(Self {
+            halves: [a, b],
+            origin: [0, 1, 2].map(|k| join(&a.origin[k], &b.origin[k])),
+            inv: [0, 1, 2].map(|k| join(&a.inv[k], &b.inv[k])),
+            tmin: join(&a.tmin, &b.tmin),
+            tmax: join(&a.tmax, &b.tmax),
+            axes: a.axes.filter(|_| a.axes == b.axes),
+            sheared_origin: [0, 1, 2].map(|k| join(&a.sheared_origin[k], &b.sheared_origin[k])),
+            shear: [0, 1, 2].map(|k| join(&a.shear[k], &b.shear[k])),
+        })
+    }
+
+    /// The lanes of `lanes` (both halves) whose ray crosses `v`: all 16
+    /// in one AVX-512 register ([`Pair::crossing16`]) where the halves
+    /// share their shear axes, else each half's [`Packet::crossing`].
+    ///
+    /// # Safety
+    /// The CPU must support AVX-512F and AVX2.
+    #[target_feature(enable = "avx512f,avx2")]
+    unsafe fn crossing(&self, v: &[Vec3A; 3], lanes: u16, ts: &mut Lanes) -> u16 {
+        if let Some(axes) = self.axes {
+            // SAFETY: AVX-512F (this function's contract).
+            let (fast, exact) = unsafe { self.crossing16(axes, v, lanes) };
+            return fast | self.each(exact, |half, l| half.crossing_each(v, l, ts));
+        }
+        // SAFETY: AVX2 (this function's contract).
+        self.each(lanes, |half, l| unsafe { half.crossing(v, l, ts) })
+    }
+
+    /// `f(half, its lanes)` for each half with lanes in `lanes`, the
+    /// answers as one mask.
+    fn each(&self, lanes: u16, mut f: impl FnMut(&Packet, u8) -> u8) -> u16 {
+        let mut out = 0;
+        for (h, half) in self.halves.iter().enumerate() {
+            let l = (lanes >> (LANES * h)) as u8;
+            if l != 0 {
+                out |= u16::from(f(half, l)) << (LANES * h);
+            }
+        }
+        out
+    }
+
+    /// [`Packet::crossing_with`]'s 8-lane test on all 16 lanes in one
+    /// AVX-512 register (the same operations lane by lane, in the same
+    /// order, no fused multiply-add: the same answers), for halves that
+    /// share the shear `axes`: the lanes it answers, and those with an
+    /// exact zero left to [`Packet::crossing_each`].
+    ///
+    /// # Safety
+    /// The CPU must support AVX-512F.
+    #[target_feature(enable = "avx512f")]
+    unsafe fn crossing16(&self, [kx, ky, kz]: [usize; 3], v: &[Vec3A; 3], lanes: u16) -> (u16, u16) {
+        // SAFETY: each load reads one [f32; 16] (unaligned loads are allowed).
+        let load = |x: &[f32; 2 * LANES]| unsafe { _mm512_loadu_ps(x.as_ptr()) };
+        let (ox, oy, oz) =
+            (load(&self.sheared_origin[0]), load(&self.sheared_origin[1]), load(&self.sheared_origin[2]));
+        let (sx, sy, sz) = (load(&self.shear[0]), load(&self.shear[1]), load(&self.shear[2]));
+        let shear = |p: &Vec3A| -> (__m512, __m512, __m512) {
+            let az = _mm512_sub_ps(_mm512_set1_ps(p[kz]), oz);
+            let ax = _mm512_sub_ps(_mm512_sub_ps(_mm512_set1_ps(p[kx]), ox), _mm512_mul_ps(sx, az));
+            let ay = _mm512_sub_ps(_mm512_sub_ps(_mm512_set1_ps(p[ky]), oy), _mm512_mul_ps(sy, az));
+            (ax, ay, az)
+        };
+        let (ax, ay, az) = shear(&v[0]);
+        let (bx, by, bz) = shear(&v[1]);
+        let (cx, cy, cz) = shear(&v[2]);
+        let u = _mm512_sub_ps(_mm512_mul_ps(cx, by), _mm512_mul_ps(cy, bx));
+        let w = _mm512_sub_ps(_mm512_mul_ps(bx, ay), _mm512_mul_ps(by, ax));
+        let vv = _mm512_sub_ps(_mm512_mul_ps(ax, cy), _mm512_mul_ps(ay, cx));
+        let zero = _mm512_setzero_ps();
+        let any3 = |f: &dyn Fn(__m512) -> u16| f(u) | f(vv) | f(w);
+        let exact = any3(&|e| _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(e, zero)) & lanes;
+        let neg = any3(&|e| _mm512_cmp_ps_mask::<_CMP_LT_OQ>(e, zero));
+        let pos = any3(&|e| _mm512_cmp_ps_mask::<_CMP_GT_OQ>(e, zero));
+        let det = _mm512_add_ps(_mm512_add_ps(u, vv), w);
+        let num = _mm512_add_ps(
+            _mm512_add_ps(_mm512_mul_ps(_mm512_mul_ps(u, sz), az), _mm512_mul_ps(_mm512_mul_ps(vv, sz), bz)),
+            _mm512_mul_ps(_mm512_mul_ps(w, sz), cz),
+        );
+        let t = _mm512_div_ps(num, det);
+        let inside = !(neg & pos) & _mm512_cmp_ps_mask::<_CMP_NEQ_OQ>(det, zero);
+        let within = _mm512_cmp_ps_mask::<_CMP_GE_OQ>(t, load(&self.tmin))
+            & _mm512_cmp_ps_mask::<_CMP_LE_OQ>(t, load(&self.tmax));
+        (inside & within & lanes & !exact, exact)
+    }
+}
+
+/// [`wide_node`] for the 16 lanes of a [`Pair`] in one AVX-512 register:
+/// the same operations lane by lane, in the same order, so each lane's
+/// answer is its own packet's.
+///
+/// # Safety
+/// The CPU must support AVX-512F.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+unsafe fn wide_node16(p: &Pair, n: &WideNode, occupied: u32, lanes: u16) -> [u16; 8] {
+    // SAFETY: each load reads one [f32; 16] (unaligned loads are allowed).
+    let load = |x: &[f32; 2 * LANES]| unsafe { _mm512_loadu_ps(x.as_ptr()) };
+    let (ox, oy, oz) = (load(&p.origin[0]), load(&p.origin[1]), load(&p.origin[2]));
+    let (ix, iy, iz) = (load(&p.inv[0]), load(&p.inv[1]), load(&p.inv[2]));
+    let tmax = load(&p.tmax);
+    let near = [0, 1, 2].map(|a| 2 * a + usize::from(p.halves[0].neg[a]));
+    let eps = _mm512_set1_ps(NODE_EPSILON);
+    let mut out = [0u16; 8];
+    let mut m = occupied;
+    while m != 0 {
+        let c = m.trailing_zeros() as usize;
+        m &= m - 1;
+        let t = |row: usize, o: __m512, i: __m512| _mm512_mul_ps(_mm512_sub_ps(_mm512_set1_ps(n.bounds[row][c]), o), i);
+        let (nx, ny, nz) = (t(near[0], ox, ix), t(near[1], oy, iy), t(near[2], oz, iz));
+        let (fx, fy, fz) = (t(near[0] ^ 1, ox, ix), t(near[1] ^ 1, oy, iy), t(near[2] ^ 1, oz, iz));
+        let lo = _mm512_max_ps(_mm512_max_ps(nx, ny), _mm512_max_ps(nz, eps));
+        let hi = _mm512_min_ps(_mm512_min_ps(fx, fy), _mm512_min_ps(fz, tmax));
+        out[c] = _mm512_cmp_ps_mask::<_CMP_LE_OQ>(lo, hi) & lanes;
+    }
+    out
+}
+
+/// [`occluded`] of two packets at once over the wide tree, where they share
+/// an octant (else `None`): one walk of up to 16 lanes, each node loaded
+/// once for both and tested in one AVX-512 register ([`wide_node16`]), each
+/// triangle tested by the packet whose lanes reach it. Each lane's answer
+/// is its own packet's walk's (occlusion asks only whether some triangle
+/// the lane reaches is crossed): bits 0-7 for `a`, 8-15 for `b`. The
+/// viewpoint channel's sample rays come 16 to a triangle (its 4 × 4
+/// points): half the walks of two packets.
+///
+/// # Safety
+/// The CPU must support AVX-512F and AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2")]
+pub(crate) unsafe fn occluded_pair(
+    tree: &Wide8,
+    triangles: &[[Vec3A; 3]],
+    a: &Packet,
+    b: &Packet,
+    stack: &mut Vec<(u32, u16)>,
+) -> Option<u16> {
+    let pair = Pair::new(a, b)?;
+    let all = ((1u32 << a.len()) - 1) as u16 | (((1u32 << b.len()) - 1) as u16) << LANES;
+    let mut done = 0u16;
+    stack.clear();
+    if tree.nodes.is_empty() {
+        return Some(0);
+    }
+    let oct = (a.oct_inv4 & 7) as usize;
+    stack.push((0, all));
+    let mut ts = [0.0; LANES];
+    while let Some((index, lanes)) = stack.pop() {
+        let lanes = lanes & !done;
+        if lanes == 0 {
+            continue;
+        }
+        let n = &tree.nodes[index as usize];
+        let occupied = n.occupied();
+        // SAFETY: AVX-512F (the caller's promise).
+        let hit = unsafe { wide_node16(&pair, n, occupied, lanes) };
+        let mut leaves = occupied & !n.imask;
+        while leaves != 0 {
+            let c = leaves.trailing_zeros() as usize;
+            leaves &= leaves - 1;
+            if hit[c] == 0 {
+                continue;
+            }
+            let mut prims = n.child[c] & !LEAF;
+            while prims != 0 {
+                let k = (n.prim_base + prims.trailing_zeros()) as usize;
+                prims &= prims - 1;
+                let l = hit[c] & !done;
+                if l != 0 {
+                    // SAFETY: AVX2 as above.
+                    done |= unsafe { pair.crossing(&triangles[k], l, &mut ts) };
+                }
+            }
+            if done == all {
+                return Some(done);
+            }
+        }
+        for q in 0..8 {
+            let c = q ^ oct;
+            if hit[c] != 0 && n.imask & (1 << c) != 0 {
+                stack.push((n.child[c], hit[c]));
+            }
+        }
+    }
+    Some(done)
+}
+
 /// [`occluded`] over the compressed nodes.
 ///
 /// # Safety
@@ -810,7 +1030,8 @@ mod tests {
         }
     }
 
-    /// Occlusion walked over the wide tree and over the CWBVH gives every
+    /// Occlusion walked over the wide tree and over the CWBVH, and two
+    /// packets walked as one pair (where AVX-512F is present), gives every
     /// lane the answer of testing every triangle (crossed within its
     /// `[tmin, tmax]`), for packets of shadow rays from one eye to nearby
     /// points (as the viewpoint channel casts them) and of parallel lines,
@@ -825,13 +1046,13 @@ mod tests {
             let bvh = crate::tracer::cpu::build_bvh(&p, bvh_input(&p).1);
             let ordered: Vec<[Vec3A; 3]> = bvh.primitive_indices.iter().map(|&i| p.triangles[i as usize]).collect();
             let wide = Wide8::new(&bvh, &ordered).unwrap();
-            let mut stack = Vec::new();
-            let (mut packets, mut blocked, mut open) = (0, 0, 0);
+            let (mut stack, mut stack16) = (Vec::new(), Vec::new());
+            let (mut packets, mut pairs, mut blocked, mut open) = (0, 0, 0, 0);
             for g in 0..400u64 {
                 let r = crate::lines::LineRng::new(9, g);
                 let eye = glam::DVec3::new(r.uniform(0), r.uniform(1), r.uniform(2)) * 1.6 - 0.8;
                 let target = glam::DVec3::new(r.uniform(3), r.uniform(4), r.uniform(5)) * 1.6 - 0.8;
-                let lines: Vec<Line> = (0..8)
+                let lines: Vec<Line> = (0..16)
                     .map(|i| {
                         if g % 2 == 0 {
                             let q = target + glam::DVec3::new(0.01 * f64::from(i), 0.003 * f64::from(i % 3), 0.0);
@@ -845,25 +1066,43 @@ mod tests {
                         }
                     })
                     .collect();
-                let Some(pk) = Packet::new(&lines) else { continue };
-                packets += 1;
-                // SAFETY: AVX2 checked above.
-                let (w, c) = unsafe {
-                    (occluded_wide(&wide, &ordered, &pk, &mut stack), occluded_cwbvh(&bvh, &ordered, &pk, &mut stack))
-                };
-                for (i, l) in lines.iter().enumerate() {
-                    let (shear, _) = Shear::of(l);
-                    let every = p.triangles.iter().any(|t| shear.hit(t).is_some_and(|t| t >= l.tmin && t <= l.tmax));
-                    assert_eq!(w >> i & 1 == 1, every, "{spec}: packet {g} lane {i}, wide tree");
-                    assert_eq!(c >> i & 1 == 1, every, "{spec}: packet {g} lane {i}, CWBVH");
-                    if every {
-                        blocked += 1;
-                    } else {
-                        open += 1;
+                let every: Vec<bool> = lines
+                    .iter()
+                    .map(|l| {
+                        let (shear, _) = Shear::of(l);
+                        p.triangles.iter().any(|t| shear.hit(t).is_some_and(|t| t >= l.tmin && t <= l.tmax))
+                    })
+                    .collect();
+                let (Some(a), Some(b)) = (Packet::new(&lines[..8]), Packet::new(&lines[8..])) else { continue };
+                for (h, pk) in [&a, &b].into_iter().enumerate() {
+                    packets += 1;
+                    // SAFETY: AVX2 checked above.
+                    let (w, c) = unsafe {
+                        (occluded_wide(&wide, &ordered, pk, &mut stack), occluded_cwbvh(&bvh, &ordered, pk, &mut stack))
+                    };
+                    for (i, &every) in every[8 * h..8 * h + 8].iter().enumerate() {
+                        assert_eq!(w >> i & 1 == 1, every, "{spec}: packet {g}.{h} lane {i}, wide tree");
+                        assert_eq!(c >> i & 1 == 1, every, "{spec}: packet {g}.{h} lane {i}, CWBVH");
+                        if every {
+                            blocked += 1;
+                        } else {
+                            open += 1;
+                        }
+                    }
+                }
+                if !crate::tracer::stream::has_avx512() {
+                    continue;
+                }
+                // SAFETY: AVX2 checked above, AVX-512F here.
+                if let Some(both) = unsafe { occluded_pair(&wide, &ordered, &a, &b, &mut stack16) } {
+                    pairs += 1;
+                    for (i, &every) in every.iter().enumerate() {
+                        assert_eq!(both >> i & 1 == 1, every, "{spec}: pair {g} lane {i}");
                     }
                 }
             }
-            assert!(packets > 200 && blocked > 100 && open > 100, "{spec}: {packets} packets, {blocked}/{open}");
+            assert!(packets > 400 && blocked > 200 && open > 200, "{spec}: {packets} packets, {blocked}/{open}");
+            assert!(pairs > 100 || !crate::tracer::stream::has_avx512(), "{spec}: {pairs} pairs");
         }
     }
 }

@@ -26,6 +26,9 @@ fn edge(a: Px, b: Px, q: Px) -> f64 {
     (b.0 - a.0) * (q.1 - a.1) - (b.1 - a.1) * (q.0 - a.0)
 }
 
+/// The apex of an edge that has no two triangles.
+const NO_APEX: u32 = u32::MAX;
+
 /// The edges of a mesh, each with the third vertices of its two triangles
 /// (`None` for a boundary or non-manifold edge: always a contour).
 pub(super) struct MeshEdges {
@@ -33,9 +36,11 @@ pub(super) struct MeshEdges {
     /// every vertex once ([`Contours::new`]), not once per triangle.
     corners: Vec<[u32; 3]>,
     vertices: Vec<DVec3>,
-    ends: Vec<[DVec3; 2]>,
-    end_ids: Vec<[u32; 2]>,
-    apex: Vec<Option<[DVec3; 2]>>,
+    /// Each edge's two ends and the third vertices of its two triangles, as
+    /// vertex ids ([`NO_APEX`] twice for a boundary or non-manifold edge):
+    /// 16 bytes an edge, read by every view ([`Contours::new`]), against
+    /// the 104 of the positions themselves.
+    ids: Vec<[u32; 4]>,
     /// The triangles of each edge (one repeated for a boundary edge; `None`
     /// for a non-manifold edge).
     owners: Vec<Option<[u32; 2]>>,
@@ -71,24 +76,21 @@ impl MeshEdges {
                 vertices[v[c] as usize] = tris[t][c];
             }
         }
-        let (mut ends, mut end_ids, mut apex, mut owners) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let (mut ids, mut owners) = (Vec::new(), Vec::new());
         for run in all.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)) {
             let (t, c) = (run[0].2 as usize, usize::from(run[0].3));
-            ends.push([tris[t][(c + 1) % 3], tris[t][(c + 2) % 3]]);
-            end_ids.push([vid[t][(c + 1) % 3], vid[t][(c + 2) % 3]]);
-            apex.push(match run {
-                [x, y] if x.2 != y.2 => {
-                    Some([tris[x.2 as usize][usize::from(x.3)], tris[y.2 as usize][usize::from(y.3)]])
-                }
-                _ => None,
-            });
+            let apex = match run {
+                [x, y] if x.2 != y.2 => [vid[x.2 as usize][usize::from(x.3)], vid[y.2 as usize][usize::from(y.3)]],
+                _ => [NO_APEX; 2],
+            };
+            ids.push([vid[t][(c + 1) % 3], vid[t][(c + 2) % 3], apex[0], apex[1]]);
             owners.push(match run {
                 [x] => Some([x.2, x.2]),
                 [x, y] => Some([x.2, y.2]),
                 _ => None,
             });
         }
-        Self { corners: vid, vertices, ends, end_ids, apex, owners }
+        Self { corners: vid, vertices, ids, owners }
     }
 
     /// Vertex ids of triangle `t` (what [`Contours::crosses`] takes).
@@ -115,6 +117,12 @@ pub(super) struct Contours {
     per_unit: f64,
     /// Every vertex of the mesh projected (by [`MeshEdges`] id).
     points: Vec<Px>,
+    /// The tile range `[x0, x1, y0, y1]` of each projected vertex alone
+    /// ([`Contours::tile_range`] of one point): a triangle's range is the
+    /// least and greatest of its corners', since [`Contours::tile`] never
+    /// decreases (four float-to-integer conversions a triangle were ~9% of
+    /// a 1.1M-triangle first pass, against two a vertex here).
+    vertex_tiles: Vec<[u16; 4]>,
     /// Tile `k`'s contours are `members[starts[k]..starts[k + 1]]`, each
     /// with its projected ends copied in tile order (read in sequence by
     /// [`Contours::crosses`], which takes their box and, for the few whose
@@ -127,8 +135,6 @@ pub(super) struct Contours {
     ends: Vec<[DVec3; 2]>,
     projected: Vec<[Px; 2]>,
     edge: Vec<u32>,
-    /// The two triangles of every manifold edge that is not a contour.
-    links: Vec<[u32; 2]>,
 }
 
 impl Contours {
@@ -137,7 +143,8 @@ impl Contours {
     pub(super) fn new(edges: &MeshEdges, eye: DVec3, tiles: usize) -> Self {
         let forward = -eye.normalize();
         let (right, up) = forward.any_orthonormal_pair();
-        let tiles = tiles.max(1);
+        // At most 2^16 a side: every tile index fits the u16 of `vertex_tiles`.
+        let tiles = tiles.clamp(1, 1 << 16);
         // The image spans ±tan of the cone's half-angle around the unit sphere.
         let cone = 1.0 / (eye.length_squared() - 1.0).max(f64::MIN_POSITIVE).sqrt();
         let mut c = Self {
@@ -148,27 +155,26 @@ impl Contours {
             tiles,
             per_unit: 0.5 * tiles as f64 / cone,
             points: Vec::new(),
+            vertex_tiles: Vec::new(),
             starts: Vec::new(),
             members: Vec::new(),
             ends: Vec::new(),
             projected: Vec::new(),
             edge: Vec::new(),
-            links: Vec::new(),
         };
         c.points = edges.vertices.iter().map(|&p| c.project(p)).collect();
-        for (k, (((e, ids), apex), owners)) in
-            edges.ends.iter().zip(&edges.end_ids).zip(&edges.apex).zip(&edges.owners).enumerate()
-        {
-            let fold = apex.is_none_or(|[p, q]| {
-                let m = (e[0] - eye).cross(e[1] - eye);
-                m.dot(p - eye) * m.dot(q - eye) >= 0.0
-            });
+        c.vertex_tiles = c.points.iter().map(|p| c.tile_range(std::slice::from_ref(p)).map(|k| k as u16)).collect();
+        let at = |k: u32| edges.vertices[k as usize];
+        for (k, &[a, b, p, q]) in edges.ids.iter().enumerate() {
+            let (ea, eb) = (at(a), at(b));
+            let fold = p == NO_APEX || {
+                let m = (ea - eye).cross(eb - eye);
+                m.dot(at(p) - eye) * m.dot(at(q) - eye) >= 0.0
+            };
             if fold {
-                c.ends.push(*e);
-                c.projected.push(ids.map(|k| c.points[k as usize]));
+                c.ends.push([ea, eb]);
+                c.projected.push([c.points[a as usize], c.points[b as usize]]);
                 c.edge.push(k as u32);
-            } else if let Some([a, b]) = owners {
-                c.links.push([*a, *b]);
             }
         }
         c.bucket(|_| true);
@@ -222,11 +228,6 @@ impl Contours {
         self.edge = edge;
     }
 
-    /// Frees the links once they are read ([`Contours::links`]).
-    pub(super) fn drop_links(&mut self) {
-        self.links = Vec::new();
-    }
-
     /// Contour edges of this view.
     #[cfg(test)]
     fn len(&self) -> usize {
@@ -237,8 +238,16 @@ impl Contours {
     /// neither triangle of such an edge is crossed by a contour
     /// ([`Contours::crosses`]) nor cuts another, both are seen or hidden
     /// alike, since nothing bounds visibility between them.
-    pub(super) fn links(&self) -> &[[u32; 2]] {
-        &self.links
+    /// `edges` are the view's own ([`Contours::new`]'s); the contours are
+    /// its edges in increasing order, so the links are the rest, read in
+    /// step with them (no list of the ~1.65M links of a 1.1M-triangle
+    /// view is written).
+    pub(super) fn links<'a>(&'a self, edges: &'a MeshEdges) -> impl Iterator<Item = [u32; 2]> + 'a {
+        let mut contour = self.edge.iter().copied().peekable();
+        edges.owners.iter().enumerate().filter_map(move |(k, owners)| {
+            // A boundary or non-manifold edge is always a contour.
+            if contour.next_if_eq(&(k as u32)).is_some() { None } else { *owners }
+        })
     }
 
     /// Where `p` projects (central projection onto the image plane).
@@ -252,6 +261,20 @@ impl Contours {
     fn tile(&self, c: f64) -> usize {
         // Truncation is the floor for the non-negative; NaN goes to 0.
         (((c * self.per_unit) + 0.5 * self.tiles as f64).max(0.0) as usize).min(self.tiles - 1)
+    }
+
+    /// [`Contours::tile_range`] of the projected corners `corners` (vertex
+    /// ids), from their own ranges: a corner that projects to NaN has the
+    /// empty range (`x0`, `y0` at the last tile, `x1`, `y1` at 0), as the
+    /// box's `min`/`max` pass it over.
+    fn corner_tiles(&self, corners: [u32; 3]) -> [usize; 4] {
+        let [a, b, c] = corners.map(|k| self.vertex_tiles[k as usize]);
+        [
+            usize::from(a[0].min(b[0]).min(c[0])),
+            usize::from(a[1].max(b[1]).max(c[1])),
+            usize::from(a[2].min(b[2]).min(c[2])),
+            usize::from(a[3].max(b[3]).max(c[3])),
+        ]
     }
 
     /// `[x0, x1, y0, y1]` of the tiles the bounding box of `pts` touches.
@@ -271,6 +294,12 @@ impl Contours {
     /// the exact test; `v`'s plane is made only for a contour that crosses.
     /// `corners` are `v`'s vertex ids ([`MeshEdges::corners`]).
     pub(super) fn crosses(&self, corners: [u32; 3], v: &[DVec3; 3]) -> bool {
+        let r = self.corner_tiles(corners);
+        // Most triangles meet no contour's tile: nothing else is read.
+        let rows = (r[2]..=r[3]).map(|y| y * self.tiles);
+        if rows.clone().all(|row| self.starts[row + r[0]] == self.starts[row + r[1] + 1]) {
+            return false;
+        }
         let proj = corners.map(|k| self.points[k as usize]);
         let sign = edge(proj[0], proj[1], proj[2]).signum();
         if sign == 0.0 {
@@ -291,12 +320,10 @@ impl Contours {
             let d = n.dot(p - v[0]);
             d.abs() > tol && d * eye_side < 0.0
         };
-        let r = self.tile_range(&proj);
         // The tiles of one row of the range are consecutive in `members`
         // (tile order): one slice, the members in the same order as tile
         // by tile.
-        for y in r[2]..=r[3] {
-            let row = y * self.tiles;
+        for row in rows {
             let (first, last) = (self.starts[row + r[0]] as usize, self.starts[row + r[1] + 1] as usize);
             for (s, i) in &self.members[first..last] {
                 if outside(s) || !crosses_interior(&proj, sign, *s) {

@@ -215,7 +215,7 @@ impl Shared {
 /// Each triangle's component label (its smallest member) under `links`,
 /// joining only triangles not `flagged`: union by smaller index, so the
 /// labels do not depend on the order of the links.
-fn components(n: usize, links: &[[u32; 2]], flagged: &[bool]) -> Vec<u32> {
+fn components(n: usize, links: impl IntoIterator<Item = [u32; 2]>, flagged: &[bool]) -> Vec<u32> {
     let mut parent: Vec<u32> = (0..n as u32).collect();
     fn root(parent: &mut [u32], mut x: u32) -> u32 {
         while parent[x as usize] != x {
@@ -225,7 +225,7 @@ fn components(n: usize, links: &[[u32; 2]], flagged: &[bool]) -> Vec<u32> {
         }
         x
     }
-    for &[a, b] in links {
+    for [a, b] in links {
         if flagged[a as usize] || flagged[b as usize] {
             continue;
         }
@@ -290,8 +290,7 @@ impl Visibility {
             .enumerate()
             .map(|(t, (tri, &cut))| cut || contours.crosses(shared.edges.corners(t), tri))
             .collect();
-        let label = components(n, contours.links(), &flag);
-        contours.drop_links();
+        let label = components(n, contours.links(&shared.edges), &flag);
         let members = by_label(&label, &flag);
         let mut vis = Self { visible: vec![false; n], flag, rays: 0 };
         let mut want = vec![false; n];
@@ -804,9 +803,9 @@ mod tests {
     #[test]
     fn components_join_unflagged_triangles_by_smallest_index() {
         let links = [[3, 1], [1, 2], [4, 5], [5, 0]];
-        assert_eq!(components(6, &links, &[false; 6]), [0, 1, 1, 1, 0, 0]);
+        assert_eq!(components(6, links, &[false; 6]), [0, 1, 1, 1, 0, 0]);
         // Flagging 5 cuts 4 and 0 apart; flagged triangles stay alone.
-        assert_eq!(components(6, &links, &[false, false, false, false, false, true]), [0, 1, 1, 1, 4, 5]);
+        assert_eq!(components(6, links, &[false, false, false, false, false, true]), [0, 1, 1, 1, 4, 5]);
     }
 
     /// The visibility of every unflagged triangle, though most take it from

@@ -241,12 +241,17 @@ impl<'a> Packet<'a> {
         let neg = any3(&|e| _mm256_cmp_ps::<_CMP_LT_OQ>(e, zero));
         let pos = any3(&|e| _mm256_cmp_ps::<_CMP_GT_OQ>(e, zero));
         let det = _mm256_add_ps(_mm256_add_ps(u, vv), w);
+        let inside = _mm256_andnot_ps(_mm256_and_ps(neg, pos), _mm256_cmp_ps::<_CMP_NEQ_OQ>(det, zero));
+        // Most tests miss every lane: no division then (`t` and the
+        // numerators are read only for the lanes answered here).
+        if _mm256_movemask_ps(inside) as u8 & lanes & !exact == 0 {
+            return (0, self.crossing_each(v, exact, ts));
+        }
         let num = _mm256_add_ps(
             _mm256_add_ps(_mm256_mul_ps(_mm256_mul_ps(u, sz), az), _mm256_mul_ps(_mm256_mul_ps(vv, sz), bz)),
             _mm256_mul_ps(_mm256_mul_ps(w, sz), cz),
         );
         let t = _mm256_div_ps(num, det);
-        let inside = _mm256_andnot_ps(_mm256_and_ps(neg, pos), _mm256_cmp_ps::<_CMP_NEQ_OQ>(det, zero));
         let within = _mm256_and_ps(
             _mm256_cmp_ps::<_CMP_GE_OQ>(t, load(&self.tmin)),
             _mm256_cmp_ps::<_CMP_LE_OQ>(t, load(&self.tmax)),
@@ -541,15 +546,20 @@ impl<'p, 'a> Pair<'p, 'a> {
         let neg = any3(&|e| _mm512_cmp_ps_mask::<_CMP_LT_OQ>(e, zero));
         let pos = any3(&|e| _mm512_cmp_ps_mask::<_CMP_GT_OQ>(e, zero));
         let det = _mm512_add_ps(_mm512_add_ps(u, vv), w);
+        let inside = !(neg & pos) & _mm512_cmp_ps_mask::<_CMP_NEQ_OQ>(det, zero) & lanes & !exact;
+        // Most tests miss every lane: no division then (the answer needs
+        // `t` only where the lane is inside).
+        if inside == 0 {
+            return (0, exact);
+        }
         let num = _mm512_add_ps(
             _mm512_add_ps(_mm512_mul_ps(_mm512_mul_ps(u, sz), az), _mm512_mul_ps(_mm512_mul_ps(vv, sz), bz)),
             _mm512_mul_ps(_mm512_mul_ps(w, sz), cz),
         );
         let t = _mm512_div_ps(num, det);
-        let inside = !(neg & pos) & _mm512_cmp_ps_mask::<_CMP_NEQ_OQ>(det, zero);
         let within = _mm512_cmp_ps_mask::<_CMP_GE_OQ>(t, load(&self.tmin))
             & _mm512_cmp_ps_mask::<_CMP_LE_OQ>(t, load(&self.tmax));
-        (inside & within & lanes & !exact, exact)
+        (inside & within, exact)
     }
 }
 

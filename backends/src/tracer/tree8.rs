@@ -126,6 +126,7 @@ impl Tree8 {
                     next += 1;
                 }
             }
+            out.seal();
             nodes[w as usize] = out;
             nodes.resize(next as usize, EMPTY);
         }
@@ -196,6 +197,7 @@ const EMPTY: Node = Node {
     prim_base: 0,
     imask: 0,
     leaf_base: 0,
+    occupied: 0,
 };
 
 /// Half the surface area of binary node `b`'s box.

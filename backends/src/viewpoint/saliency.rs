@@ -170,7 +170,7 @@ pub fn mesh_saliency(an: &ViewpointAnalysis, adjacency: &[Vec<u32>], base: Base)
         .flat_map(|(o, near)| near.iter().map(move |&n| ((o as u32).min(n), (o as u32).max(n))))
         .filter(|&(a, b)| a != b && an.p_o[a as usize] > 0.0 && an.p_o[b as usize] > 0.0)
         .collect();
-    edges.sort_unstable();
+    edges.par_sort_unstable();
     edges.dedup();
     let js: Vec<f64> = edges
         .par_iter()

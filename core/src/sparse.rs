@@ -321,11 +321,11 @@ impl<'a, T: Real> SparseChannel<'a, T> {
         same_len(self.inputs(), out.len())?;
         for (x, o) in out.iter_mut().enumerate() {
             let mut acc = Neumaier::new();
-            for k in self.starts[x]..self.starts[x + 1] {
-                let (p, j) = (self.values[k].to_f64(), self.cols[k] as usize);
-                let q = output[j].to_f64();
+            let r = self.starts[x]..self.starts[x + 1];
+            for ((&j, p), &lp) in self.cols[r.clone()].iter().zip(&self.values[r.clone()]).zip(&logs[r]) {
+                let (p, q) = (p.to_f64(), output[j as usize].to_f64());
                 if p > 0.0 {
-                    acc.add(if q > 0.0 { p * (logs[k] - output_logs[j]) } else { f64::INFINITY });
+                    acc.add(if q > 0.0 { p * (lp - output_logs[j as usize]) } else { f64::INFINITY });
                 }
             }
             let d = acc.value();

@@ -111,4 +111,6 @@ pub use scene::{
     mutual_information_matrix_into, point_form_factor, scene_measures, scene_measures_from_counts,
     scene_measures_from_counts_with,
 };
+#[cfg(feature = "alloc")]
+pub use sparse::SparseRows;
 pub use sparse::{SparseChannel, jensen_shannon_sparse, jensen_shannon_sparse_logs, sparse_logs};

@@ -11,6 +11,7 @@ use crate::math::ln;
 use crate::scan::{check_normalized, entropy_nats, mass, mass_xlnx, same_len};
 use crate::sum::Neumaier;
 use crate::{Base, ChannelMeasures, Error, Real};
+use core::ops::Range;
 
 /// A borrowed sparse channel `X → Y`.
 ///
@@ -104,7 +105,82 @@ impl<'a, T: Real> SparseChannel<'a, T> {
     /// Stored entries.
     #[must_use]
     pub fn nonzeros(&self) -> usize {
-        self.cols.len()
+        self.starts[self.starts.len() - 1] - self.starts[0]
+    }
+
+    /// The channel of rows `rows` alone with the input distribution `input`
+    /// (one per row): the rows were checked when `self` was made, so only
+    /// `input` is (as [`SparseChannel::new`] checks it). Row `k` of the
+    /// result is row `rows.start + k` of `self`.
+    ///
+    /// # Errors
+    /// [`Error::Empty`]; [`Error::InvalidParameter`] named `"rows"` for a
+    /// range past the last row; [`Error::LengthMismatch`] when `input` is not
+    /// one per row; element errors and [`Error::NotNormalized`] for `input`.
+    pub fn rows_with_input<'b>(&self, rows: Range<usize>, input: &'b [T]) -> Result<SparseChannel<'b, T>, Error>
+    where
+        'a: 'b,
+    {
+        if rows.start > rows.end || rows.end >= self.starts.len() {
+            return Err(Error::InvalidParameter { name: "rows", value: rows.end as f64 });
+        }
+        if input.is_empty() {
+            return Err(Error::Empty);
+        }
+        check_normalized::<T>(mass(input)?)?;
+        if input.len() != rows.len() {
+            return Err(Error::LengthMismatch { expected: rows.len(), found: input.len() });
+        }
+        let starts = &self.starts[rows.start..=rows.end];
+        Ok(SparseChannel { input, starts, cols: self.cols, values: self.values, outputs: self.outputs })
+    }
+
+    /// [`jensen_shannon_sparse`] of rows `a` and `b` with weights
+    /// `(π_a, π_b)` (Part II eq. (17)), the rows checked once when the
+    /// channel was made instead of on every call: the same value, bit for bit.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] named `"row"` for a row out of range;
+    /// element errors and [`Error::NotNormalized`] for the weights.
+    pub fn jensen_shannon(&self, weights: (T, T), a: usize, b: usize, base: Base) -> Result<T, Error> {
+        self.check_rows_pair(weights, a, b)?;
+        let (ra, rb) = (self.row(a), self.row(b));
+        Ok(js_merge(weights, ra, rb, |k| ln(ra.1[k].to_f64()), |k| ln(rb.1[k].to_f64()), base))
+    }
+
+    /// [`jensen_shannon_sparse_logs`] of rows `a` and `b`, with `logs` the
+    /// logarithm of every stored value of the channel (by position, from
+    /// [`sparse_logs`]), the rows checked once when the channel was made:
+    /// the same value, bit for bit.
+    ///
+    /// # Errors
+    /// Those of [`SparseChannel::jensen_shannon`]; [`Error::LengthMismatch`]
+    /// when `logs` is not one per stored value.
+    pub fn jensen_shannon_logs(
+        &self,
+        weights: (T, T),
+        a: usize,
+        b: usize,
+        logs: &[f64],
+        base: Base,
+    ) -> Result<T, Error> {
+        if logs.len() != self.values.len() {
+            return Err(Error::LengthMismatch { expected: self.values.len(), found: logs.len() });
+        }
+        self.check_rows_pair(weights, a, b)?;
+        let (ra, rb) = (self.row(a), self.row(b));
+        let (la, lb) = (&logs[self.starts[a]..self.starts[a + 1]], &logs[self.starts[b]..self.starts[b + 1]]);
+        Ok(js_merge_batched(weights, (ra.0, ra.1, la), (rb.0, rb.1, lb), base))
+    }
+
+    /// The checks of [`check_pair`] that a checked channel's rows still need:
+    /// the weights, and both rows in range.
+    fn check_rows_pair(&self, weights: (T, T), a: usize, b: usize) -> Result<(), Error> {
+        check_normalized::<T>(mass(&[weights.0, weights.1])?)?;
+        if let Some(&x) = [a, b].iter().find(|&&x| x + 1 >= self.starts.len()) {
+            return Err(Error::InvalidParameter { name: "row", value: x as f64 });
+        }
+        Ok(())
     }
 
     /// `p(x)`.
@@ -123,26 +199,56 @@ impl<'a, T: Real> SparseChannel<'a, T> {
         (&self.cols[a..b], &self.values[a..b])
     }
 
-    /// Every stored entry as `(p(x), y, p(y|x))` in f64, row by row: the one
-    /// walk the marginal, the output information and the measures share.
-    fn entries(&self) -> impl Iterator<Item = (f64, usize, f64)> + '_ {
-        self.input.iter().enumerate().flat_map(move |(x, px)| {
-            let (c, v) = self.row(x);
-            c.iter().zip(v).map(move |(&j, p)| (px.to_f64(), j as usize, p.to_f64()))
-        })
-    }
-
     /// The output marginal `p(y) = Σ_x p(x) p(y|x)` (Part II §2).
     ///
     /// # Errors
     /// [`Error::LengthMismatch`] if `out.len() != outputs()`.
     pub fn output_into(&self, out: &mut [T]) -> Result<(), Error> {
         same_len(self.outputs, out.len())?;
+        self.output_cols_into(0..self.outputs, out)
+    }
+
+    /// [`SparseChannel::output_into`] of the outputs `cols` alone (`out[k]`
+    /// for output `cols.start + k`): each output's sum over the rows in row
+    /// order, as the whole pass takes it, so blocks of outputs computed
+    /// apart (side by side) give the same bits.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] named `"cols"` for a range past the
+    /// outputs; [`Error::LengthMismatch`] if `out` is not one per output of `cols`.
+    pub fn output_cols_into(&self, cols: Range<usize>, out: &mut [T]) -> Result<(), Error> {
+        self.check_cols(&cols, out.len())?;
         out.iter_mut().for_each(|o| *o = T::from_f64(0.0));
-        for (px, j, p) in self.entries() {
-            out[j] = T::from_f64(out[j].to_f64() + px * p);
+        for (x, px) in self.input.iter().enumerate() {
+            let (k0, c) = self.row_part(x, &cols);
+            for (k, &j) in (k0..).zip(c) {
+                let o = &mut out[j as usize - cols.start];
+                *o = T::from_f64(o.to_f64() + px.to_f64() * self.values[k].to_f64());
+            }
         }
         Ok(())
+    }
+
+    /// Refuses a column range past the outputs or an output buffer of
+    /// another length.
+    fn check_cols(&self, cols: &Range<usize>, len: usize) -> Result<(), Error> {
+        if cols.start > cols.end || cols.end > self.outputs {
+            return Err(Error::InvalidParameter { name: "cols", value: cols.end as f64 });
+        }
+        if len != cols.len() {
+            return Err(Error::LengthMismatch { expected: cols.len(), found: len });
+        }
+        Ok(())
+    }
+
+    /// The part of row `x` whose columns fall in `cols`: the position of its
+    /// first entry and its columns (rows are increasing).
+    fn row_part(&self, x: usize, cols: &Range<usize>) -> (usize, &'a [u32]) {
+        let (a, b) = (self.starts[x], self.starts[x + 1]);
+        let c = &self.cols[a..b];
+        let lo = c.partition_point(|&j| (j as usize) < cols.start);
+        let hi = lo + c[lo..].partition_point(|&j| (j as usize) < cols.end);
+        (a + lo, &c[lo..hi])
     }
 
     /// `H(Y|x)` of each row (Part V eq. (2) for a viewpoint).
@@ -193,6 +299,41 @@ impl<'a, T: Real> SparseChannel<'a, T> {
         Ok(())
     }
 
+    /// [`SparseChannel::specific_information_into`] with the logarithms
+    /// given, so that no entry takes one: `logs` of every stored value of the
+    /// channel (by position, [`sparse_logs`]) and `output_logs` of `output`
+    /// ([`sparse_logs`] of it). The same terms added in the same order: the
+    /// same values, bit for bit.
+    ///
+    /// # Errors
+    /// [`Error::LengthMismatch`] for wrong buffer lengths.
+    pub fn specific_information_logs_into(
+        &self,
+        output: &[T],
+        output_logs: &[f64],
+        logs: &[f64],
+        base: Base,
+        out: &mut [T],
+    ) -> Result<(), Error> {
+        same_len(self.outputs, output.len())?;
+        same_len(self.outputs, output_logs.len())?;
+        same_len(self.values.len(), logs.len())?;
+        same_len(self.inputs(), out.len())?;
+        for (x, o) in out.iter_mut().enumerate() {
+            let mut acc = Neumaier::new();
+            let r = self.starts[x]..self.starts[x + 1];
+            for ((&j, p), &lp) in self.cols[r.clone()].iter().zip(&self.values[r.clone()]).zip(&logs[r]) {
+                let (p, q) = (p.to_f64(), output[j as usize].to_f64());
+                if p > 0.0 {
+                    acc.add(if q > 0.0 { p * (lp - output_logs[j as usize]) } else { f64::INFINITY });
+                }
+            }
+            let d = acc.value();
+            *o = T::from_f64(if d < 0.0 { 0.0 } else { d * base.per_nat() });
+        }
+        Ok(())
+    }
+
     /// Specific information of each output, `I(y;X) = D_KL(p(X|y) ‖ p(X))`,
     /// without forming the reversed channel: by Bayes,
     /// `I(y;X) = (1/p(y)) Σ_x p(x) p(y|x) ln(p(y|x)/p(y))` (the polygonal
@@ -201,16 +342,51 @@ impl<'a, T: Real> SparseChannel<'a, T> {
     /// # Errors
     /// [`Error::LengthMismatch`] for wrong buffer lengths.
     pub fn output_specific_information_into(&self, output: &[T], base: Base, out: &mut [T]) -> Result<(), Error> {
-        same_len(self.outputs, output.len())?;
         same_len(self.outputs, out.len())?;
+        self.output_specific_information_cols_into(output, 0..self.outputs, base, out)
+    }
+
+    /// [`SparseChannel::output_specific_information_into`] of the outputs
+    /// `cols` alone (`out[k]` for output `cols.start + k`; `output` is the
+    /// whole marginal): each output's terms added over the rows in row order,
+    /// as the whole pass adds them, so blocks of outputs computed apart (side
+    /// by side) give the same bits. The logarithms are taken in batches, one
+    /// vectorised pass each ([`crate::dispatch::ln_into`], [`ln`]'s bits).
+    ///
+    /// # Errors
+    /// [`Error::LengthMismatch`] for wrong buffer lengths;
+    /// [`Error::InvalidParameter`] named `"cols"` for a range past the outputs.
+    pub fn output_specific_information_cols_into(
+        &self,
+        output: &[T],
+        cols: Range<usize>,
+        base: Base,
+        out: &mut [T],
+    ) -> Result<(), Error> {
+        same_len(self.outputs, output.len())?;
+        self.check_cols(&cols, out.len())?;
         out.iter_mut().for_each(|o| *o = T::from_f64(0.0));
-        for (px, j, p) in self.entries() {
-            let q = output[j].to_f64();
-            if p > 0.0 && q > 0.0 {
-                out[j] = T::from_f64(out[j].to_f64() + px * p * (ln(p) - ln(q)));
+        let (mut ps, mut qs, mut lp, mut lq) = ([0.0f64; BATCH], [0.0; BATCH], [0.0; BATCH], [0.0; BATCH]);
+        for (x, px) in self.input.iter().enumerate() {
+            let px = px.to_f64();
+            let (k0, c) = self.row_part(x, &cols);
+            for (b, c) in c.chunks(BATCH).enumerate() {
+                let (n, k0) = (c.len(), k0 + b * BATCH);
+                for (k, &j) in c.iter().enumerate() {
+                    (ps[k], qs[k]) = (self.values[k0 + k].to_f64(), output[j as usize].to_f64());
+                }
+                crate::dispatch::ln_into(&ps[..n], &mut lp[..n]);
+                crate::dispatch::ln_into(&qs[..n], &mut lq[..n]);
+                for (k, &j) in c.iter().enumerate() {
+                    let (p, q) = (ps[k], qs[k]);
+                    if p > 0.0 && q > 0.0 {
+                        let o = &mut out[j as usize - cols.start];
+                        *o = T::from_f64(o.to_f64() + px * p * (lp[k] - lq[k]));
+                    }
+                }
             }
         }
-        for (o, q) in out.iter_mut().zip(output) {
+        for (o, q) in out.iter_mut().zip(&output[cols]) {
             let q = q.to_f64();
             let d = if q > 0.0 { o.to_f64() / q } else { 0.0 };
             *o = T::from_f64(if d < 0.0 { 0.0 } else { d * base.per_nat() });
@@ -271,15 +447,54 @@ impl<'a, T: Real> SparseChannel<'a, T> {
     /// must be a distribution.
     pub fn measures(&self, output: &[T], base: Base) -> Result<ChannelMeasures, Error> {
         same_len(self.outputs, output.len())?;
+        self.measures_by(output, base, |k| ln(self.values[k].to_f64()), |j| ln(output[j].to_f64()))
+    }
+
+    /// [`SparseChannel::measures`] with the logarithms given, so that the
+    /// pass over every entry (one thread, in order: compensated sums) takes
+    /// none: `logs` of every stored value of the channel (by position,
+    /// [`sparse_logs`]) and `output_logs` of `output` ([`sparse_logs`] of
+    /// it). The same terms added in the same order: the same values, bit for
+    /// bit.
+    ///
+    /// # Errors
+    /// Those of [`SparseChannel::measures`]; [`Error::LengthMismatch`] when
+    /// `logs` or `output_logs` is not one per value.
+    pub fn measures_logs(
+        &self,
+        output: &[T],
+        output_logs: &[f64],
+        logs: &[f64],
+        base: Base,
+    ) -> Result<ChannelMeasures, Error> {
+        same_len(self.outputs, output.len())?;
+        same_len(self.outputs, output_logs.len())?;
+        same_len(self.values.len(), logs.len())?;
+        self.measures_by(output, base, |k| logs[k], |j| output_logs[j])
+    }
+
+    /// [`SparseChannel::measures`] with `ln p(y|x)` of the value at position
+    /// `k` from `lp(k)` and `ln p(y)` from `lq(y)`.
+    fn measures_by(
+        &self,
+        output: &[T],
+        base: Base,
+        lp: impl Fn(usize) -> f64,
+        lq: impl Fn(usize) -> f64,
+    ) -> Result<ChannelMeasures, Error> {
         let h_y = entropy_nats(mass_xlnx(output)?);
         let h_x = entropy_nats(mass_xlnx(self.input)?);
         let (mut mi, mut hyx) = (Neumaier::new(), Neumaier::new());
-        for (px, j, p) in self.entries() {
-            // An input of zero weight contributes nothing, even where q = 0.
-            if px > 0.0 && p > 0.0 {
-                let q = output[j].to_f64();
-                hyx.add(-px * p * ln(p));
-                mi.add(if q > 0.0 { px * p * (ln(p) - ln(q)) } else { f64::INFINITY });
+        for (x, px) in self.input.iter().enumerate() {
+            let px = px.to_f64();
+            for k in self.starts[x]..self.starts[x + 1] {
+                let (j, p) = (self.cols[k] as usize, self.values[k].to_f64());
+                // An input of zero weight contributes nothing, even where q = 0.
+                if px > 0.0 && p > 0.0 {
+                    let q = output[j].to_f64();
+                    hyx.add(-px * p * lp(k));
+                    mi.add(if q > 0.0 { px * p * (lp(k) - lq(j)) } else { f64::INFINITY });
+                }
             }
         }
         let k = base.per_nat();
@@ -292,6 +507,90 @@ impl<'a, T: Real> SparseChannel<'a, T> {
             h_xy: (h_x + hyx) * k,
             mutual_information: mi * k,
         })
+    }
+}
+
+/// The rows of a sparse channel, owned and checked once (every check of
+/// [`SparseChannel::new`]) when made, so that the channel over them
+/// ([`SparseRows::channel`]) checks only its input: a channel whose rows
+/// are read by many passes (the viewpoint channel, 67M entries on the
+/// 1.1M-triangle bunny) validates them once instead of on every pass and
+/// every pair of rows.
+#[cfg(feature = "alloc")]
+#[derive(Clone, Debug, PartialEq)]
+pub struct SparseRows<T> {
+    starts: alloc::vec::Vec<usize>,
+    cols: alloc::vec::Vec<u32>,
+    values: alloc::vec::Vec<T>,
+    outputs: usize,
+}
+
+#[cfg(feature = "alloc")]
+impl<T: Real> SparseRows<T> {
+    /// Takes the rows over after [`SparseChannel::new`]`(input, ...)` accepts
+    /// them (the same checks, in the same order, the same errors).
+    ///
+    /// # Errors
+    /// Those of [`SparseChannel::new`].
+    pub fn new(
+        input: &[T],
+        starts: alloc::vec::Vec<usize>,
+        cols: alloc::vec::Vec<u32>,
+        values: alloc::vec::Vec<T>,
+        outputs: usize,
+    ) -> Result<Self, Error> {
+        SparseChannel::new(input, &starts, &cols, &values, outputs)?;
+        Ok(Self { starts, cols, values, outputs })
+    }
+
+    /// The channel of these rows with the input distribution `input`, which
+    /// alone is checked.
+    ///
+    /// # Errors
+    /// Those of [`SparseChannel::rows_with_input`].
+    pub fn channel<'a>(&'a self, input: &'a [T]) -> Result<SparseChannel<'a, T>, Error> {
+        self.all().rows_with_input(0..self.rows(), input)
+    }
+
+    /// Every row as a channel with no input yet (the rows' own view).
+    fn all(&self) -> SparseChannel<'_, T> {
+        SparseChannel {
+            input: &[],
+            starts: &self.starts,
+            cols: &self.cols,
+            values: &self.values,
+            outputs: self.outputs,
+        }
+    }
+
+    /// Rows.
+    #[must_use]
+    pub fn rows(&self) -> usize {
+        self.starts.len() - 1
+    }
+
+    /// Outputs (columns).
+    #[must_use]
+    pub fn outputs(&self) -> usize {
+        self.outputs
+    }
+
+    /// Row offsets: row `x` is at `starts()[x]..starts()[x + 1]`.
+    #[must_use]
+    pub fn starts(&self) -> &[usize] {
+        &self.starts
+    }
+
+    /// Every row's columns, in row order.
+    #[must_use]
+    pub fn cols(&self) -> &[u32] {
+        &self.cols
+    }
+
+    /// Every row's values, in row order.
+    #[must_use]
+    pub fn values(&self) -> &[T] {
+        &self.values
     }
 }
 
@@ -465,4 +764,73 @@ fn js_merge_batched<T: Real>(weights: (T, T), a: (&[u32], &[T], &[f64]), b: (&[u
     }
     let d = acc.value();
     T::from_f64(if d < 0.0 { 0.0 } else { d * base.per_nat() })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Three rows over five outputs, uneven, with `p(y)` and every logarithm.
+    #[allow(clippy::type_complexity)]
+    fn channel() -> ([f64; 3], [usize; 4], [u32; 8], [f64; 8]) {
+        ([0.2, 0.5, 0.3], [0, 3, 5, 8], [0, 1, 3, 1, 4, 0, 2, 3], [0.3, 0.6, 0.1, 0.25, 0.75, 0.125, 0.5, 0.375])
+    }
+
+    fn logs(xs: &[f64]) -> alloc::vec::Vec<f64> {
+        let mut l = alloc::vec![0.0; xs.len()];
+        sparse_logs(xs, &mut l);
+        l
+    }
+
+    #[test]
+    fn logs_and_blocks_give_the_whole_passes_bits() {
+        let (input, starts, cols, values) = channel();
+        let ch = SparseChannel::new(&input, &starts, &cols, &values, 5).unwrap();
+        let mut p_y = [0.0; 5];
+        ch.output_into(&mut p_y).unwrap();
+        let (lv, ly) = (logs(&values), logs(&p_y));
+        // Output blocks of two, apart.
+        let (mut q, mut info, mut block) = ([0.0; 5], [0.0; 5], [0.0; 5]);
+        ch.output_specific_information_into(&p_y, Base::Bits, &mut info).unwrap();
+        for a in (0..5).step_by(2) {
+            let r = a..(a + 2).min(5);
+            ch.output_cols_into(r.clone(), &mut q[r.clone()]).unwrap();
+            ch.output_specific_information_cols_into(&p_y, r.clone(), Base::Bits, &mut block[r]).unwrap();
+        }
+        assert_eq!(q.map(f64::to_bits), p_y.map(f64::to_bits));
+        assert_eq!(block.map(f64::to_bits), info.map(f64::to_bits));
+        let m = ch.measures(&p_y, Base::Bits).unwrap();
+        assert_eq!(ch.measures_logs(&p_y, &ly, &lv, Base::Bits).unwrap(), m);
+        let (mut a, mut b) = ([0.0; 3], [0.0; 3]);
+        ch.specific_information_into(&p_y, Base::Bits, &mut a).unwrap();
+        ch.specific_information_logs_into(&p_y, &ly, &lv, Base::Bits, &mut b).unwrap();
+        assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
+        assert!(ch.measures_logs(&p_y, &ly, &lv[1..], Base::Bits).is_err());
+    }
+
+    #[test]
+    fn checked_rows_give_the_pairs_bits() {
+        let (input, starts, cols, values) = channel();
+        let rows = SparseRows::new(&input, starts.to_vec(), cols.to_vec(), values.to_vec(), 5).unwrap();
+        let ch = rows.channel(&input).unwrap();
+        let lv = logs(&values);
+        for (a, b) in [(0, 1), (1, 2), (2, 0)] {
+            let w = (input[a] / (input[a] + input[b]), input[b] / (input[a] + input[b]));
+            let (ra, rb) = (ch.row(a), ch.row(b));
+            let (la, lb) = (&lv[starts[a]..starts[a + 1]], &lv[starts[b]..starts[b + 1]]);
+            let plain = jensen_shannon_sparse(w, ra, rb, Base::Bits).unwrap();
+            let with = jensen_shannon_sparse_logs(w, (ra.0, ra.1, la), (rb.0, rb.1, lb), Base::Bits).unwrap();
+            assert_eq!(ch.jensen_shannon(w, a, b, Base::Bits).unwrap().to_bits(), plain.to_bits());
+            assert_eq!(ch.jensen_shannon_logs(w, a, b, &lv, Base::Bits).unwrap().to_bits(), with.to_bits());
+        }
+        assert!(ch.jensen_shannon((0.5, 0.5), 0, 3, Base::Bits).is_err());
+        assert!(ch.jensen_shannon((0.5, 0.6), 0, 1, Base::Bits).is_err());
+        // Rows 1..3 alone: row 0 of the part is row 1.
+        let part = ch.rows_with_input(1..3, &[0.5, 0.5]).unwrap();
+        assert_eq!((part.inputs(), part.nonzeros(), part.row(0)), (2, 5, ch.row(1)));
+        assert!(ch.rows_with_input(1..3, &[0.5, 0.6]).is_err());
+        assert!(ch.rows_with_input(2..4, &[0.5, 0.5]).is_err());
+        assert!(rows.channel(&[0.5, 0.5]).is_err());
+        assert!(SparseRows::new(&input, starts.to_vec(), cols.to_vec(), alloc::vec![0.5; 8], 5).is_err());
+    }
 }

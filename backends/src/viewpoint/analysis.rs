@@ -2,11 +2,24 @@
 //! `p(O)` over the viewpoints that see the object, and everything computed
 //! from them through [`itgfx_core::SparseChannel`].
 
-use itgfx_core::{Base, Error, SparseChannel, jensen_shannon_sparse, jensen_shannon_sparse_logs};
+use itgfx_core::{Base, Error, SparseChannel, SparseRows};
 
 use rayon::prelude::*;
 
 use super::ViewpointChannel;
+
+/// Outputs per block of the per-output passes (`p(o)`, `I(o;V)`) that run
+/// side by side: each block reads its part of every row.
+const OUTPUT_BLOCK: usize = 1 << 14;
+
+/// `ln x` of every value (the core's [`itgfx_core::sparse_logs`], on chunks
+/// side by side): what the core's `*_logs` passes take for a target
+/// distribution.
+fn logs_of(xs: &[f64]) -> Vec<f64> {
+    let mut logs = vec![0.0; xs.len()];
+    logs.par_chunks_mut(4096).zip(xs.par_chunks(4096)).for_each(|(l, x)| itgfx_core::sparse_logs(x, l));
+    logs
+}
 
 /// How the input distribution `p(V)` is chosen (Part V §3.1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -35,9 +48,8 @@ pub struct ViewpointAnalysis {
     pub viewpoints: usize,
     /// Patches in the scene.
     pub patches: usize,
-    starts: Vec<usize>,
-    cols: Vec<u32>,
-    values: Vec<f64>,
+    /// `p(O|v)` of every row, checked once when the analysis is made.
+    rows: SparseRows<f64>,
 }
 
 /// Per-viewpoint measures over all sampled viewpoints, in one unit.
@@ -184,30 +196,24 @@ impl ViewpointAnalysis {
             ViewpointWeights::Uniform => vec![1.0 / seen.len() as f64; seen.len()],
         };
         let outputs = patches + usize::from(background);
-        let mut an = Self {
-            seen,
-            p_v,
-            p_o: vec![0.0; outputs],
-            seen_angle,
-            background,
-            viewpoints,
-            patches,
-            starts,
-            cols,
-            values,
-        };
+        let rows = SparseRows::new(&p_v, starts, cols, values, outputs)?;
         let mut p_o = vec![0.0; outputs];
-        an.channel()?.output_into(&mut p_o)?;
-        an.p_o = p_o;
-        Ok(an)
+        let ch = rows.channel(&p_v)?;
+        // Blocks of outputs side by side, each summed over the rows in row
+        // order: the whole pass's bits.
+        p_o.par_chunks_mut(OUTPUT_BLOCK)
+            .enumerate()
+            .try_for_each(|(k, out)| ch.output_cols_into(k * OUTPUT_BLOCK..k * OUTPUT_BLOCK + out.len(), out))?;
+        Ok(Self { seen, p_v, p_o, seen_angle, background, viewpoints, patches, rows })
     }
 
-    /// The core's view of the channel.
+    /// The core's view of the channel (its rows checked once, when the
+    /// analysis was made; only `p(v)` is checked here).
     ///
     /// # Errors
     /// Never for an analysis built by [`ViewpointAnalysis::new`].
     pub fn channel(&self) -> Result<SparseChannel<'_, f64>, Error> {
-        SparseChannel::new(&self.p_v, &self.starts, &self.cols, &self.values, self.outputs())
+        self.rows.channel(&self.p_v)
     }
 
     /// A per-row pass of the core over every row, on chunks of rows side
@@ -220,13 +226,11 @@ impl ViewpointAnalysis {
     ) -> Result<Vec<f64>, Error> {
         let mut out = vec![0.0; self.rows()];
         let per = self.rows().div_ceil(4 * rayon::current_num_threads()).max(1);
+        let all = self.channel()?;
         out.par_chunks_mut(per).enumerate().try_for_each(|(k, out)| {
             let r = k * per..k * per + out.len();
-            let (a, b) = (self.starts[r.start], self.starts[r.end]);
-            let starts: Vec<usize> = self.starts[r.start..=r.end].iter().map(|s| s - a).collect();
             let input = vec![1.0 / out.len() as f64; out.len()];
-            let ch = SparseChannel::new(&input, &starts, &self.cols[a..b], &self.values[a..b], self.outputs())?;
-            pass(&ch, out)
+            pass(&all.rows_with_input(r, &input)?, out)
         })?;
         Ok(out)
     }
@@ -238,7 +242,20 @@ impl ViewpointAnalysis {
     /// # Errors
     /// [`Error::LengthMismatch`] if `target` is not one per output.
     pub fn row_information(&self, target: &[f64], base: Base) -> Result<Vec<f64>, Error> {
-        self.by_rows(|ch, out| ch.specific_information_into(target, base, out))
+        self.row_information_with(target, base, None)
+    }
+
+    /// [`ViewpointAnalysis::row_information`], on the entries' logarithms
+    /// when given (from [`ViewpointAnalysis::entry_logs`]: the core's
+    /// `specific_information_logs_into`, the same bits, no logarithm per entry).
+    fn row_information_with(&self, target: &[f64], base: Base, logs: Option<&[f64]>) -> Result<Vec<f64>, Error> {
+        match logs {
+            None => self.by_rows(|ch, out| ch.specific_information_into(target, base, out)),
+            Some(logs) => {
+                let target_logs = logs_of(target);
+                self.by_rows(|ch, out| ch.specific_information_logs_into(target, &target_logs, logs, base, out))
+            }
+        }
     }
 
     /// Outputs: patches, plus one for the background when counted.
@@ -256,7 +273,16 @@ impl ViewpointAnalysis {
     /// Row `x`: outputs seen and `p(o|v)`.
     #[must_use]
     pub fn row(&self, x: usize) -> (&[u32], &[f64]) {
-        (&self.cols[self.starts[x]..self.starts[x + 1]], &self.values[self.starts[x]..self.starts[x + 1]])
+        let r = self.rows.starts()[x]..self.rows.starts()[x + 1];
+        (&self.rows.cols()[r.clone()], &self.rows.values()[r])
+    }
+
+    /// The part of row `x` whose outputs fall in `cols` (rows are increasing).
+    pub(super) fn row_part(&self, x: usize, cols: &std::ops::Range<usize>) -> (&[u32], &[f64]) {
+        let (c, p) = self.row(x);
+        let a = c.partition_point(|&o| (o as usize) < cols.start);
+        let b = a + c[a..].partition_point(|&o| (o as usize) < cols.end);
+        (&c[a..b], &p[a..b])
     }
 
     /// The row of viewpoint `v`, if it sees the object.
@@ -280,6 +306,21 @@ impl ViewpointAnalysis {
     /// # Errors
     /// [`Error::LengthMismatch`] if `areas` is not one per patch.
     pub fn measures(&self, areas: &[f64], base: Base) -> Result<ViewpointMeasures, Error> {
+        self.measures_with(areas, base, None)
+    }
+
+    /// [`ViewpointAnalysis::measures`] on the entries' logarithms (from
+    /// [`ViewpointAnalysis::entry_logs`]): no logarithm per entry in the
+    /// core's passes (the whole-channel one runs on one thread), the same bits.
+    ///
+    /// # Errors
+    /// Those of [`ViewpointAnalysis::measures`]; [`Error::LengthMismatch`]
+    /// if `logs` is not one per entry.
+    pub fn measures_logs(&self, areas: &[f64], base: Base, logs: &[f64]) -> Result<ViewpointMeasures, Error> {
+        self.measures_with(areas, base, Some(logs))
+    }
+
+    fn measures_with(&self, areas: &[f64], base: Base, logs: Option<&[f64]>) -> Result<ViewpointMeasures, Error> {
         if areas.len() != self.patches {
             return Err(Error::LengthMismatch { expected: self.patches, found: areas.len() });
         }
@@ -294,14 +335,18 @@ impl ViewpointAnalysis {
             }
             let total: f64 = areas.iter().sum();
             let rel: Vec<f64> = areas.iter().map(|a| a / total).collect();
-            self.row_information(&rel, base)
+            self.row_information_with(&rel, base, logs)
         };
         let per_row = || {
-            let vmi = self.row_information(&self.p_o, base)?;
+            let vmi = self.row_information_with(&self.p_o, base, logs)?;
             let ve = self.by_rows(|ch, out| ch.row_entropies_into(base, out))?;
             Ok::<_, Error>((vmi, ve, vkl()?))
         };
-        let (cm, rows) = rayon::join(|| ch.measures(&self.p_o, base), per_row);
+        let whole = || match logs {
+            None => ch.measures(&self.p_o, base),
+            Some(logs) => ch.measures_logs(&self.p_o, &logs_of(&self.p_o), logs, base),
+        };
+        let (cm, rows) = rayon::join(whole, per_row);
         let (cm, (vmi, ve, vkl)) = (cm?, rows?);
         let heuristic: Vec<f64> = (0..n)
             .map(|x| {
@@ -332,7 +377,17 @@ impl ViewpointAnalysis {
     /// None in practice (sizes are consistent by construction).
     pub fn polygonal_information(&self, base: Base) -> Result<Vec<f64>, Error> {
         let mut info = vec![0.0; self.outputs()];
-        self.channel()?.output_specific_information_into(&self.p_o, base, &mut info)?;
+        let ch = self.channel()?;
+        // Blocks of outputs side by side (each output's terms over the rows
+        // in row order: the whole pass's bits).
+        info.par_chunks_mut(OUTPUT_BLOCK).enumerate().try_for_each(|(k, out)| {
+            ch.output_specific_information_cols_into(
+                &self.p_o,
+                k * OUTPUT_BLOCK..k * OUTPUT_BLOCK + out.len(),
+                base,
+                out,
+            )
+        })?;
         Ok(info)
     }
 
@@ -343,7 +398,7 @@ impl ViewpointAnalysis {
     /// None in practice.
     pub fn dissimilarity(&self, a: usize, b: usize, base: Base) -> Result<f64, Error> {
         let t = self.p_v[a] + self.p_v[b];
-        jensen_shannon_sparse((self.p_v[a] / t, self.p_v[b] / t), self.row(a), self.row(b), base)
+        self.channel()?.jensen_shannon((self.p_v[a] / t, self.p_v[b] / t), a, b, base)
     }
 
     /// `ln` of every entry of the channel, in row order (8 bytes an entry):
@@ -352,34 +407,17 @@ impl ViewpointAnalysis {
     /// with many others take their logarithms once.
     #[must_use]
     pub fn entry_logs(&self) -> Vec<f64> {
-        let mut logs = vec![0.0; self.values.len()];
-        logs.par_chunks_mut(4096).zip(self.values.par_chunks(4096)).for_each(|(l, v)| itgfx_core::sparse_logs(v, l));
-        logs
-    }
-
-    /// Row `x` with its entries' logarithms (`logs` from
-    /// [`ViewpointAnalysis::entry_logs`]).
-    fn row_logs<'a>(&'a self, x: usize, logs: &'a [f64]) -> (&'a [u32], &'a [f64], &'a [f64]) {
-        let r = self.starts[x]..self.starts[x + 1];
-        (&self.cols[r.clone()], &self.values[r.clone()], &logs[r])
+        logs_of(self.rows.values())
     }
 
     /// [`ViewpointAnalysis::dissimilarity`] on precomputed logarithms
-    /// ([`jensen_shannon_sparse_logs`]: the same merge, the same bits).
+    /// ([`SparseChannel::jensen_shannon_logs`]: the same merge, the same bits).
     ///
     /// # Errors
     /// [`Error::LengthMismatch`] if `logs` is not one per entry.
     pub fn dissimilarity_logs(&self, a: usize, b: usize, logs: &[f64], base: Base) -> Result<f64, Error> {
-        if logs.len() != self.values.len() {
-            return Err(Error::LengthMismatch { expected: self.values.len(), found: logs.len() });
-        }
         let t = self.p_v[a] + self.p_v[b];
-        jensen_shannon_sparse_logs(
-            (self.p_v[a] / t, self.p_v[b] / t),
-            self.row_logs(a, logs),
-            self.row_logs(b, logs),
-            base,
-        )
+        self.channel()?.jensen_shannon_logs((self.p_v[a] / t, self.p_v[b] / t), a, b, logs, base)
     }
 
     /// Viewpoint instability: the mean dissimilarity of each viewpoint to
@@ -400,24 +438,24 @@ impl ViewpointAnalysis {
     /// # Errors
     /// [`Error::LengthMismatch`] if `logs` is not one per entry.
     pub fn instability_logs(&self, neighbours: &[Vec<usize>], logs: &[f64], base: Base) -> Result<Vec<f64>, Error> {
-        if logs.len() != self.values.len() {
-            return Err(Error::LengthMismatch { expected: self.values.len(), found: logs.len() });
+        if logs.len() != self.rows.values().len() {
+            return Err(Error::LengthMismatch { expected: self.rows.values().len(), found: logs.len() });
         }
-        self.instability_by(neighbours, |w, x, y| {
-            jensen_shannon_sparse_logs(w, self.row_logs(x, logs), self.row_logs(y, logs), base)
-        })
+        let ch = self.channel()?;
+        self.instability_by(neighbours, |w, x, y| ch.jensen_shannon_logs(w, x, y, logs, base))
     }
 
     /// [`ViewpointAnalysis::instability`] without holding a logarithm per
     /// entry: each pair takes its rows' logarithms itself
-    /// ([`jensen_shannon_sparse`], the same merge, so the same bits). For
+    /// ([`SparseChannel::jensen_shannon`], the same merge, so the same bits). For
     /// channels whose memory is counted without those 8 bytes per entry (the
     /// volume channel's estimate): more CPU, no extra memory.
     ///
     /// # Errors
     /// None in practice.
     pub fn instability_lean(&self, neighbours: &[Vec<usize>], base: Base) -> Result<Vec<f64>, Error> {
-        self.instability_by(neighbours, |w, x, y| jensen_shannon_sparse(w, self.row(x), self.row(y), base))
+        let ch = self.channel()?;
+        self.instability_by(neighbours, |w, x, y| ch.jensen_shannon(w, x, y, base))
     }
 
     /// The mean of `js((π_x, π_y), x, y)` over each row's neighbours that see

@@ -83,14 +83,6 @@ pub fn patch_adjacency(scene: &Scene) -> Vec<Vec<u32>> {
 /// filled by one task, which writes only inside its own part of the arrays.
 const COLUMN_BLOCK: usize = 1 << 14;
 
-/// The part of row `x` whose outputs fall in `cols` (rows are increasing).
-fn row_part<'a>(an: &'a ViewpointAnalysis, x: usize, cols: &std::ops::Range<usize>) -> (&'a [u32], &'a [f64]) {
-    let (c, p) = an.row(x);
-    let a = c.partition_point(|&o| (o as usize) < cols.start);
-    let b = a + c[a..].partition_point(|&o| (o as usize) < cols.end);
-    (&c[a..b], &p[a..b])
-}
-
 /// The reversed channel `p(V|o)` as compressed columns: for each output,
 /// the rows that see it (increasing) and `p(v|o) = p(v) p(o|v) / p(o)`.
 /// Blocks of [`COLUMN_BLOCK`] columns are counted, filled and renormalised
@@ -105,7 +97,7 @@ fn reversed_columns(an: &ViewpointAnalysis) -> (Vec<usize>, Vec<u32>, Vec<f64>) 
     starts[1..].par_chunks_mut(COLUMN_BLOCK).enumerate().for_each(|(k, count)| {
         let cols = block(k);
         for x in 0..an.rows() {
-            for &o in row_part(an, x, &cols).0 {
+            for &o in an.row_part(x, &cols).0 {
                 count[o as usize - cols.start] += 1;
             }
         }
@@ -130,7 +122,7 @@ fn reversed_columns(an: &ViewpointAnalysis) -> (Vec<usize>, Vec<u32>, Vec<f64>) 
         let base = starts[cols.start];
         let mut fill: Vec<usize> = starts[cols.clone()].iter().map(|s| s - base).collect();
         for x in 0..an.rows() {
-            let (c, p) = row_part(an, x, &cols);
+            let (c, p) = an.row_part(x, &cols);
             for (&o, &q) in c.iter().zip(p) {
                 let k = &mut fill[o as usize - cols.start];
                 r[*k] = x as u32;
@@ -178,7 +170,7 @@ pub fn mesh_saliency(an: &ViewpointAnalysis, adjacency: &[Vec<u32>], base: Base)
         .flat_map(|(o, near)| near.iter().map(move |&n| ((o as u32).min(n), (o as u32).max(n))))
         .filter(|&(a, b)| a != b && an.p_o[a as usize] > 0.0 && an.p_o[b as usize] > 0.0)
         .collect();
-    edges.sort_unstable();
+    edges.par_sort_unstable();
     edges.dedup();
     let js: Vec<f64> = edges
         .par_iter()

@@ -163,33 +163,78 @@ pub fn best_views(
     Ok(out)
 }
 
-/// `I(V̂;O)` in nats for the clustering of rows given by `nearest[x].1`.
+/// Outputs per block of [`clustered_information`]'s passes side by side.
+const CLUSTER_BLOCK: usize = 1 << 14;
+
+/// `I(V̂;O)` in nats for the clustering of rows given by `nearest[x].1`:
+/// `Σ_c Σ_o p(c) kl_term(m_o/p(c), p(o))` (Part V eq. (6) over the merged
+/// views, `m_o = Σ_{v∈c} p(v) p(o|v)`), clusters in order, each cluster's
+/// outputs in the order its rows first show them (by the first row, in row
+/// order, that sees the output, then by output), one plain sum. Each
+/// cluster's `m` and terms are computed on blocks of outputs side by side
+/// (each `m_o` summed over the cluster's rows in row order); only the sum
+/// of the terms, in that order, runs on one thread.
 fn clustered_information(an: &ViewpointAnalysis, nearest: &[(f64, usize)]) -> f64 {
     let mut clusters: Vec<(usize, usize)> = nearest.iter().enumerate().map(|(x, &(_, c))| (c, x)).collect();
     clusters.sort_unstable();
-    let mut acc = vec![0.0; an.outputs()];
-    let mut touched = Vec::new();
+    let (mut terms, mut first) = (vec![0.0; an.outputs()], vec![u32::MAX; an.outputs()]);
     let mut total = 0.0;
     for group in clusters.chunk_by(|a, b| a.0 == b.0) {
+        let rows: Vec<usize> = group.iter().map(|&(_, x)| x).collect();
         let mut pc = 0.0;
-        for &(_, x) in group {
-            let (cols, p) = an.row(x);
-            for (&o, &q) in cols.iter().zip(p) {
-                if acc[o as usize] == 0.0 {
-                    touched.push(o as usize);
-                }
-                acc[o as usize] += an.p_v[x] * q;
-            }
+        for &x in &rows {
             pc += an.p_v[x];
         }
-        for &o in &touched {
-            let m = acc[o];
-            total += pc * kl_term(m / pc, an.p_o[o]);
-            acc[o] = 0.0;
+        terms
+            .par_chunks_mut(CLUSTER_BLOCK)
+            .zip(first.par_chunks_mut(CLUSTER_BLOCK))
+            .enumerate()
+            .for_each(|(k, (terms, first))| cluster_terms(an, &rows, pc, k * CLUSTER_BLOCK, terms, first));
+        for o in first_shown_order(&first, rows.len()) {
+            total += terms[o];
         }
-        touched.clear();
     }
     total.max(0.0)
+}
+
+/// One cluster's terms `p(c) kl_term(m_o/p(c), p(o))` of the outputs from
+/// `start` on (`terms.len()` of them), and for each the position in `rows`
+/// of the first row that sees it (`u32::MAX` for none, whose term is 0).
+fn cluster_terms(an: &ViewpointAnalysis, rows: &[usize], pc: f64, start: usize, terms: &mut [f64], first: &mut [u32]) {
+    let cols = start..start + terms.len();
+    terms.fill(0.0);
+    first.fill(u32::MAX);
+    for (at, &x) in rows.iter().enumerate() {
+        let (c, p) = an.row_part(x, &cols);
+        for (&o, &q) in c.iter().zip(p) {
+            let k = o as usize - start;
+            terms[k] += an.p_v[x] * q;
+            first[k] = first[k].min(at as u32);
+        }
+    }
+    for (k, t) in terms.iter_mut().enumerate() {
+        if first[k] != u32::MAX {
+            *t = pc * kl_term(*t / pc, an.p_o[start + k]);
+        }
+    }
+}
+
+/// The outputs that `first` marks as seen, ordered by the first row that
+/// sees them (`first[o] < rows`), then by output: a counting sort.
+fn first_shown_order(first: &[u32], rows: usize) -> Vec<usize> {
+    let mut at = vec![0usize; rows + 1];
+    for &f in first.iter().filter(|&&f| f != u32::MAX) {
+        at[f as usize + 1] += 1;
+    }
+    for k in 0..rows {
+        at[k + 1] += at[k];
+    }
+    let mut order = vec![0; at[rows]];
+    for (o, &f) in first.iter().enumerate().filter(|&(_, &f)| f != u32::MAX) {
+        order[at[f as usize]] = o;
+        at[f as usize] += 1;
+    }
+    order
 }
 
 /// A guided tour over neighbouring viewpoints.

@@ -94,9 +94,10 @@ impl Study {
         let areas = scene.areas();
         let an = &analysis;
         let selection = || -> Result<_, Error> {
-            // The logarithms of the entries do not need the measures.
-            let (measures, logs) = rayon::join(|| an.measures(&areas, s.base), || an.entry_logs());
-            let measures = measures?;
+            // One logarithm per channel entry, taken first: the measures'
+            // passes read them instead of taking their own.
+            let logs = an.entry_logs();
+            let measures = an.measures_logs(&areas, s.base, &logs)?;
             // One logarithm per channel entry, shared by the instability
             // and the best-n search (each row meets many others).
             let instability = an.instability_logs(&neighbours, &logs, s.base)?;

@@ -351,7 +351,7 @@ impl<'a, T: Real> SparseChannel<'a, T> {
     /// whole marginal): each output's terms added over the rows in row order,
     /// as the whole pass adds them, so blocks of outputs computed apart (side
     /// by side) give the same bits. The logarithms are taken in batches, one
-    /// vectorised pass each ([`crate::dispatch::ln_into`], [`ln`]'s bits).
+    /// vectorised pass each (`dispatch::ln_into`, [`ln`]'s bits).
     ///
     /// # Errors
     /// [`Error::LengthMismatch`] for wrong buffer lengths;

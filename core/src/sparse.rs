@@ -289,12 +289,12 @@ impl<'a, T: Real> SparseChannel<'a, T> {
                 for k in 0..n {
                     let (p, q) = (ps[k], qs[k]);
                     if p > 0.0 {
-                        acc.add(if q > 0.0 { p * (lp[k] - lq[k]) } else { f64::INFINITY });
+                        acc.add(information_term(p, q, lp[k], lq[k]));
                     }
                 }
             }
             let d = acc.value();
-            *o = T::from_f64(if d < 0.0 { 0.0 } else { d * base.per_nat() });
+            *o = nonnegative_in(d, base);
         }
         Ok(())
     }
@@ -325,11 +325,11 @@ impl<'a, T: Real> SparseChannel<'a, T> {
             for ((&j, p), &lp) in self.cols[r.clone()].iter().zip(&self.values[r.clone()]).zip(&logs[r]) {
                 let (p, q) = (p.to_f64(), output[j as usize].to_f64());
                 if p > 0.0 {
-                    acc.add(if q > 0.0 { p * (lp - output_logs[j as usize]) } else { f64::INFINITY });
+                    acc.add(information_term(p, q, lp, output_logs[j as usize]));
                 }
             }
             let d = acc.value();
-            *o = T::from_f64(if d < 0.0 { 0.0 } else { d * base.per_nat() });
+            *o = nonnegative_in(d, base);
         }
         Ok(())
     }
@@ -389,7 +389,7 @@ impl<'a, T: Real> SparseChannel<'a, T> {
         for (o, q) in out.iter_mut().zip(&output[cols]) {
             let q = q.to_f64();
             let d = if q > 0.0 { o.to_f64() / q } else { 0.0 };
-            *o = T::from_f64(if d < 0.0 { 0.0 } else { d * base.per_nat() });
+            *o = nonnegative_in(d, base);
         }
         Ok(())
     }
@@ -493,7 +493,7 @@ impl<'a, T: Real> SparseChannel<'a, T> {
                 if px > 0.0 && p > 0.0 {
                     let q = output[j].to_f64();
                     hyx.add(-px * p * lp(k));
-                    mi.add(if q > 0.0 { px * p * (lp(k) - lq(j)) } else { f64::INFINITY });
+                    mi.add(information_term(px * p, q, lp(k), lq(j)));
                 }
             }
         }
@@ -708,6 +708,23 @@ fn js_merge<T: Real>(
         acc.add(ta + tb);
     }
     let d = acc.value();
+    nonnegative_in(d, base)
+}
+
+/// One entry's term of an information sum `Σ p ln(p_cond / q)`: `p (ln p_cond
+/// − ln q)` from the two logarithms, `+∞` where `q = 0` (a mass that the
+/// reference distribution lacks). One definition for the specific
+/// information (Part II) and the channel's `I(X;Y)`, with or without
+/// precomputed logarithms.
+#[inline(always)]
+fn information_term(p: f64, q: f64, lp: f64, lq: f64) -> f64 {
+    if q > 0.0 { p * (lp - lq) } else { f64::INFINITY }
+}
+
+/// A sum of nonnegative terms (in nats) as `T` in `base`, rounding's
+/// negative residue taken as 0.
+#[inline(always)]
+fn nonnegative_in<T: Real>(d: f64, base: Base) -> T {
     T::from_f64(if d < 0.0 { 0.0 } else { d * base.per_nat() })
 }
 
@@ -763,7 +780,7 @@ fn js_merge_batched<T: Real>(weights: (T, T), a: (&[u32], &[T], &[f64]), b: (&[u
         }
     }
     let d = acc.value();
-    T::from_f64(if d < 0.0 { 0.0 } else { d * base.per_nat() })
+    nonnegative_in(d, base)
 }
 
 #[cfg(test)]

@@ -40,6 +40,9 @@ use std::arch::x86_64::{
     _mm512_mul_ps, _mm512_set1_ps, _mm512_setzero_ps, _mm512_sub_ps,
 };
 
+#[cfg(target_arch = "x86_64")]
+use std::ops::{BitAnd, BitOrAssign, Not};
+
 use glam::Vec3A;
 use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::node::CwBvhNode;
@@ -358,30 +361,89 @@ unsafe fn wide_node(p: &Packet, n: &WideNode, occupied: u32, tmax: __m256, lanes
 #[target_feature(enable = "avx2")]
 unsafe fn occluded_wide(tree: &Wide8, triangles: &[[Vec3A; 3]], packet: &Packet, stack: &mut Vec<(u32, u8)>) -> u8 {
     let all = ((1u16 << packet.len()) - 1) as u8;
-    let mut done = 0u8;
+    // SAFETY: AVX2 (this function's contract), what `Packet`'s walk needs.
+    unsafe { occluded_walk(tree, triangles, packet, all, stack) }
+}
+
+/// The lanes of one occlusion walk over the wide tree ([`occluded_walk`]):
+/// a packet (8 lanes, AVX2) or two packets as a [`Pair`] (16, AVX-512F),
+/// with the node and triangle tests at that width.
+#[cfg(target_arch = "x86_64")]
+trait Walk {
+    /// A bit per lane.
+    type Mask: Copy + Eq + Default + BitAnd<Output = Self::Mask> + BitOrAssign + Not<Output = Self::Mask>;
+    /// The octant bits that order a node's children (`slot ^ octant`).
+    fn octant(&self) -> usize;
+    /// Per slot of `n`, the lanes of `lanes` whose ray enters it.
+    ///
+    /// # Safety
+    /// The CPU must support the walk's instructions.
+    unsafe fn enter(&self, n: &WideNode, occupied: u32, lanes: Self::Mask) -> [Self::Mask; 8];
+    /// The lanes of `lanes` whose ray crosses `v`.
+    ///
+    /// # Safety
+    /// As [`Walk::enter`].
+    unsafe fn crosses(&self, v: &[Vec3A; 3], lanes: Self::Mask, ts: &mut Lanes) -> Self::Mask;
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Walk for Packet<'_> {
+    type Mask = u8;
+    fn octant(&self) -> usize {
+        (self.oct_inv4 & 7) as usize
+    }
+    #[inline(always)]
+    unsafe fn enter(&self, n: &WideNode, occupied: u32, lanes: u8) -> [u8; 8] {
+        // SAFETY: AVX2 (the caller's promise); reads one [f32; 8].
+        unsafe { wide_node(self, n, occupied, _mm256_loadu_ps(self.tmax.as_ptr()), lanes) }
+    }
+    #[inline(always)]
+    unsafe fn crosses(&self, v: &[Vec3A; 3], lanes: u8, ts: &mut Lanes) -> u8 {
+        // SAFETY: AVX2 (the caller's promise).
+        unsafe { self.crossing(v, lanes, ts) }
+    }
+}
+
+/// The occlusion walk of `w`'s lanes (`all`) over the wide tree: each
+/// node's slots tested against the lanes still open, each leaf triangle
+/// against the lanes that reach it, children pushed in `slot ^ octant`
+/// order; a lane is done at its first crossing, the walk when every lane
+/// is. The one walk of [`occluded_wide`] and [`occluded_pair`].
+///
+/// # Safety
+/// The CPU must support `W`'s instructions ([`Walk::enter`]).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn occluded_walk<W: Walk>(
+    tree: &Wide8,
+    triangles: &[[Vec3A; 3]],
+    w: &W,
+    all: W::Mask,
+    stack: &mut Vec<(u32, W::Mask)>,
+) -> W::Mask {
+    let none = W::Mask::default();
+    let mut done = none;
     stack.clear();
     if tree.nodes.is_empty() {
-        return 0;
+        return none;
     }
-    // SAFETY: reads one [f32; 8].
-    let tmax = unsafe { _mm256_loadu_ps(packet.tmax.as_ptr()) };
-    let oct = (packet.oct_inv4 & 7) as usize;
+    let oct = w.octant();
     stack.push((0, all));
     let mut ts = [0.0; LANES];
     while let Some((index, lanes)) = stack.pop() {
         let lanes = lanes & !done;
-        if lanes == 0 {
+        if lanes == none {
             continue;
         }
         let n = &tree.nodes[index as usize];
         let occupied = n.occupied();
-        // SAFETY: AVX2 (the caller's promise).
-        let hit = unsafe { wide_node(packet, n, occupied, tmax, lanes) };
+        // SAFETY: `W`'s instructions (the caller's promise).
+        let hit = unsafe { w.enter(n, occupied, lanes) };
         let mut leaves = occupied & !n.imask;
         while leaves != 0 {
             let c = leaves.trailing_zeros() as usize;
             leaves &= leaves - 1;
-            if hit[c] == 0 {
+            if hit[c] == none {
                 continue;
             }
             let mut prims = n.child[c] & !LEAF;
@@ -389,9 +451,9 @@ unsafe fn occluded_wide(tree: &Wide8, triangles: &[[Vec3A; 3]], packet: &Packet,
                 let k = (n.prim_base + prims.trailing_zeros()) as usize;
                 prims &= prims - 1;
                 let l = hit[c] & !done;
-                if l != 0 {
-                    // SAFETY: AVX2 as above.
-                    done |= unsafe { packet.crossing(&triangles[k], l, &mut ts) };
+                if l != none {
+                    // SAFETY: as above.
+                    done |= unsafe { w.crosses(&triangles[k], l, &mut ts) };
                 }
             }
             if done == all {
@@ -408,10 +470,15 @@ unsafe fn occluded_wide(tree: &Wide8, triangles: &[[Vec3A; 3]], packet: &Packet,
 /// the nearest is walked next: the packet walks' one push over the wide
 /// nodes.
 #[inline(always)]
-fn push_wide_children(n: &WideNode, hit: &[u8; 8], oct: usize, stack: &mut Vec<(u32, u8)>) {
+fn push_wide_children<M: Copy + Default + PartialEq>(
+    n: &WideNode,
+    hit: &[M; 8],
+    oct: usize,
+    stack: &mut Vec<(u32, M)>,
+) {
     for q in 0..8 {
         let c = q ^ oct;
-        if hit[c] != 0 && n.imask & (1 << c) != 0 {
+        if hit[c] != M::default() && n.imask & (1 << c) != 0 {
             stack.push((n.child[c], hit[c]));
         }
     }
@@ -617,52 +684,26 @@ pub(crate) unsafe fn occluded_pair(
 ) -> Option<u16> {
     let pair = Pair::new(a, b)?;
     let all = ((1u32 << a.len()) - 1) as u16 | (((1u32 << b.len()) - 1) as u16) << LANES;
-    let mut done = 0u16;
-    stack.clear();
-    if tree.nodes.is_empty() {
-        return Some(0);
+    // SAFETY: AVX-512F and AVX2 (this function's contract), what a pair's walk needs.
+    Some(unsafe { occluded_walk(tree, triangles, &pair, all, stack) })
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Walk for Pair<'_, '_> {
+    type Mask = u16;
+    fn octant(&self) -> usize {
+        (self.halves[0].oct_inv4 & 7) as usize
     }
-    let oct = (a.oct_inv4 & 7) as usize;
-    stack.push((0, all));
-    let mut ts = [0.0; LANES];
-    while let Some((index, lanes)) = stack.pop() {
-        let lanes = lanes & !done;
-        if lanes == 0 {
-            continue;
-        }
-        let n = &tree.nodes[index as usize];
-        let occupied = n.occupied();
+    #[inline(always)]
+    unsafe fn enter(&self, n: &WideNode, occupied: u32, lanes: u16) -> [u16; 8] {
         // SAFETY: AVX-512F (the caller's promise).
-        let hit = unsafe { wide_node16(&pair, n, occupied, lanes) };
-        let mut leaves = occupied & !n.imask;
-        while leaves != 0 {
-            let c = leaves.trailing_zeros() as usize;
-            leaves &= leaves - 1;
-            if hit[c] == 0 {
-                continue;
-            }
-            let mut prims = n.child[c] & !LEAF;
-            while prims != 0 {
-                let k = (n.prim_base + prims.trailing_zeros()) as usize;
-                prims &= prims - 1;
-                let l = hit[c] & !done;
-                if l != 0 {
-                    // SAFETY: AVX2 as above.
-                    done |= unsafe { pair.crossing(&triangles[k], l, &mut ts) };
-                }
-            }
-            if done == all {
-                return Some(done);
-            }
-        }
-        for q in 0..8 {
-            let c = q ^ oct;
-            if hit[c] != 0 && n.imask & (1 << c) != 0 {
-                stack.push((n.child[c], hit[c]));
-            }
-        }
+        unsafe { wide_node16(self, n, occupied, lanes) }
     }
-    Some(done)
+    #[inline(always)]
+    unsafe fn crosses(&self, v: &[Vec3A; 3], lanes: u16, ts: &mut Lanes) -> u16 {
+        // SAFETY: AVX-512F and AVX2 (the caller's promise).
+        unsafe { self.crossing(v, lanes, ts) }
+    }
 }
 
 /// [`occluded`] over the compressed nodes.
